@@ -1,0 +1,20 @@
+// Surfaces by crease angle (Larsen ch. 8) and lightmap charts packed into one atlas, with a record
+// per texel. Connectivity comes from OpenMesh; the result is plain arrays in scene.h/lightmap.h.
+#pragma once
+
+#include <vector>
+
+#include "shared/mesh.h"
+#include "shared/scene.h"
+
+namespace ag {
+
+// Groups triangles into surfaces: edge-adjacent faces whose normals differ by less than
+// `crease_angle_deg` share a surface. Returns a surface id (0..n-1) per triangle.
+std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int* surface_count);
+
+// Fills scene.surfaces, scene.triangle_surface and scene.atlas from the objects' meshes and
+// scene.settings.lightmap (crease angle, chart cone, texel size, gutter). Deterministic.
+void make_surfaces_and_atlas(Scene& scene);
+
+}  // namespace ag

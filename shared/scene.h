@@ -1,0 +1,138 @@
+// The scene graph shared by cpu/ and gpu/: objects, materials, lights, camera, settings, and the
+// derived surfaces (Larsen ch. 8) and lightmap atlas. Plain structs, value semantics (yocto-gl).
+// All edits go through scene_edit.h so that consumers can update only what an edit touched.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "shared/lightmap.h"
+#include "shared/mesh.h"
+#include "shared/settings.h"
+
+namespace ag {
+
+enum class MaterialType { diffuse, mirror, glass };
+inline constexpr std::array kMaterialTypeNames = {"diffuse", "mirror", "glass"};
+
+// A material. Diffuse albedo is the Lambertian reflectance ρ (BRDF ρ/π); mirrors and glass are
+// perfectly specular; emission is radiance (W/(sr·m²) in scene units) leaving the surface.
+struct Material {
+    std::string name;
+    MaterialType type = MaterialType::diffuse;
+    glm::vec3 albedo{0.75f};
+    float ior = 1.5f;
+    glm::vec3 emission{0.0f};
+};
+
+// Rigid transform: world = rotation * object + translation. Scale is baked into the mesh at load.
+struct Transform {
+    glm::vec3 translation{0.0f};
+    glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  // (w, x, y, z)
+
+    glm::mat4 matrix() const;
+    glm::vec3 apply_point(const glm::vec3& p) const { return rotation * p + translation; }
+    glm::vec3 apply_vector(const glm::vec3& v) const { return rotation * v; }
+};
+
+struct Object {
+    std::string name;
+    Mesh mesh;           // object space, plain indexed arrays
+    Material material;   // each object owns its copy, so an albedo edit touches one object
+    Transform transform;
+    bool dynamic = false;
+    std::string source;  // mesh file or built-in shape name, for info/export
+};
+
+enum class LightType { point, quad };
+inline constexpr std::array kLightTypeNames = {"point", "quad"};
+
+// Point light: position and intensity I (W/sr, RGB). Quad area light: a parallelogram
+// corners[0..3] (corners[2] = corners[1] + corners[3] - corners[0]) emitting radiance L from the
+// side its normal (edge01 × edge03) faces.
+struct Light {
+    std::string name;
+    LightType type = LightType::point;
+    glm::vec3 position{0.0f};
+    glm::vec3 intensity{0.0f};
+    std::array<glm::vec3, 4> corners{};
+    glm::vec3 radiance{0.0f};
+    bool enabled = true;
+
+    glm::vec3 quad_normal() const;  // unit normal of a quad light
+    float quad_area() const;
+    glm::vec3 center() const;       // position, or the quad's centre
+    glm::vec3 power() const;        // emitted flux Φ (W): 4πI for a point, πLA for a quad
+};
+
+struct Camera {
+    glm::vec3 eye{0.0f, 0.0f, 1.0f};
+    glm::vec3 target{0.0f};
+    glm::vec3 up{0.0f, 1.0f, 0.0f};
+    float fov_y = 40.0f;  // vertical field of view, degrees
+    int width = 512;
+    int height = 512;
+};
+
+// A surface (Larsen ch. 8): connected triangles of one object whose normals differ by less than
+// the crease angle across every shared edge. Each surface owns its photon map and its lightmaps.
+struct Surface {
+    int object = -1;
+    std::vector<int> triangles;  // triangle indices into the object's mesh
+    std::vector<int> charts;     // chart ids into Scene::atlas.charts
+    float area = 0.0f;           // world area (rigid transforms keep it)
+    glm::vec3 normal{0.0f};      // area-weighted mean normal, object space
+};
+
+// What an edit changed; consumers keep the last sequence number they saw.
+enum class ChangeKind {
+    object_transform,
+    object_material,
+    light_position,  // a point light moved or a quad light's corners changed
+    light_power,     // intensity / radiance changed (colour or strength)
+    light_enabled,
+    camera,
+};
+inline constexpr std::array kChangeKindNames = {"object_transform", "object_material",
+                                                "light_position",   "light_power",
+                                                "light_enabled",    "camera"};
+
+struct SceneChange {
+    uint64_t sequence = 0;
+    ChangeKind kind = ChangeKind::object_transform;
+    int index = -1;  // object or light index; -1 for the camera
+};
+
+struct Scene {
+    std::string name;
+    std::string path;          // the scene file, for messages and relative paths
+    std::string length_unit = "unit";
+    std::string script;        // optional Lua edit script (path, resolved against the scene)
+    Camera camera;
+    std::vector<Object> objects;
+    std::vector<Light> lights;
+    Settings settings;
+
+    // Derived by make_surfaces_and_atlas() (shared/charts.h); rebuilt only if meshes change.
+    std::vector<Surface> surfaces;
+    std::vector<std::vector<int>> triangle_surface;  // [object][triangle] -> surface id
+    LightmapAtlas atlas;
+
+    // Versioning: every edit bumps `version` and the touched item's counter and appends a change.
+    uint64_t version = 0;
+    std::vector<uint64_t> object_versions;  // per object, transform or material edits
+    std::vector<uint64_t> light_versions;   // per light
+    uint64_t camera_version = 0;
+    std::vector<SceneChange> changes;
+
+    int find_object(const std::string& object_name) const;  // -1 if absent
+    int find_light(const std::string& light_name) const;    // -1 if absent
+    size_t triangle_count() const;
+};
+
+}  // namespace ag
