@@ -1,0 +1,123 @@
+#include "shared/image.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <stdexcept>
+
+#include <OpenImageIO/imageio.h>
+
+#include "shared/input_error.h"
+
+namespace ag {
+
+namespace fs = std::filesystem;
+
+float srgb_encode(float x) {
+    x = std::clamp(x, 0.0f, 1.0f);
+    return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+float srgb_decode(float x) {
+    return x <= 0.04045f ? x / 12.92f : std::pow((x + 0.055f) / 1.055f, 2.4f);
+}
+
+namespace {
+
+std::string lower_extension(const std::string& path) {
+    std::string ext = fs::path(path).extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    return ext;
+}
+
+// A temporary name beside `path` with the same extension (OIIO picks the format by extension).
+std::string temporary_beside(const std::string& path) {
+    const fs::path p(path);
+    const std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) +
+                             p.extension().string();
+    return (p.parent_path() / name).string();
+}
+
+void commit_temporary(const std::string& tmp, const std::string& path) {
+    std::error_code ec;
+    fs::rename(tmp, path, ec);
+    if (ec) {
+        fs::remove(tmp, ec);
+        throw std::runtime_error(path + ": cannot move the written image into place: " + ec.message());
+    }
+}
+
+}  // namespace
+
+void write_file_atomically(const std::string& path, const std::string& bytes) {
+    const std::string tmp = temporary_beside(path);
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        out.write(bytes.data(), std::streamsize(bytes.size()));
+        out.flush();
+        if (!out) {
+            std::error_code ec;
+            fs::remove(tmp, ec);
+            throw std::runtime_error(path + ": cannot write file");
+        }
+    }
+    commit_temporary(tmp, path);
+}
+
+void write_image(const Image& image, const std::string& path, float exposure_ev) {
+    if (image.width <= 0 || image.height <= 0 || image.pixels.size() != size_t(image.width) * image.height * image.channels)
+        throw std::runtime_error(path + ": refusing to write an empty or malformed image");
+    const std::string ext = lower_extension(path);
+    const bool eight_bit = ext == ".png" || ext == ".jpg" || ext == ".jpeg";
+    const std::string tmp = temporary_beside(path);
+
+    auto out = OIIO::ImageOutput::create(path);
+    if (!out) throw std::runtime_error(path + ": no image writer for this extension (" + OIIO::geterror() + ")");
+    OIIO::ImageSpec spec(image.width, image.height, image.channels,
+                         eight_bit ? OIIO::TypeDesc::UINT8
+                                   : (ext == ".exr" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT));
+    bool ok = false;
+    if (eight_bit) {
+        spec.attribute("oiio:ColorSpace", "sRGB");
+        const float scale = std::exp2(exposure_ev);
+        std::vector<unsigned char> bytes(image.pixels.size());
+        for (size_t i = 0; i < bytes.size(); ++i) {
+            const bool alpha = image.channels == 4 && i % 4 == 3;
+            const float v = alpha ? std::clamp(image.pixels[i], 0.0f, 1.0f) : srgb_encode(image.pixels[i] * scale);
+            bytes[i] = (unsigned char)std::lround(v * 255.0f);
+        }
+        ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+    } else {
+        spec.attribute("oiio:ColorSpace", "Linear");
+        if (ext == ".exr") spec.attribute("compression", "zip");
+        ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::FLOAT, image.pixels.data());
+    }
+    ok = out->close() && ok;
+    if (!ok) {
+        std::error_code ec;
+        fs::remove(tmp, ec);
+        throw std::runtime_error(path + ": cannot write image: " + out->geterror());
+    }
+    commit_temporary(tmp, path);
+}
+
+Image read_image(const std::string& path) {
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) throw_input_error(path, "", "cannot read image: " + OIIO::geterror());
+    const OIIO::ImageSpec& spec = in->spec();
+    Image image(spec.width, spec.height, spec.nchannels);
+    if (image.pixels.empty() || !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+        throw_input_error(path, "", "cannot decode image: " + in->geterror());
+    const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
+    if (srgb)
+        for (size_t i = 0; i < image.pixels.size(); ++i)
+            if (!(image.channels == 4 && i % 4 == 3)) image.pixels[i] = srgb_decode(image.pixels[i]);
+    in->close();
+    return image;
+}
+
+}  // namespace ag

@@ -1,0 +1,113 @@
+#include "shared/scene_edit.h"
+
+#include <gtest/gtest.h>
+
+#include "shared/input_error.h"
+
+namespace ag {
+
+namespace {
+Scene two_objects_two_lights() {
+    Scene s;
+    s.path = "test.json";
+    s.objects.resize(2);
+    s.objects[0].name = "cube";
+    s.objects[0].transform.translation = {1, 2, 3};
+    s.objects[1].name = "floor";
+    s.lights.resize(2);
+    s.lights[0].name = "lamp";
+    s.lights[0].position = {0, 5, 0};
+    s.lights[0].intensity = glm::vec3(10.0f);
+    s.lights[1].name = "panel";
+    s.lights[1].type = LightType::quad;
+    s.lights[1].corners = {glm::vec3(0, 4, 0), glm::vec3(2, 4, 0), glm::vec3(2, 4, 2), glm::vec3(0, 4, 2)};
+    s.lights[1].radiance = glm::vec3(1.0f);
+    init_versions(s);
+    return s;
+}
+}  // namespace
+
+TEST(SceneEdit, EveryEditBumpsVersionsAndIsRecorded) {
+    Scene s = two_objects_two_lights();
+    EXPECT_EQ(s.version, 0u);
+    translate_object(s, 0, {1, 0, 0});
+    set_albedo(s, 1, {0.5f, 0.5f, 0.5f});
+    set_light_color(s, 0, {1, 2, 3});
+    set_light_enabled(s, 1, false);
+    set_light_position(s, 0, {0, 6, 0});
+    EXPECT_EQ(s.version, 5u);
+    EXPECT_EQ(s.object_versions[0], 1u);
+    EXPECT_EQ(s.object_versions[1], 2u);
+    EXPECT_EQ(s.light_versions[0], 5u);
+    EXPECT_EQ(s.light_versions[1], 4u);
+
+    const auto all = changes_since(s, 0);
+    ASSERT_EQ(all.size(), 5u);
+    EXPECT_EQ(all[0].kind, ChangeKind::object_transform);
+    EXPECT_EQ(all[1].kind, ChangeKind::object_material);
+    EXPECT_EQ(all[2].kind, ChangeKind::light_power);
+    EXPECT_EQ(all[3].kind, ChangeKind::light_enabled);
+    EXPECT_EQ(all[4].kind, ChangeKind::light_position);
+    const auto recent = changes_since(s, 3);
+    ASSERT_EQ(recent.size(), 2u);
+    EXPECT_EQ(recent[0].index, 1);
+    EXPECT_TRUE(changes_since(s, 5).empty());
+}
+
+TEST(SceneEdit, UntouchedItemsKeepTheirVersion) {
+    Scene s = two_objects_two_lights();
+    translate_object(s, 0, {0, 1, 0});
+    EXPECT_EQ(s.object_versions[1], 0u);
+    EXPECT_EQ(s.light_versions[0], 0u);
+    EXPECT_EQ(s.camera_version, 0u);
+}
+
+TEST(SceneEdit, TransformsComposeRigidly) {
+    Scene s = two_objects_two_lights();
+    rotate_object(s, 0, {0, 1, 0}, 90.0f);
+    const Transform& t = s.objects[0].transform;
+    EXPECT_NEAR(glm::length(t.translation - glm::vec3(1, 2, 3)), 0.0f, 1e-6f);  // about its own origin
+    const glm::vec3 x = t.apply_vector({1, 0, 0});
+    EXPECT_NEAR(x.z, -1.0f, 1e-6f);  // +90° about +Y takes +X to -Z
+    translate_object(s, 0, {0, 0, 1});
+    EXPECT_NEAR(s.objects[0].transform.translation.z, 4.0f, 1e-6f);
+    const glm::mat4 m = s.objects[0].transform.matrix();
+    const glm::vec3 p = glm::vec3(m * glm::vec4(1, 0, 0, 1));
+    EXPECT_NEAR(glm::length(p - s.objects[0].transform.apply_point({1, 0, 0})), 0.0f, 1e-5f);
+}
+
+TEST(SceneEdit, QuadLightMovesAsAWholeAndColourGoesToRadiance) {
+    Scene s = two_objects_two_lights();
+    set_light_position(s, 1, {5, 5, 5});
+    EXPECT_NEAR(glm::length(s.lights[1].center() - glm::vec3(5, 5, 5)), 0.0f, 1e-6f);
+    EXPECT_NEAR(s.lights[1].quad_area(), 4.0f, 1e-6f);
+    set_light_color(s, 1, {2, 2, 2});
+    EXPECT_EQ(s.lights[1].radiance, glm::vec3(2.0f));
+    EXPECT_NEAR(s.lights[1].power().x, 3.14159265f * 4.0f * 2.0f, 1e-4f);
+    EXPECT_NEAR(s.lights[0].power().x, 4.0f * 3.14159265f * 10.0f, 1e-3f);
+}
+
+TEST(SceneEdit, BadEditsAreInputErrorsAndChangeNothing) {
+    Scene s = two_objects_two_lights();
+    EXPECT_THROW(translate_object(s, 2, {1, 0, 0}), InputError);
+    EXPECT_THROW(set_light_enabled(s, -1, true), InputError);
+    EXPECT_THROW(set_albedo(s, 0, {1.5f, 0, 0}), InputError);
+    EXPECT_THROW(translate_object(s, 0, {std::nanf(""), 0, 0}), InputError);
+    EXPECT_THROW(rotate_object(s, 0, {0, 0, 0}, 10.0f), InputError);
+    EXPECT_THROW(set_light_color(s, 0, {-1, 0, 0}), InputError);
+    Camera c = s.camera;
+    c.target = c.eye;
+    EXPECT_THROW(set_camera(s, c), InputError);
+    EXPECT_EQ(s.version, 0u);
+    EXPECT_TRUE(s.changes.empty());
+    EXPECT_EQ(s.objects[0].transform.translation, glm::vec3(1, 2, 3));
+}
+
+TEST(SceneEdit, FindByName) {
+    const Scene s = two_objects_two_lights();
+    EXPECT_EQ(s.find_object("floor"), 1);
+    EXPECT_EQ(s.find_object("nope"), -1);
+    EXPECT_EQ(s.find_light("panel"), 1);
+}
+
+}  // namespace ag

@@ -1,0 +1,70 @@
+// afterglow: one executable with subcommands (yocto's yscene, pbrt's long flags).
+#include <exception>
+#include <iostream>
+#include <string>
+#include <vector>
+
+#include "shared/input_error.h"
+#include "tools/afterglow/commands.h"
+
+namespace ag::cli {
+
+const std::vector<Subcommand>& subcommands() {
+    static const std::vector<Subcommand> all = {
+        {&kInfoCommand, run_info},
+        {&kExportCommand, run_export},
+    };
+    return all;
+}
+
+}  // namespace ag::cli
+
+namespace {
+
+void print_usage(std::ostream& out) {
+    out << "usage: afterglow COMMAND [options]\n\n"
+           "Progressive global illumination in dynamic scenes (Larsen 2004).\n\ncommands:\n";
+    for (const auto& s : ag::cli::subcommands()) {
+        std::string name = s.command->name;
+        name.resize(10, ' ');
+        out << "  " << name << " " << s.command->summary << "\n";
+    }
+    out << "\n'afterglow COMMAND --help' shows a command's options. Docs: README.md, docs/.\n";
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace ag::cli;
+    if (argc < 2) {
+        print_usage(std::cerr);
+        return 2;
+    }
+    const std::string name = argv[1];
+    if (name == "-h" || name == "--help" || name == "help") {
+        print_usage(std::cout);
+        return 0;
+    }
+    for (const Subcommand& s : subcommands()) {
+        if (s.command->name != name) continue;
+        try {
+            const Args args(*s.command, std::vector<std::string>(argv + 2, argv + argc));
+            if (args.help()) {
+                std::cout << help_text(*s.command);
+                return 0;
+            }
+            return s.run(args);
+        } catch (const CliError& e) {
+            std::cerr << e.what() << "\n";
+            return 2;
+        } catch (const ag::InputError& e) {
+            std::cerr << "afterglow: error: " << e.what() << "\n";
+            return 1;
+        } catch (const std::exception& e) {
+            std::cerr << "afterglow " << name << ": error: " << e.what() << "\n";
+            return 1;
+        }
+    }
+    std::cerr << "afterglow: unknown command '" << name << "' (see 'afterglow --help')\n";
+    return 2;
+}
