@@ -1,0 +1,102 @@
+#include "cpu/aim.h"
+
+#include <algorithm>
+#include <numeric>
+
+#include "cpu/knn.h"
+
+namespace ag::cpu {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+}
+
+Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
+    surface_texels_.resize(scene_.surfaces.size());
+    for (int i = 0; i < int(scene_.atlas.texels.size()); ++i)
+        surface_texels_[size_t(scene_.atlas.texels[size_t(i)].surface)].push_back(i);
+    const size_t n = size_t(scene_.atlas.width) * size_t(scene_.atlas.height);
+    radiance_.assign(n, glm::vec3(0.0f));
+    irradiance_.assign(n, glm::vec3(0.0f));
+    dirty_flag_.assign(n, 0);
+}
+
+int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
+    SurfaceHits& s = maps.surface(surface);
+    const std::vector<int>& texels = surface_texels_[size_t(surface)];
+    const Object& object = scene_.objects[size_t(scene_.surfaces[size_t(surface)].object)];
+    const glm::vec3 albedo = object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
+
+    std::vector<glm::vec3> points(s.hits.size());
+    for (size_t i = 0; i < s.hits.size(); ++i) points[i] = s.hits[i].position;
+    KnnIndex index;
+    index.build(points);
+    const int k = scene_.settings.aim.knn;
+    const float texel = scene_.atlas.texel_size;
+
+    std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f));
+    pool_.parallel_for(texels.size(), [&](size_t i) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
+        thread_local std::vector<int> idx;
+        thread_local std::vector<float> d2;
+        const int n = index.query(t.position, k, idx, d2);
+        if (n == 0) return;
+        // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
+        double r2 = double(d2[size_t(n - 1)]);
+        if (r2 <= 0.0) r2 = double(texel) * texel / kPi;
+        glm::dvec3 sum(0.0);
+        for (int j = 0; j < n; ++j) sum += glm::dvec3(s.hits[size_t(idx[size_t(j)])].power);
+        e[i] = glm::vec3(sum / (kPi * r2));
+    }, 16);
+
+    for (size_t i = 0; i < texels.size(); ++i) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
+        const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
+        irradiance_[a] = e[i];
+        radiance_[a] = albedo / float(kPi) * e[i];
+        if (!dirty_flag_[a]) {
+            dirty_flag_[a] = 1;
+            dirty_.push_back(int(a));
+        }
+    }
+    s.delta_f = 0.0;
+    s.signed_delta = glm::dvec3(0.0);
+    return int(texels.size());
+}
+
+int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {
+    std::vector<int> candidates;
+    for (int s = 0; s < int(maps.surface_count()); ++s) {
+        const SurfaceHits& h = maps.surface(s);
+        if (h.delta_f <= 0.0) continue;
+        const double flux = std::abs(energy(h.flux));
+        if (flux > 0.0 && h.delta_f / flux <= double(scene_.settings.aim.delta_threshold)) continue;
+        candidates.push_back(s);
+    }
+    // Largest Δf / A first (Larsen ch. 10); ties by surface id for determinism.
+    std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) {
+        const double ka = maps.surface(a).delta_f / std::max(1e-30f, scene_.surfaces[size_t(a)].area);
+        const double kb = maps.surface(b).delta_f / std::max(1e-30f, scene_.surfaces[size_t(b)].area);
+        return ka > kb;
+    });
+    const int budget = std::min<int>(int(candidates.size()), scene_.settings.aim.surfaces_per_frame);
+    int texels = 0;
+    for (int i = 0; i < budget; ++i) texels += rebuild_surface(maps, candidates[size_t(i)]);
+    if (surfaces_rebuilt) *surfaces_rebuilt = budget;
+    return texels;
+}
+
+int Aim::rebuild_all(PhotonMaps& maps) {
+    int texels = 0;
+    for (int s = 0; s < int(maps.surface_count()); ++s) texels += rebuild_surface(maps, s);
+    return texels;
+}
+
+std::vector<int> Aim::take_dirty_texels() {
+    std::vector<int> out;
+    out.swap(dirty_);
+    for (int a : out) dirty_flag_[size_t(a)] = 0;
+    return out;
+}
+
+}  // namespace ag::cpu

@@ -1,0 +1,45 @@
+// Approximated illumination maps (Larsen ch. 10): per texel, an N-nearest-neighbour density
+// estimate over the photon hits of the texel's own surface, E = ΣΦ / (π r²), stored as the
+// diffusely reflected radiance L = ρ/π · E in the shared atlas layout. Surfaces are rebuilt in
+// order of Δf / area, above a threshold, under a per-frame budget.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cpu/photon_map.h"
+#include "shared/parallel.h"
+#include "shared/scene.h"
+
+namespace ag::cpu {
+
+class Aim {
+public:
+    Aim(const Scene& scene, ThreadPool& pool);
+
+    // Rebuilds the most-changed surfaces (Δf / area, above aim.delta_threshold relative to the
+    // surface's flux) up to aim.surfaces_per_frame. Resets those surfaces' Δf. Returns texels
+    // rebuilt; `surfaces_rebuilt` receives the surface count.
+    int update(PhotonMaps& maps, int* surfaces_rebuilt = nullptr);
+    // Rebuilds every surface.
+    int rebuild_all(PhotonMaps& maps);
+    // Rebuilds one surface's texels from its hits and resets its Δf.
+    int rebuild_surface(PhotonMaps& maps, int surface);
+
+    // Per atlas texel (width × height, row-major): reflected radiance and irradiance.
+    const std::vector<glm::vec3>& radiance() const { return radiance_; }
+    const std::vector<glm::vec3>& irradiance() const { return irradiance_; }
+    // Atlas texel indices (y·width + x) changed since the last call, for uploads.
+    std::vector<int> take_dirty_texels();
+
+private:
+    const Scene& scene_;
+    ThreadPool& pool_;
+    std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
+    std::vector<glm::vec3> radiance_, irradiance_;
+    std::vector<int> dirty_;
+    std::vector<char> dirty_flag_;
+};
+
+}  // namespace ag::cpu

@@ -1,0 +1,76 @@
+// Per-surface photon maps with stored paths (Larsen ch. 8, 9): each surface owns its photon hits,
+// each photon group owns its paths, and a hit links back to its path vertex so that removing a
+// whole group's hits is O(1) per hit (swap-remove, the moved hit's owner is patched).
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cpu/photon_tracer.h"
+
+namespace ag::cpu {
+
+struct PhotonHit {
+    glm::vec3 position{0.0f};  // object space of the surface's object
+    glm::vec3 power{0.0f};     // incident flux, W
+    uint32_t light = 0, group = 0;
+    uint32_t vertex = 0;       // index into the owning group's path vertices
+    uint8_t bounce = 0;
+};
+
+// One photon's interaction as stored in its group's path.
+struct PathVertex {
+    int surface = -1;
+    glm::vec3 position{0.0f};  // world space, for comparison with a re-traced path
+    int32_t hit = -1;          // slot in the surface's hits, -1 if nothing was stored
+};
+
+struct PhotonGroup {
+    std::vector<PathVertex> vertices;       // all photons' paths, back to back
+    std::vector<uint32_t> photon_begin;     // P + 1 offsets into vertices
+    int verify_cursor = 0;                  // next photon to verify (round robin)
+    bool queued = false;                    // waiting for a full retrace
+    bool traced = false;                    // holds hits of the current light state
+};
+
+struct SurfaceHits {
+    std::vector<PhotonHit> hits;
+    glm::dvec3 flux{0.0};          // Σ power of the stored hits
+    double delta_f = 0.0;          // Σ |energy| of hits added/removed since the AIM rebuild
+    double delta_i = 0.0;          // same, hits with bounce ≥ 1 only, since the IIM update
+    glm::dvec3 signed_delta{0.0};  // Σ signed energy since the AIM rebuild (bookkeeping check)
+};
+
+// Scalar energy of an RGB flux for the deltas: the channel mean.
+inline double energy(const glm::vec3& p) { return (double(p.x) + double(p.y) + double(p.z)) / 3.0; }
+inline double energy(const glm::dvec3& p) { return (p.x + p.y + p.z) / 3.0; }
+
+class PhotonMaps {
+public:
+    void resize(size_t surfaces, size_t lights, int groups_per_light);
+
+    SurfaceHits& surface(int s) { return surfaces_[size_t(s)]; }
+    const SurfaceHits& surface(int s) const { return surfaces_[size_t(s)]; }
+    size_t surface_count() const { return surfaces_.size(); }
+    PhotonGroup& group(int light, int g) { return groups_[size_t(light)][size_t(g)]; }
+    const PhotonGroup& group(int light, int g) const { return groups_[size_t(light)][size_t(g)]; }
+
+    // Removes every hit of the group and forgets its paths.
+    void clear_group(int light, int g);
+    // Replaces the group's paths with `photons` (one traced path per photon) and adds the hits.
+    void set_group(int light, int g, const std::vector<std::vector<TracedVertex>>& photons);
+    // Multiplies the power of every hit of the group by `ratio` (light colour edits).
+    void rescale_group(int light, int g, const glm::vec3& ratio);
+
+    size_t hit_count() const;
+
+private:
+    void add_energy(SurfaceHits& s, const glm::vec3& power, uint8_t bounce, double sign);
+
+    std::vector<SurfaceHits> surfaces_;
+    std::vector<std::vector<PhotonGroup>> groups_;  // [light][group]
+};
+
+}  // namespace ag::cpu

@@ -1,0 +1,168 @@
+#include "cpu/photon_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ag::cpu {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// Orthonormal basis around unit n (Duff et al. 2017).
+void basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+// Cosine-weighted direction about n (Larsen ch. 6.3: φ = arccos √r2, θ = 2π r1).
+glm::vec3 cosine_direction(const glm::vec3& n, float r1, float r2) {
+    glm::vec3 t, b;
+    basis(n, t, b);
+    const float phi = 2.0f * kPi * r1, r = std::sqrt(r2);
+    const float z = std::sqrt(std::max(0.0f, 1.0f - r2));
+    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * n);
+}
+
+glm::vec3 sphere_direction(float r1, float r2) {
+    const float z = 1.0f - 2.0f * r1, phi = 2.0f * kPi * r2;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+// Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t.
+float fresnel(float cos_i, float eta, float& cos_t) {
+    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        cos_t = 0.0f;
+        return 1.0f;  // total internal reflection
+    }
+    cos_t = std::sqrt(1.0f - sin2_t);
+    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+}  // namespace
+
+glm::vec2 hilbert_point(double t) {
+    constexpr int kOrder = 16;
+    constexpr uint32_t kSide = 1u << kOrder;
+    const double scaled = std::clamp(t, 0.0, 1.0) * double(uint64_t(kSide) * kSide);
+    uint64_t d = std::min<uint64_t>(uint64_t(scaled), uint64_t(kSide) * kSide - 1);
+    uint32_t x = 0, y = 0;
+    for (uint32_t s = 1; s < kSide; s <<= 1) {  // Hilbert index -> cell (classic d2xy)
+        const uint32_t rx = 1u & uint32_t(d / 2), ry = 1u & uint32_t(d ^ rx);
+        if (ry == 0) {
+            if (rx == 1) {
+                x = s - 1 - x;
+                y = s - 1 - y;
+            }
+            std::swap(x, y);
+        }
+        x += s * rx;
+        y += s * ry;
+        d /= 4;
+    }
+    return {(float(x) + 0.5f) / float(kSide), (float(y) + 0.5f) / float(kSide)};
+}
+
+PhotonTracer::PhotonTracer(const Scene& scene, const RayTracer& rays) : scene_(scene), rays_(rays) { refresh(); }
+
+void PhotonTracer::refresh() {
+    const PhotonSettings& s = scene_.settings.photons;
+    groups_ = s.groups;
+    per_group_ = s.photons_per_group;
+    max_bounces_ = s.max_bounces;
+    dimensions_ = 3 + 3 * max_bounces_;
+    if (halton_.size() != scene_.lights.size() || (!halton_.empty() && halton_[0].dimensions() != dimensions_)) {
+        halton_.clear();
+        for (size_t l = 0; l < scene_.lights.size(); ++l)
+            halton_.emplace_back(dimensions_, hash_u32(scene_.settings.seed * 7919u + uint32_t(l)) | 1u);
+    }
+}
+
+glm::vec3 PhotonTracer::photon_power(int light) const {
+    const Light& l = scene_.lights[size_t(light)];
+    if (!l.enabled) return glm::vec3(0.0f);
+    return l.power() / float(double(groups_) * double(per_group_));
+}
+
+void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
+    const Light& l = scene_.lights[size_t(light)];
+    const Halton& h = halton_[size_t(light)];
+    const uint64_t k = uint64_t(group) * uint64_t(per_group_) + uint64_t(index);
+    // Group g owns stratum [g/G, (g+1)/G) of the Hilbert parameter; photon i takes the i-th
+    // point of a 1D QMC sequence inside it, so a group's photons leave in similar directions.
+    const glm::vec2 s = hilbert_point((double(group) + h.sample(uint64_t(index), 0)) / double(groups_));
+
+    Ray ray;
+    if (l.type == LightType::point) {
+        ray.origin = l.position;
+        ray.direction = sphere_direction(s.x, s.y);
+    } else {
+        const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
+        const glm::vec3 n = l.quad_normal();
+        ray.origin = l.corners[0] + float(h.sample(k, 1)) * e1 + float(h.sample(k, 2)) * e3 + rays_.epsilon() * n;
+        ray.direction = cosine_direction(n, s.x, s.y);
+    }
+    glm::vec3 power = photon_power(light);
+    const float eps = rays_.epsilon();
+
+    for (int bounce = 0; bounce < max_bounces_; ++bounce) {
+        ray.tmin = 0.0f;
+        ray.tmax = 1e30f;
+        const RayHit hit = rays_.intersect(ray);
+        if (!hit.hit) return;
+        const Object& object = scene_.objects[size_t(hit.object)];
+        const Material& m = object.material;
+        const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
+        const glm::vec3 facing = front ? hit.normal : -hit.normal;  // towards the incoming side
+
+        TracedVertex v;
+        v.object = hit.object;
+        v.surface = scene_.triangle_surface[size_t(hit.object)][size_t(hit.triangle)];
+        v.position = hit.position;
+        v.local_position = glm::conjugate(object.transform.rotation) * (hit.position - object.transform.translation);
+        v.power = power;
+        v.bounce = uint8_t(std::min(bounce, 255));
+        const int dim = 3 + 3 * bounce;
+
+        if (m.type == MaterialType::diffuse) {
+            // Lightmaps cover the front of a surface; light reaching a back face is absorbed
+            // (walls lit from both sides need thickness).
+            v.stored = front;
+            out.push_back(v);
+            if (!front) return;
+            // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
+            const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
+            if (p <= 0.0f || float(h.sample(k, dim)) >= p) return;
+            power *= m.albedo / p;
+            ray.origin = hit.position + eps * facing;
+            ray.direction = cosine_direction(facing, float(h.sample(k, dim + 1)), float(h.sample(k, dim + 2)));
+        } else if (m.type == MaterialType::mirror) {
+            out.push_back(v);
+            ray.origin = hit.position + eps * facing;
+            ray.direction = glm::reflect(ray.direction, facing);
+        } else {  // glass: Fresnel decides reflection or refraction
+            out.push_back(v);
+            const float eta = front ? 1.0f / m.ior : m.ior;
+            const glm::vec3 d = glm::normalize(ray.direction);
+            const float cos_i = -glm::dot(d, facing);
+            float cos_t = 0.0f;
+            const float f = fresnel(cos_i, eta, cos_t);
+            if (float(h.sample(k, dim)) < f) {
+                ray.origin = hit.position + eps * facing;
+                ray.direction = glm::reflect(d, facing);
+            } else {
+                ray.origin = hit.position - eps * facing;
+                ray.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
+            }
+        }
+    }
+}
+
+}  // namespace ag::cpu

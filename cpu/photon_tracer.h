@@ -1,0 +1,54 @@
+// Tracing one QMC photon through the scene (Larsen ch. 6.3, 9): emission from a stratum of the
+// light's domain, diffuse bounces with Russian roulette by albedo, mirror and glass without
+// storing. A pure function of (scene, light, group, photon): re-tracing gives the same path, which
+// is what lets selective tracing compare a new path with the stored one.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cpu/ray_tracer.h"
+#include "shared/qmc.h"
+#include "shared/scene.h"
+
+namespace ag::cpu {
+
+// One interaction along a photon path.
+struct TracedVertex {
+    int object = -1;
+    int surface = -1;
+    glm::vec3 position{0.0f};         // world space (path comparison)
+    glm::vec3 local_position{0.0f};   // object space (photon maps live in object space)
+    glm::vec3 power{0.0f};            // incident flux carried by the photon, W
+    uint8_t bounce = 0;               // 0: straight from the light
+    bool stored = false;              // deposited as a photon hit (front side of a diffuse surface)
+};
+
+// Maps t ∈ [0,1) along a Hilbert curve to the unit square. The curve preserves area, so an
+// interval of length 1/G is a compact stratum of area 1/G: the emission domain of one group.
+glm::vec2 hilbert_point(double t);
+
+class PhotonTracer {
+public:
+    PhotonTracer(const Scene& scene, const RayTracer& rays);
+
+    // Rebinds to the scene's current lights/materials (call after edits; cheap).
+    void refresh();
+
+    // Traces photon `index` of group `group` of light `light`, appending its vertices to `out`.
+    void trace(int light, int group, int index, std::vector<TracedVertex>& out) const;
+
+    // Flux of one photon of `light` as emitted (Φ / (G·P)); zero for a switched-off light.
+    glm::vec3 photon_power(int light) const;
+    int dimensions() const { return dimensions_; }
+
+private:
+    const Scene& scene_;
+    const RayTracer& rays_;
+    int groups_, per_group_, max_bounces_, dimensions_;
+    std::vector<Halton> halton_;  // per light, scrambled with the scene seed and the light index
+};
+
+}  // namespace ag::cpu
