@@ -1,9 +1,894 @@
-// PLACEHOLDER so the tree links; being replaced by the charts implementation.
+// Surfaces by crease angle (Larsen ch. 8), lightmap charts cut from them, one packed atlas and a
+// record per texel (the layout the AIMs of ch. 10 and the IIM gathers of ch. 11 write into).
 #include "shared/charts.h"
+
+#include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <unordered_map>
+#include <utility>
+
+#include "shared/input_error.h"
+
 namespace ag {
-std::vector<int> segment_surfaces(const Mesh& mesh, float, int* surface_count) {
-    *surface_count = 1;
-    return std::vector<int>(mesh.triangles.size(), 0);
+namespace {
+
+using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
+using Tri2 = std::array<glm::dvec2, 3>;
+
+constexpr double kDegree = 3.14159265358979323846 / 180.0;
+// Charts keep this many texels between their triangles and their rectangle's edge, so every
+// corner UV lies strictly inside the rectangle.
+constexpr double kChartMargin = 0.01;
+// A texel belongs to a chart if its square overlaps chart triangles by more than this (texel²);
+// anything smaller is a rounding sliver along a texel line.
+constexpr double kMinCoverage = 1e-9;
+// Snapped texel centres move this fraction of the way to the triangle's centroid, so they sit
+// strictly inside a chart triangle rather than on an edge shared with a crease (ch. 8, 11).
+constexpr double kSnapNudge = 1e-3;
+// An atlas larger than this (texels) is a texel size far too small for the scene.
+constexpr double kMaxAtlasTexels = double(1 << 28);
+
+// Equal positions get one id, so meshes that repeat corners per face (boxes exported with
+// per-face normals) are still connected across their edges.
+std::vector<int> weld_positions(const Mesh& mesh, int* welded_count) {
+    const std::vector<glm::vec3>& p = mesh.positions;
+    std::vector<int> ids(p.size(), -1);
+    std::vector<int> order;
+    order.reserve(p.size());
+    int next = 0;
+    for (int i = 0; i < int(p.size()); ++i) {
+        const glm::vec3& q = p[size_t(i)];
+        // NaN would break the sort's ordering; such a vertex simply stays on its own.
+        if (std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z))
+            order.push_back(i);
+        else
+            ids[size_t(i)] = next++;
+    }
+    auto less = [&](int a, int b) {
+        const glm::vec3 &pa = p[size_t(a)], &pb = p[size_t(b)];
+        if (pa.x != pb.x) return pa.x < pb.x;
+        if (pa.y != pb.y) return pa.y < pb.y;
+        if (pa.z != pb.z) return pa.z < pb.z;
+        return a < b;
+    };
+    std::sort(order.begin(), order.end(), less);
+    for (size_t i = 0; i < order.size(); ++i) {
+        if (i == 0 || p[size_t(order[i])] != p[size_t(order[i - 1])]) ++next;
+        ids[size_t(order[i])] = next - 1;
+    }
+    *welded_count = next;
+    return ids;
 }
-void make_surfaces_and_atlas(Scene&) {}
+
+uint64_t edge_key(int a, int b) { return uint64_t(uint32_t(a)) << 32 | uint32_t(b); }
+
+// Edge adjacency between triangles, compressed rows sorted by neighbour index.
+struct Adjacency {
+    std::vector<int> offsets;  // triangle count + 1
+    std::vector<int> neighbours;
+
+    int begin(int t) const { return offsets[size_t(t)]; }
+    int end(int t) const { return offsets[size_t(t) + 1]; }
+};
+
+// OpenMesh's half-edge structure gives the adjacency of the manifold part. It refuses faces on
+// an edge that already has two faces or the same direction, and some non-manifold fans; those
+// triangles are matched instead through a map keyed by their sorted (welded) edge vertices, so
+// any triangle soup gets an adjacency and nothing is dropped.
+Adjacency triangle_adjacency(const Mesh& mesh) {
+    const int n = int(mesh.triangles.size());
+    int welded_count = 0;
+    const std::vector<int> weld = weld_positions(mesh, &welded_count);
+    std::vector<std::array<int, 3>> corners(static_cast<size_t>(n));
+    for (int t = 0; t < n; ++t)
+        for (int k = 0; k < 3; ++k)
+            corners[size_t(t)][size_t(k)] = weld[mesh.triangles[size_t(t)][k]];
+
+    // Directed edges used twice and undirected edges used more than twice make OpenMesh fail
+    // (loudly); send their triangles to the edge map up front.
+    std::vector<uint8_t> fallback(size_t(n), 0);
+    std::vector<uint64_t> directed, undirected;
+    directed.reserve(3 * size_t(n));
+    undirected.reserve(3 * size_t(n));
+    for (int t = 0; t < n; ++t) {
+        const auto& c = corners[size_t(t)];
+        if (c[0] == c[1] || c[1] == c[2] || c[0] == c[2]) {
+            fallback[size_t(t)] = 1;
+            continue;
+        }
+        for (int k = 0; k < 3; ++k) {
+            const int a = c[size_t(k)], b = c[size_t((k + 1) % 3)];
+            directed.push_back(edge_key(a, b));
+            undirected.push_back(edge_key(std::min(a, b), std::max(a, b)));
+        }
+    }
+    std::sort(directed.begin(), directed.end());
+    std::sort(undirected.begin(), undirected.end());
+    std::vector<uint64_t> bad;
+    for (size_t i = 1; i < directed.size(); ++i)
+        if (directed[i] == directed[i - 1]) bad.push_back(directed[i]);
+    for (size_t i = 2; i < undirected.size(); ++i)
+        if (undirected[i] == undirected[i - 2]) bad.push_back(undirected[i]);
+    std::sort(bad.begin(), bad.end());
+    auto is_bad = [&](uint64_t key) { return std::binary_search(bad.begin(), bad.end(), key); };
+    for (int t = 0; t < n && !bad.empty(); ++t) {
+        const auto& c = corners[size_t(t)];
+        for (int k = 0; k < 3 && !fallback[size_t(t)]; ++k) {
+            const int a = c[size_t(k)], b = c[size_t((k + 1) % 3)];
+            if (is_bad(edge_key(a, b)) || is_bad(edge_key(std::min(a, b), std::max(a, b))))
+                fallback[size_t(t)] = 1;
+        }
+    }
+
+    OmMesh om;
+    om.reserve(size_t(welded_count), 3 * size_t(n), size_t(n));
+    std::vector<glm::vec3> welded_positions(static_cast<size_t>(welded_count));
+    for (size_t i = 0; i < mesh.positions.size(); ++i)
+        welded_positions[size_t(weld[i])] = mesh.positions[i];
+    for (const glm::vec3& p : welded_positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
+    std::vector<int> face_triangle;
+    face_triangle.reserve(size_t(n));
+    for (int t = 0; t < n; ++t) {
+        if (fallback[size_t(t)]) continue;
+        const auto& c = corners[size_t(t)];
+        const OmMesh::FaceHandle fh = om.add_face(
+            OmMesh::VertexHandle(c[0]), OmMesh::VertexHandle(c[1]), OmMesh::VertexHandle(c[2]));
+        if (fh.is_valid())
+            face_triangle.push_back(t);
+        else
+            fallback[size_t(t)] = 1;
+    }
+
+    std::vector<std::pair<int, int>> pairs;
+    pairs.reserve(3 * size_t(n));
+    for (const OmMesh::FaceHandle fh : om.faces()) {
+        const int t = face_triangle[size_t(fh.idx())];
+        for (const OmMesh::HalfedgeHandle heh : om.fh_range(fh)) {
+            const OmMesh::FaceHandle other = om.opposite_face_handle(heh);
+            if (other.is_valid()) pairs.emplace_back(t, face_triangle[size_t(other.idx())]);
+        }
+    }
+    std::vector<std::pair<uint64_t, int>> loose_edges;
+    for (int t = 0; t < n; ++t) {
+        if (!fallback[size_t(t)]) continue;
+        const auto& c = corners[size_t(t)];
+        for (int k = 0; k < 3; ++k) {
+            const int a = c[size_t(k)], b = c[size_t((k + 1) % 3)];
+            if (a != b) loose_edges.emplace_back(edge_key(std::min(a, b), std::max(a, b)), t);
+        }
+    }
+    std::sort(loose_edges.begin(), loose_edges.end());
+    if (!loose_edges.empty()) {
+        for (int t = 0; t < n; ++t) {
+            const auto& c = corners[size_t(t)];
+            for (int k = 0; k < 3; ++k) {
+                const int a = c[size_t(k)], b = c[size_t((k + 1) % 3)];
+                if (a == b) continue;
+                const uint64_t key = edge_key(std::min(a, b), std::max(a, b));
+                auto it = std::lower_bound(loose_edges.begin(), loose_edges.end(),
+                                           std::pair<uint64_t, int>(key, -1));
+                for (; it != loose_edges.end() && it->first == key; ++it) {
+                    if (it->second == t) continue;
+                    pairs.emplace_back(t, it->second);
+                    pairs.emplace_back(it->second, t);
+                }
+            }
+        }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+
+    Adjacency adjacency;
+    adjacency.offsets.assign(size_t(n) + 1, 0);
+    adjacency.neighbours.reserve(pairs.size());
+    for (const auto& [t, other] : pairs) {
+        ++adjacency.offsets[size_t(t) + 1];
+        adjacency.neighbours.push_back(other);
+    }
+    for (int t = 0; t < n; ++t) adjacency.offsets[size_t(t) + 1] += adjacency.offsets[size_t(t)];
+    return adjacency;
+}
+
+int find_root(std::vector<int>& parent, int i) {
+    while (parent[size_t(i)] != i) {
+        parent[size_t(i)] = parent[size_t(parent[size_t(i)])];
+        i = parent[size_t(i)];
+    }
+    return i;
+}
+
+void unite(std::vector<int>& parent, int a, int b) {
+    a = find_root(parent, a);
+    b = find_root(parent, b);
+    if (a != b) parent[size_t(std::max(a, b))] = std::min(a, b);
+}
+
+// Larsen's rule (ch. 8.1): an edge is connected when the normals on both sides differ by less
+// than α, and polygons joined by connected edges share one photon map.
+std::vector<int> segment(const Mesh& mesh, const Adjacency& adjacency, float crease_angle_deg,
+                         int* surface_count) {
+    const int n = int(mesh.triangles.size());
+    const float cos_crease = float(std::cos(double(crease_angle_deg) * kDegree));
+    std::vector<glm::vec3> normals(static_cast<size_t>(n));
+    std::vector<uint8_t> degenerate(static_cast<size_t>(n));
+    for (int t = 0; t < n; ++t) {
+        degenerate[size_t(t)] = is_degenerate_triangle(mesh, t);
+        normals[size_t(t)] = triangle_normal(mesh, t);
+    }
+    std::vector<int> parent(static_cast<size_t>(n));
+    std::iota(parent.begin(), parent.end(), 0);
+    for (int t = 0; t < n; ++t) {
+        if (degenerate[size_t(t)]) continue;
+        for (int i = adjacency.begin(t); i < adjacency.end(t); ++i) {
+            const int o = adjacency.neighbours[size_t(i)];
+            if (o > t && !degenerate[size_t(o)] &&
+                glm::dot(normals[size_t(t)], normals[size_t(o)]) > cos_crease)
+                unite(parent, t, o);
+        }
+    }
+    // A degenerate triangle has no trustworthy normal: it joins the surface of a neighbour
+    // (through chains of degenerate ones) but never bridges two surfaces.
+    std::vector<uint8_t> anchored(static_cast<size_t>(n));
+    for (int t = 0; t < n; ++t) anchored[size_t(t)] = !degenerate[size_t(t)];
+    for (bool changed = true; changed;) {
+        changed = false;
+        for (int t = 0; t < n; ++t) {
+            if (anchored[size_t(t)]) continue;
+            for (int i = adjacency.begin(t); i < adjacency.end(t); ++i) {
+                const int o = adjacency.neighbours[size_t(i)];
+                if (!anchored[size_t(o)]) continue;
+                unite(parent, t, o);
+                anchored[size_t(t)] = 1;
+                changed = true;
+                break;
+            }
+        }
+    }
+    std::vector<int> root_id(size_t(n), -1), ids(static_cast<size_t>(n));
+    int count = 0;
+    for (int t = 0; t < n; ++t) {
+        int& id = root_id[size_t(find_root(parent, t))];
+        if (id < 0) id = count++;
+        ids[size_t(t)] = id;
+    }
+    *surface_count = count;
+    return ids;
+}
+
+// Projection frame of a chart: u × v = axis, so counter-clockwise fronts stay counter-clockwise
+// in the atlas. The world axis least aligned with `axis` fixes u, deterministically.
+struct Frame {
+    glm::dvec3 axis, u, v;
+
+    explicit Frame(const glm::dvec3& n) : axis(n) {
+        const glm::dvec3 a = glm::abs(n);
+        const glm::dvec3 least = a.x <= a.y && a.x <= a.z ? glm::dvec3(1, 0, 0)
+                                 : a.y <= a.z             ? glm::dvec3(0, 1, 0)
+                                                          : glm::dvec3(0, 0, 1);
+        u = glm::normalize(glm::cross(n, least));
+        v = glm::cross(n, u);
+    }
+    glm::dvec2 project(const glm::vec3& p) const {
+        const glm::dvec3 q(p);
+        return {glm::dot(q, u), glm::dot(q, v)};
+    }
+};
+
+Tri2 project_triangle(const Mesh& mesh, const Frame& frame, int t) {
+    const glm::uvec3 tri = mesh.triangles[size_t(t)];
+    return {frame.project(mesh.positions[tri.x]), frame.project(mesh.positions[tri.y]),
+            frame.project(mesh.positions[tri.z])};
+}
+
+double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
+
+// Separating axes: two triangles overlap unless one of their six edge normals separates them,
+// allowing `eps` of interpenetration so that neighbours sharing an edge or a corner (equal up to
+// rounding) do not count as overlapping.
+bool triangles_overlap(const Tri2& a, const Tri2& b, double eps) {
+    for (const Tri2* t : {&a, &b})
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec2 e = (*t)[size_t((k + 1) % 3)] - (*t)[size_t(k)];
+            const glm::dvec2 axis(-e.y, e.x);
+            const double tolerance = eps * glm::length(axis);
+            double min_a = 1e300, max_a = -1e300, min_b = 1e300, max_b = -1e300;
+            for (int i = 0; i < 3; ++i) {
+                const double pa = glm::dot(a[size_t(i)], axis), pb = glm::dot(b[size_t(i)], axis);
+                min_a = std::min(min_a, pa), max_a = std::max(max_a, pa);
+                min_b = std::min(min_b, pb), max_b = std::max(max_b, pb);
+            }
+            if (max_a - min_b <= tolerance || max_b - min_a <= tolerance) return false;
+        }
+    return true;
+}
+
+// The projected triangles of one chart in a uniform hash grid, to refuse a triangle whose flat
+// image would land on top of the chart (a spiral ramp, a fold: normals inside the cone do not
+// make a surface a height field).
+class OverlapGrid {
+public:
+    void reset(double cell, double eps) {
+        cell_ = cell;
+        eps_ = eps;
+        // clear() keeps (and wipes) every bucket of the largest chart so far; many small charts
+        // after one big one would pay for that each time.
+        if (cells_.bucket_count() > 4096)
+            cells_ = {};
+        else
+            cells_.clear();
+        triangles_.clear();
+        big_.clear();
+        seen_.clear();
+    }
+
+    bool overlaps(const Tri2& t) {
+        ++query_;
+        const CellRange r = range(t);
+        auto test = [&](int id) {
+            if (seen_[size_t(id)] == query_) return false;
+            seen_[size_t(id)] = query_;
+            return triangles_overlap(t, triangles_[size_t(id)], eps_);
+        };
+        if (r.count() > kMaxCells) {
+            for (int id = 0; id < int(triangles_.size()); ++id)
+                if (test(id)) return true;
+            return false;
+        }
+        for (int id : big_)
+            if (test(id)) return true;
+        for (int64_t y = r.y0; y <= r.y1; ++y)
+            for (int64_t x = r.x0; x <= r.x1; ++x) {
+                const auto it = cells_.find(key(x, y));
+                if (it == cells_.end()) continue;
+                for (int id : it->second)
+                    if (test(id)) return true;
+            }
+        return false;
+    }
+
+    void insert(const Tri2& t) {
+        const int id = int(triangles_.size());
+        triangles_.push_back(t);
+        seen_.push_back(0);
+        const CellRange r = range(t);
+        if (r.count() > kMaxCells) {
+            big_.push_back(id);
+            return;
+        }
+        for (int64_t y = r.y0; y <= r.y1; ++y)
+            for (int64_t x = r.x0; x <= r.x1; ++x) cells_[key(x, y)].push_back(id);
+    }
+
+private:
+    // Triangles far larger than the cell are tested against everything instead of being
+    // spread over thousands of cells.
+    static constexpr double kMaxCells = 256;
+
+    struct CellRange {
+        int64_t x0, y0, x1, y1;
+        double count() const { return double(x1 - x0 + 1) * double(y1 - y0 + 1); }
+    };
+    CellRange range(const Tri2& t) const {
+        const glm::dvec2 lo = glm::min(glm::min(t[0], t[1]), t[2]);
+        const glm::dvec2 hi = glm::max(glm::max(t[0], t[1]), t[2]);
+        auto cell = [&](double c) {
+            return int64_t(std::floor(std::clamp(c / cell_, -1e15, 1e15)));
+        };
+        return {cell(lo.x), cell(lo.y), cell(hi.x), cell(hi.y)};
+    }
+    // Wrapping coordinates only merge cells, which costs tests, never correctness.
+    static uint64_t key(int64_t x, int64_t y) { return uint64_t(x) << 32 ^ uint64_t(uint32_t(y)); }
+
+    double cell_ = 1.0, eps_ = 0.0;
+    std::unordered_map<uint64_t, std::vector<int>> cells_;
+    std::vector<Tri2> triangles_;
+    std::vector<int> big_;
+    std::vector<uint32_t> seen_;
+    uint32_t query_ = 0;
+};
+
+// Per-triangle quantities that chart growth reads over and over.
+struct TriangleInfo {
+    std::vector<glm::dvec3> normal;  // unit, zero for degenerate triangles
+    std::vector<glm::dvec3> cross;   // 2 × area along the normal
+    std::vector<double> area;
+    std::vector<uint8_t> degenerate;
+};
+
+TriangleInfo triangle_info(const Mesh& mesh) {
+    const size_t n = mesh.triangles.size();
+    TriangleInfo info;
+    info.normal.resize(n);
+    info.cross.resize(n);
+    info.area.resize(n);
+    info.degenerate.resize(n);
+    for (size_t t = 0; t < n; ++t) {
+        const glm::uvec3 tri = mesh.triangles[t];
+        const glm::dvec3 a(mesh.positions[tri.x]), b(mesh.positions[tri.y]),
+            c(mesh.positions[tri.z]);
+        info.cross[t] = glm::cross(b - a, c - a);
+        info.area[t] = 0.5 * glm::length(info.cross[t]);
+        info.degenerate[t] = is_degenerate_triangle(mesh, int(t));
+        info.normal[t] = info.degenerate[t] ? glm::dvec3(0.0) : glm::normalize(info.cross[t]);
+    }
+    return info;
+}
+
+struct ChartCut {
+    std::vector<int> triangles;
+    glm::dvec3 axis;
+};
+
+// Cuts one surface into charts by greedy region growing (breadth first over edge neighbours).
+// Growth keeps the seed's normal as the projection axis, so every member is within the cone of
+// it; afterwards the area-weighted mean normal replaces it if every member is within the cone
+// of the mean too and the flat image does not fold in its plane. A member at angle θ from the
+// axis is stretched by 1/cos θ in area: the cone bounds the lightmap's distortion.
+std::vector<ChartCut> cut_charts(const Mesh& mesh, const Adjacency& adjacency,
+                                 const TriangleInfo& info, const std::vector<int>& surface_of,
+                                 int surface, const std::vector<int>& members, double cos_cone,
+                                 std::vector<int>& chart_of, std::vector<int>& tried, int& stamp,
+                                 OverlapGrid& grid) {
+    glm::dvec3 mean(0.0);
+    double edge_sum = 0.0;
+    int edge_count = 0;
+    for (int t : members) {
+        mean += info.cross[size_t(t)];
+        if (info.degenerate[size_t(t)]) continue;
+        const glm::uvec3 tri = mesh.triangles[size_t(t)];
+        const glm::vec3 a = mesh.positions[tri.x], b = mesh.positions[tri.y],
+                        c = mesh.positions[tri.z];
+        edge_sum += double(std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)}));
+        ++edge_count;
+    }
+    const double cell = edge_count > 0 && edge_sum > 0.0 ? edge_sum / edge_count : 1.0;
+    const double eps = 1e-6 * cell;
+    const glm::dvec3 surface_normal =
+        glm::length(mean) > 0.0 ? glm::normalize(mean) : glm::dvec3(0.0, 0.0, 1.0);
+
+    // Seeds: the triangles most aligned with the surface's mean normal first (on a bumpy floor
+    // that grows one big chart from the flat parts instead of starting at the steepest bump),
+    // then the largest, then the lowest index.
+    std::vector<int> seeds = members;
+    std::vector<double> alignment(seeds.size());
+    for (size_t i = 0; i < seeds.size(); ++i)
+        alignment[i] = glm::dot(info.normal[size_t(seeds[i])], surface_normal);
+    std::vector<size_t> order(seeds.size());
+    std::iota(order.begin(), order.end(), size_t(0));
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        const int ta = seeds[a], tb = seeds[b];
+        if (info.degenerate[size_t(ta)] != info.degenerate[size_t(tb)])
+            return info.degenerate[size_t(tb)] > info.degenerate[size_t(ta)];
+        if (alignment[a] != alignment[b]) return alignment[a] > alignment[b];
+        if (info.area[size_t(ta)] != info.area[size_t(tb)])
+            return info.area[size_t(ta)] > info.area[size_t(tb)];
+        return ta < tb;
+    });
+
+    std::vector<ChartCut> charts;
+    for (size_t oi : order) {
+        const int seed = seeds[oi];
+        if (chart_of[size_t(seed)] >= 0) continue;
+        const int id = int(charts.size());
+        ++stamp;
+        ChartCut chart;
+        chart.axis = info.degenerate[size_t(seed)] ? surface_normal : info.normal[size_t(seed)];
+        const Frame frame(chart.axis);
+        grid.reset(cell, eps);
+        chart.triangles.push_back(seed);
+        chart_of[size_t(seed)] = id;
+        tried[size_t(seed)] = stamp;
+        if (!info.degenerate[size_t(seed)]) grid.insert(project_triangle(mesh, frame, seed));
+        for (size_t head = 0; head < chart.triangles.size(); ++head) {
+            const int t = chart.triangles[head];
+            for (int i = adjacency.begin(t); i < adjacency.end(t); ++i) {
+                const int o = adjacency.neighbours[size_t(i)];
+                // Each test depends only on the chart so far, which only grows: a refused
+                // triangle stays refused, so try each once.
+                if (tried[size_t(o)] == stamp) continue;
+                tried[size_t(o)] = stamp;
+                if (chart_of[size_t(o)] >= 0 || surface_of[size_t(o)] != surface) continue;
+                if (!info.degenerate[size_t(o)]) {
+                    if (glm::dot(info.normal[size_t(o)], chart.axis) < cos_cone) continue;
+                    const Tri2 projected = project_triangle(mesh, frame, o);
+                    if (grid.overlaps(projected)) continue;
+                    grid.insert(projected);
+                }
+                chart_of[size_t(o)] = id;
+                chart.triangles.push_back(o);
+            }
+        }
+
+        glm::dvec3 chart_mean(0.0);
+        for (int t : chart.triangles) chart_mean += info.cross[size_t(t)];
+        if (chart.triangles.size() > 1 && glm::length(chart_mean) > 0.0) {
+            const glm::dvec3 m = glm::normalize(chart_mean);
+            bool ok = glm::dot(m, chart.axis) < 1.0;
+            for (size_t i = 0; ok && i < chart.triangles.size(); ++i) {
+                const int t = chart.triangles[i];
+                ok = info.degenerate[size_t(t)] || glm::dot(info.normal[size_t(t)], m) >= cos_cone;
+            }
+            if (ok) {
+                const Frame mean_frame(m);
+                grid.reset(cell, eps);
+                for (size_t i = 0; ok && i < chart.triangles.size(); ++i) {
+                    const int t = chart.triangles[i];
+                    if (info.degenerate[size_t(t)]) continue;
+                    const Tri2 projected = project_triangle(mesh, mean_frame, t);
+                    ok = !grid.overlaps(projected);
+                    grid.insert(projected);
+                }
+            }
+            if (ok) chart.axis = m;
+        }
+        std::sort(chart.triangles.begin(), chart.triangles.end());
+        charts.push_back(std::move(chart));
+    }
+    return charts;
+}
+
+// Area of the unit square [0,1]² (texel-local coordinates) inside a counter-clockwise triangle,
+// by Sutherland–Hodgman clipping of the square against the triangle's three edges.
+double clipped_square_area(const Tri2& tri) {
+    std::array<glm::dvec2, 8> poly{glm::dvec2(0, 0), glm::dvec2(1, 0), glm::dvec2(1, 1),
+                                   glm::dvec2(0, 1)};
+    std::array<glm::dvec2, 8> next;
+    int count = 4;
+    for (int k = 0; k < 3 && count > 0; ++k) {
+        const glm::dvec2 a = tri[size_t(k)], e = tri[size_t((k + 1) % 3)] - a;
+        int out = 0;
+        for (int i = 0; i < count; ++i) {
+            const glm::dvec2 p = poly[size_t(i)], q = poly[size_t((i + 1) % count)];
+            const double dp = cross2(e, p - a), dq = cross2(e, q - a);
+            if (dp >= 0.0) next[size_t(out++)] = p;
+            if ((dp >= 0.0) != (dq >= 0.0)) next[size_t(out++)] = p + (q - p) * (dp / (dp - dq));
+        }
+        poly = next;
+        count = out;
+    }
+    double area = 0.0;
+    for (int i = 0; i < count; ++i) area += cross2(poly[size_t(i)], poly[size_t((i + 1) % count)]);
+    return 0.5 * area;
+}
+
+// Closest point of triangle abc to p (Ericson, Real-Time Collision Detection 5.1.5), as
+// barycentric weights of (a, b, c); also the squared distance.
+glm::dvec3 closest_barycentric(const glm::dvec2& p, const Tri2& t, double* distance2) {
+    const glm::dvec2 a = t[0], b = t[1], c = t[2];
+    const glm::dvec2 ab = b - a, ac = c - a, ap = p - a;
+    glm::dvec3 w;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    const glm::dvec2 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    const glm::dvec2 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    const double vc = d1 * d4 - d3 * d2, vb = d5 * d2 - d1 * d6, va = d3 * d6 - d5 * d4;
+    if (d1 <= 0.0 && d2 <= 0.0) {
+        w = {1, 0, 0};
+    } else if (d3 >= 0.0 && d4 <= d3) {
+        w = {0, 1, 0};
+    } else if (d6 >= 0.0 && d5 <= d6) {
+        w = {0, 0, 1};
+    } else if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+        const double s = d1 / (d1 - d3);
+        w = {1 - s, s, 0};
+    } else if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+        const double s = d2 / (d2 - d6);
+        w = {1 - s, 0, s};
+    } else if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+        const double s = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        w = {0, 1 - s, s};
+    } else {
+        const double denom = 1.0 / (va + vb + vc);
+        w = {va * denom, vb * denom, vc * denom};
+    }
+    const glm::dvec2 q = w.x * a + w.y * b + w.z * c;
+    *distance2 = glm::dot(p - q, p - q);
+    return w;
+}
+
+// Barycentric weights of p in triangle t, or nothing if p lies outside it.
+bool inside_barycentric(const glm::dvec2& p, const Tri2& t, glm::dvec3* w) {
+    const double area = cross2(t[1] - t[0], t[2] - t[0]);
+    const double w0 = cross2(t[1] - p, t[2] - p) / area, w1 = cross2(t[2] - p, t[0] - p) / area;
+    const double w2 = 1.0 - w0 - w1;
+    if (w0 < 0.0 || w1 < 0.0 || w2 < 0.0) return false;
+    *w = {w0, w1, w2};
+    return true;
+}
+
+// A chart triangle in the chart's texel space: (0,0) is the corner of the chart's first texel.
+Tri2 chart_texel_triangle(const Mesh& mesh, const Chart& chart, int t, double texel_size) {
+    const glm::uvec3 tri = mesh.triangles[size_t(t)];
+    Tri2 out;
+    for (int k = 0; k < 3; ++k) {
+        const glm::dvec3 p(mesh.positions[tri[k]]);
+        out[size_t(k)] = {
+            (glm::dot(p, glm::dvec3(chart.u_axis)) - double(chart.origin.x)) / texel_size,
+            (glm::dot(p, glm::dvec3(chart.v_axis)) - double(chart.origin.y)) / texel_size};
+    }
+    return out;
+}
+
+// Texel records of one chart (ch. 10, 11): every texel whose square overlaps a chart triangle,
+// with the world area it covers and its centre on the surface, snapped inside the chart where
+// the centre falls outside, so gathers never start below a neighbouring crease.
+void make_chart_texels(const Mesh& mesh, const TriangleInfo& info, const Chart& chart, int chart_id,
+                       double texel_size, LightmapAtlas& atlas) {
+    const int w = chart.width, h = chart.height;
+    const size_t count = size_t(w) * size_t(h);
+    std::vector<double> area(count, 0.0), coverage(count, 0.0);
+    std::vector<double> best_distance(count, std::numeric_limits<double>::infinity());
+    std::vector<int> best_triangle(count, -1);
+    std::vector<glm::dvec3> best_weights(count);
+
+    for (int t : chart.triangles) {
+        if (info.degenerate[size_t(t)]) continue;
+        const Tri2 q = chart_texel_triangle(mesh, chart, t, texel_size);
+        const double texel_area = 0.5 * cross2(q[1] - q[0], q[2] - q[0]);
+        if (!(texel_area > 0.0)) continue;
+        const double world_per_texel = info.area[size_t(t)] / texel_area;
+        const glm::dvec2 lo = glm::min(glm::min(q[0], q[1]), q[2]);
+        const glm::dvec2 hi = glm::max(glm::max(q[0], q[1]), q[2]);
+        // Texels the triangle overlaps, and (wider) texels whose centre may be nearest to it:
+        // a covered texel's centre is within √½ of some chart triangle.
+        const int cx0 = std::max(0, int(std::floor(lo.x))),
+                  cx1 = std::min(w - 1, int(std::ceil(hi.x)) - 1);
+        const int cy0 = std::max(0, int(std::floor(lo.y))),
+                  cy1 = std::min(h - 1, int(std::ceil(hi.y)) - 1);
+        const int sx0 = std::max(0, int(std::floor(lo.x - 1.21))),
+                  sx1 = std::min(w - 1, int(std::floor(hi.x + 0.21)));
+        const int sy0 = std::max(0, int(std::floor(lo.y - 1.21))),
+                  sy1 = std::min(h - 1, int(std::floor(hi.y + 0.21)));
+        for (int y = sy0; y <= sy1; ++y)
+            for (int x = sx0; x <= sx1; ++x) {
+                const size_t i = size_t(y) * size_t(w) + size_t(x);
+                const glm::dvec2 centre(x + 0.5, y + 0.5);
+                glm::dvec3 weights;
+                double distance2 = 0.0;
+                if (!inside_barycentric(centre, q, &weights))
+                    weights = closest_barycentric(centre, q, &distance2);
+                if (distance2 < best_distance[i]) {
+                    best_distance[i] = distance2;
+                    best_triangle[i] = t;
+                    best_weights[i] = weights;
+                }
+                if (x < cx0 || x > cx1 || y < cy0 || y > cy1) continue;
+                const glm::dvec2 corner(x, y);
+                const Tri2 local{q[0] - corner, q[1] - corner, q[2] - corner};
+                const double covered = lo.x >= x && hi.x <= x + 1 && lo.y >= y && hi.y <= y + 1
+                                           ? texel_area
+                                           : clipped_square_area(local);
+                coverage[i] += covered;
+                area[i] += covered * world_per_texel;
+            }
+    }
+
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const size_t i = size_t(y) * size_t(w) + size_t(x);
+            if (!(coverage[i] > kMinCoverage)) continue;
+            const int t = best_triangle[i];
+            glm::dvec3 weights = best_weights[i];
+            if (best_distance[i] > 0.0) weights = (1.0 - kSnapNudge) * weights + kSnapNudge / 3.0;
+            const glm::uvec3 tri = mesh.triangles[size_t(t)];
+            const glm::dvec3 p = weights.x * glm::dvec3(mesh.positions[tri.x]) +
+                                 weights.y * glm::dvec3(mesh.positions[tri.y]) +
+                                 weights.z * glm::dvec3(mesh.positions[tri.z]);
+            TexelRecord record;
+            record.object = chart.object;
+            record.surface = chart.surface;
+            record.chart = chart_id;
+            record.triangle = t;
+            record.x = chart.x + x;
+            record.y = chart.y + y;
+            record.position = glm::vec3(p);
+            record.normal = glm::vec3(info.normal[size_t(t)]);
+            record.area = float(area[i]);
+            int& slot =
+                atlas.texel_index[size_t(record.y) * size_t(atlas.width) + size_t(record.x)];
+            slot = int(atlas.texels.size());
+            atlas.texels.push_back(record);
+        }
+}
+
+// Shelf packing of the gutter-padded rectangles, tallest first; returns the used height.
+int pack_shelves(const std::vector<glm::ivec2>& sizes, const std::vector<int>& order, int width,
+                 std::vector<glm::ivec2>* positions) {
+    positions->assign(sizes.size(), glm::ivec2(0));
+    int x = 0, y = 0, shelf = 0;
+    for (int id : order) {
+        const glm::ivec2 s = sizes[size_t(id)];
+        if (x + s.x > width) {
+            y += shelf;
+            x = 0;
+            shelf = 0;
+        }
+        (*positions)[size_t(id)] = {x, y};
+        x += s.x;
+        shelf = std::max(shelf, s.y);
+    }
+    return y + shelf;
+}
+
+int round_up(int value, int multiple) { return (value + multiple - 1) / multiple * multiple; }
+
+}  // namespace
+
+std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int* surface_count) {
+    return segment(mesh, triangle_adjacency(mesh), crease_angle_deg, surface_count);
+}
+
+void make_surfaces_and_atlas(Scene& scene) {
+    const LightmapSettings& ls = scene.settings.lightmap;
+    const std::string where = scene.path.empty() ? "scene" : scene.path;
+    scene.surfaces.clear();
+    scene.triangle_surface.assign(scene.objects.size(), {});
+    LightmapAtlas& atlas = scene.atlas;
+    atlas = LightmapAtlas{};
+    atlas.gutter = std::max(0, ls.gutter);
+    atlas.corner_uvs.assign(scene.objects.size(), {});
+
+    Bounds bounds;
+    for (const Object& object : scene.objects)
+        for (const glm::vec3& p : object.mesh.positions)
+            bounds.add(object.transform.apply_point(p));
+    const float longest = bounds.empty() ? 0.0f
+                                         : glm::max(glm::max(bounds.extent().x, bounds.extent().y),
+                                                    bounds.extent().z);
+    const float texel_size_f = effective_texel_size(scene.settings, longest);
+    if (!(texel_size_f > 0.0f) || !std::isfinite(texel_size_f))
+        throw_input_error(where, "settings.lightmap.texel_size",
+                          "expected a positive texel size, got " + std::to_string(texel_size_f));
+    atlas.texel_size = texel_size_f;
+    const double texel_size = texel_size_f;
+    const double cos_cone = std::cos(double(ls.chart_cone) * kDegree);
+
+    std::vector<TriangleInfo> infos(scene.objects.size());
+    OverlapGrid grid;
+    for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
+        const Mesh& mesh = scene.objects[size_t(oi)].mesh;
+        const int n = int(mesh.triangles.size());
+        const Adjacency adjacency = triangle_adjacency(mesh);
+        int local_count = 0;
+        const std::vector<int> local = segment(mesh, adjacency, ls.crease_angle, &local_count);
+        TriangleInfo& info = infos[size_t(oi)];
+        info = triangle_info(mesh);
+
+        const int first_surface = int(scene.surfaces.size());
+        scene.surfaces.resize(size_t(first_surface + local_count));
+        std::vector<int>& global = scene.triangle_surface[size_t(oi)];
+        global.resize(size_t(n));
+        std::vector<glm::dvec3> normal_sums(size_t(local_count), glm::dvec3(0.0));
+        std::vector<double> area_sums(size_t(local_count), 0.0);
+        for (int t = 0; t < n; ++t) {
+            const int s = local[size_t(t)];
+            global[size_t(t)] = first_surface + s;
+            Surface& surface = scene.surfaces[size_t(first_surface + s)];
+            surface.object = oi;
+            surface.triangles.push_back(t);
+            normal_sums[size_t(s)] += info.cross[size_t(t)];
+            area_sums[size_t(s)] += info.area[size_t(t)];
+        }
+
+        std::vector<int> chart_of(size_t(n), -1), tried(size_t(n), -1);
+        int stamp = -1;
+        for (int s = 0; s < local_count; ++s) {
+            Surface& surface = scene.surfaces[size_t(first_surface + s)];
+            surface.area = float(area_sums[size_t(s)]);
+            const double length = glm::length(normal_sums[size_t(s)]);
+            surface.normal =
+                length > 0.0 ? glm::vec3(normal_sums[size_t(s)] / length) : glm::vec3(0.0f);
+            std::vector<ChartCut> cuts =
+                cut_charts(mesh, adjacency, info, local, s, surface.triangles, cos_cone, chart_of,
+                           tried, stamp, grid);
+            for (ChartCut& cut : cuts) {
+                Chart chart;
+                chart.object = oi;
+                chart.surface = first_surface + s;
+                chart.triangles = std::move(cut.triangles);
+                const Frame frame(cut.axis);
+                chart.axis = glm::vec3(frame.axis);
+                chart.u_axis = glm::vec3(frame.u);
+                chart.v_axis = glm::vec3(frame.v);
+                // Rectangle: the projected bounds plus a margin, centred, in whole texels.
+                glm::dvec2 lo(1e300), hi(-1e300);
+                for (int t : chart.triangles)
+                    for (int k = 0; k < 3; ++k) {
+                        const glm::dvec3 p(mesh.positions[mesh.triangles[size_t(t)][k]]);
+                        const glm::dvec2 uv(glm::dot(p, glm::dvec3(chart.u_axis)),
+                                            glm::dot(p, glm::dvec3(chart.v_axis)));
+                        lo = glm::min(lo, uv);
+                        hi = glm::max(hi, uv);
+                    }
+                const glm::dvec2 texels = (hi - lo) / texel_size + 2.0 * kChartMargin;
+                if (!(texels.x < 65536.0 && texels.y < 65536.0))
+                    throw_input_error(where, "settings.lightmap.texel_size",
+                                      "a chart of object '" + scene.objects[size_t(oi)].name +
+                                          "' would be over 65536 texels wide; expected a texel "
+                                          "size closer to the scene's scale");
+                chart.width = std::max(1, int(std::ceil(texels.x)));
+                chart.height = std::max(1, int(std::ceil(texels.y)));
+                const glm::dvec2 slack =
+                    glm::dvec2(chart.width, chart.height) * texel_size - (hi - lo);
+                chart.origin = glm::vec2(lo - 0.5 * slack);
+                surface.charts.push_back(int(atlas.charts.size()));
+                atlas.charts.push_back(std::move(chart));
+            }
+        }
+    }
+
+    // Pack every chart with `gutter` free texels on each side, so bilinear lookups near a
+    // chart's edge never read a neighbouring chart.
+    const int count = int(atlas.charts.size());
+    const int pad = 2 * atlas.gutter;
+    std::vector<glm::ivec2> sizes(static_cast<size_t>(count));
+    double total = 0.0;
+    int widest = 1;
+    for (int c = 0; c < count; ++c) {
+        const Chart& chart = atlas.charts[size_t(c)];
+        sizes[size_t(c)] = {chart.width + pad, chart.height + pad};
+        total += double(sizes[size_t(c)].x) * double(sizes[size_t(c)].y);
+        widest = std::max(widest, sizes[size_t(c)].x);
+    }
+    if (total > kMaxAtlasTexels)
+        throw_input_error(where, "settings.lightmap.texel_size",
+                          "the lightmap atlas would need " + std::to_string(int64_t(total)) +
+                              " texels; expected a larger texel size than " +
+                              std::to_string(texel_size_f));
+    std::vector<int> order(static_cast<size_t>(count));
+    std::iota(order.begin(), order.end(), 0);
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+        if (sizes[size_t(a)].y != sizes[size_t(b)].y)
+            return sizes[size_t(a)].y > sizes[size_t(b)].y;
+        if (sizes[size_t(a)].x != sizes[size_t(b)].x)
+            return sizes[size_t(a)].x > sizes[size_t(b)].x;
+        return a < b;
+    });
+    std::vector<glm::ivec2> positions;
+    if (count > 0) {
+        int width = 1;
+        while (width < widest || double(width) * double(width) < total) width *= 2;
+        // Shelves waste the space above shorter charts; a twice-wider atlas sometimes wastes less.
+        const int height = round_up(pack_shelves(sizes, order, width, &positions), 4);
+        std::vector<glm::ivec2> wide_positions;
+        const int wide_height = round_up(pack_shelves(sizes, order, 2 * width, &wide_positions), 4);
+        if (2.0 * double(width) * double(wide_height) < double(width) * double(height)) {
+            atlas.width = 2 * width;
+            atlas.height = wide_height;
+            positions = std::move(wide_positions);
+        } else {
+            atlas.width = width;
+            atlas.height = height;
+        }
+    }
+    for (int c = 0; c < count; ++c) {
+        atlas.charts[size_t(c)].x = positions[size_t(c)].x + atlas.gutter;
+        atlas.charts[size_t(c)].y = positions[size_t(c)].y + atlas.gutter;
+    }
+
+    atlas.texel_index.assign(size_t(atlas.width) * size_t(atlas.height), -1);
+    for (int oi = 0; oi < int(scene.objects.size()); ++oi)
+        atlas.corner_uvs[size_t(oi)].assign(3 * scene.objects[size_t(oi)].mesh.triangles.size(),
+                                            glm::vec2(0.0f));
+    for (int c = 0; c < count; ++c) {
+        const Chart& chart = atlas.charts[size_t(c)];
+        const Mesh& mesh = scene.objects[size_t(chart.object)].mesh;
+        std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(chart.object)];
+        for (int t : chart.triangles) {
+            const Tri2 q = chart_texel_triangle(mesh, chart, t, texel_size);
+            for (int k = 0; k < 3; ++k)
+                uvs[3 * size_t(t) + size_t(k)] =
+                    glm::vec2(q[size_t(k)] + glm::dvec2(chart.x, chart.y));
+        }
+        make_chart_texels(mesh, infos[size_t(chart.object)], chart, c, texel_size, atlas);
+    }
+}
+
 }  // namespace ag

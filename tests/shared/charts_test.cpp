@@ -1,0 +1,479 @@
+// Surfaces by crease angle (Larsen ch. 8), charts and the packed lightmap atlas: known answers for
+// simple shapes first, then invariants every atlas must keep (coverage, no overlap, distortion,
+// texel records on the chart, area conservation, determinism).
+#include "shared/charts.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+
+#include "shared/shapes.h"
+
+namespace ag {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// A box whose faces do not share vertices (as exported with per-face normals): surfaces must
+// still be found across its edges by welding equal positions.
+Mesh make_face_split_box(const glm::vec3& size) {
+    const Mesh shared = make_box(size);
+    Mesh mesh;
+    for (const glm::uvec3& t : shared.triangles) {
+        const unsigned base = unsigned(mesh.positions.size());
+        for (int k = 0; k < 3; ++k) mesh.positions.push_back(shared.positions[t[k]]);
+        mesh.triangles.push_back({base, base + 1, base + 2});
+    }
+    return mesh;
+}
+
+// Two unit quads sharing the edge x = 0 (along Z): one in the XZ plane facing +Y, one rotated
+// up about that edge by `fold_deg` (0 = flat, 90 = a right-angle corner).
+Mesh make_folded_quads(float fold_deg) {
+    const float a = fold_deg * kPi / 180.0f;
+    Mesh mesh;
+    mesh.positions = {{0, 0, 0},
+                      {0, 0, 1},
+                      {1, 0, 1},
+                      {1, 0, 0},
+                      {-std::cos(a), std::sin(a), 0},
+                      {-std::cos(a), std::sin(a), 1}};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}, {4, 5, 1}, {4, 1, 0}};
+    return mesh;
+}
+
+// A spiral ramp: gently sloped (normals within a few degrees of +Y) but winding `turns` times
+// about the Y axis, so its flat projection along Y folds over itself.
+Mesh make_spiral_ramp(float turns, int segments_per_turn, float rise_per_turn) {
+    Mesh mesh;
+    const int segments = int(turns * float(segments_per_turn));
+    for (int i = 0; i <= segments; ++i) {
+        const float a = 2.0f * kPi * float(i) / float(segments_per_turn);
+        const float y = rise_per_turn * float(i) / float(segments_per_turn);
+        mesh.positions.push_back({1.0f * std::cos(a), y, 1.0f * std::sin(a)});
+        mesh.positions.push_back({2.0f * std::cos(a), y, 2.0f * std::sin(a)});
+    }
+    for (int i = 0; i < segments; ++i) {
+        const unsigned in0 = unsigned(2 * i), out0 = in0 + 1, in1 = in0 + 2, out1 = in0 + 3;
+        // Angle grows from +X towards +Z: (in0, in1, out1) turns about +Y.
+        mesh.triangles.push_back({in0, in1, out1});
+        mesh.triangles.push_back({in0, out1, out0});
+    }
+    return mesh;
+}
+
+Scene make_scene(std::vector<Mesh> meshes, float texel_size) {
+    Scene scene;
+    for (size_t i = 0; i < meshes.size(); ++i) {
+        Object object;
+        object.name = "object" + std::to_string(i);
+        object.mesh = std::move(meshes[i]);
+        // Rigid motion must not matter: texel size is in world units, records in object space.
+        object.transform.translation = glm::vec3(3.0f * float(i), 0.5f, -1.0f);
+        object.transform.rotation = glm::angleAxis(0.3f * float(i), glm::vec3(0, 1, 0));
+        scene.objects.push_back(std::move(object));
+    }
+    scene.settings.lightmap.texel_size = texel_size;
+    make_surfaces_and_atlas(scene);
+    return scene;
+}
+
+// The scenes every invariant is checked on.
+std::vector<std::pair<std::string, Scene>> invariant_scenes() {
+    std::vector<std::pair<std::string, Scene>> scenes;
+    scenes.emplace_back("box", make_scene({make_box({1.0f, 2.0f, 0.5f})}, 0.1f));
+    scenes.emplace_back("sphere", make_scene({make_sphere(1.0f, 3)}, 0.05f));
+    scenes.emplace_back("bumpy", make_scene({make_bumpy_plane(4.0f, 4.0f, 40, 0.4f, 7)}, 0.05f));
+    scenes.emplace_back("spiral", make_scene({make_spiral_ramp(2.5f, 40, 0.3f)}, 0.1f));
+    scenes.emplace_back(
+        "mixed", make_scene({make_face_split_box({2.0f, 1.0f, 1.0f}), make_sphere(0.7f, 2),
+                             make_folded_quads(90.0f), make_bumpy_plane(3.0f, 2.0f, 20, 0.2f, 3)},
+                            0.0f));
+    return scenes;
+}
+
+double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
+
+std::array<glm::dvec2, 3> corner_uvs(const Scene& scene, int object, int triangle) {
+    const auto& uvs = scene.atlas.corner_uvs[size_t(object)];
+    return {glm::dvec2(uvs[3 * size_t(triangle)]), glm::dvec2(uvs[3 * size_t(triangle) + 1]),
+            glm::dvec2(uvs[3 * size_t(triangle) + 2])};
+}
+
+// Strict overlap of two triangles in the plane (separating axes with a small tolerance).
+bool overlap_2d(const std::array<glm::dvec2, 3>& a, const std::array<glm::dvec2, 3>& b) {
+    for (const auto* t : {&a, &b})
+        for (int k = 0; k < 3; ++k) {
+            const glm::dvec2 e = (*t)[size_t((k + 1) % 3)] - (*t)[size_t(k)];
+            const glm::dvec2 n(-e.y, e.x);
+            double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300;
+            for (int i = 0; i < 3; ++i) {
+                a0 = std::min(a0, glm::dot(a[size_t(i)], n)),
+                a1 = std::max(a1, glm::dot(a[size_t(i)], n));
+                b0 = std::min(b0, glm::dot(b[size_t(i)], n)),
+                b1 = std::max(b1, glm::dot(b[size_t(i)], n));
+            }
+            const double tolerance = 1e-4 * glm::length(n);
+            if (a1 - b0 <= tolerance || b1 - a0 <= tolerance) return false;
+        }
+    return true;
+}
+
+TEST(Surfaces, CubeHasSixAt30Degrees) {
+    for (const Mesh& box :
+         {make_box({1.0f, 1.0f, 1.0f}), make_face_split_box({1.0f, 2.0f, 3.0f})}) {
+        int count = 0;
+        const std::vector<int> ids = segment_surfaces(box, 30.0f, &count);
+        EXPECT_EQ(count, 6);
+        ASSERT_EQ(ids.size(), 12u);
+        std::map<int, int> sizes;
+        for (int id : ids) ++sizes[id];
+        for (const auto& [id, n] : sizes) EXPECT_EQ(n, 2) << "surface " << id;
+    }
+}
+
+TEST(Surfaces, IdsAreOrderedByLowestTriangle) {
+    int count = 0;
+    const std::vector<int> ids = segment_surfaces(make_face_split_box({1, 1, 1}), 30.0f, &count);
+    int next = 0;
+    for (int id : ids) {
+        EXPECT_LE(id, next);
+        if (id == next) ++next;
+    }
+    EXPECT_EQ(next, count);
+}
+
+TEST(Surfaces, FineSphereIsOneAt30Degrees) {
+    const Mesh sphere = make_sphere(1.0f, 3);
+    ASSERT_GE(sphere.triangles.size(), 1280u);
+    int count = 0;
+    segment_surfaces(sphere, 30.0f, &count);
+    EXPECT_EQ(count, 1);
+    // Neighbouring faces of this sphere differ by several degrees: a 1° crease splits them all.
+    segment_surfaces(sphere, 1.0f, &count);
+    EXPECT_EQ(count, int(sphere.triangles.size()));
+}
+
+TEST(Surfaces, RightAngleSplitsAt30AndJoinsAt100) {
+    const Mesh corner = make_folded_quads(90.0f);
+    int count = 0;
+    EXPECT_EQ(segment_surfaces(corner, 30.0f, &count), (std::vector<int>{0, 0, 1, 1}));
+    EXPECT_EQ(count, 2);
+    EXPECT_EQ(segment_surfaces(corner, 100.0f, &count), (std::vector<int>{0, 0, 0, 0}));
+    EXPECT_EQ(count, 1);
+    segment_surfaces(make_folded_quads(20.0f), 30.0f, &count);
+    EXPECT_EQ(count, 1);
+}
+
+TEST(Surfaces, NonManifoldInputDoesNotCrash) {
+    // A fin (three faces on one edge), a duplicated face, a face wound the other way, an
+    // isolated face and a zero-area face: OpenMesh refuses several of them.
+    Mesh mesh;
+    mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0.5f, 0, 1}, {0.5f, 0, -1}, {0.5f, 1, 0},
+                      {2, 0, 0}, {5, 0, 0}, {6, 0, 0},    {5, 0, 1},     {0.5f, 0, 0}};
+    mesh.triangles = {
+        {0, 2, 1},  // 0: faces +Y
+        {0, 1, 3},  // 1: faces +Y, across edge 0-1
+        {0, 4, 1},  // 2: the fin, vertical, on edge 0-1
+        {0, 2, 1},  // 3: duplicate of 0
+        {2, 1, 5},  // 4: faces -Y, across edge 1-2, wound against 0
+        {6, 8, 7},  // 5: isolated, +Y
+        {0, 9, 1},  // 6: zero area on edge 0-1
+    };
+    int count = 0;
+    const std::vector<int> ids = segment_surfaces(mesh, 30.0f, &count);
+    ASSERT_EQ(ids.size(), mesh.triangles.size());
+    EXPECT_EQ(ids[0], ids[1]);
+    EXPECT_EQ(ids[0], ids[3]);
+    EXPECT_NE(ids[0], ids[2]);
+    EXPECT_NE(ids[0], ids[4]);
+    EXPECT_NE(ids[0], ids[5]);
+    EXPECT_EQ(count, 4);  // {0,1,3,6}, {2}, {4}, {5}
+
+    Scene scene = make_scene({mesh}, 0.1f);
+    EXPECT_EQ(scene.surfaces.size(), 4u);
+    EXPECT_FALSE(scene.atlas.texels.empty());
+}
+
+TEST(Surfaces, FillsAreaNormalAndGlobalIds) {
+    const Scene scene = make_scene({make_box({1.0f, 2.0f, 3.0f}), make_folded_quads(90.0f)}, 0.25f);
+    ASSERT_EQ(scene.surfaces.size(), 8u);
+    ASSERT_EQ(scene.triangle_surface.size(), 2u);
+    EXPECT_EQ(scene.triangle_surface[1], (std::vector<int>{6, 6, 7, 7}));
+    float box_area = 0.0f;
+    for (int s = 0; s < 6; ++s) {
+        const Surface& surface = scene.surfaces[size_t(s)];
+        EXPECT_EQ(surface.object, 0);
+        box_area += surface.area;
+        const glm::vec3 n = surface.normal;
+        EXPECT_NEAR(glm::length(n), 1.0f, 1e-5f);
+        EXPECT_NEAR(std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)}), 1.0f, 1e-5f);
+    }
+    EXPECT_NEAR(box_area, 2.0f * (2.0f + 3.0f + 6.0f), 1e-4f);
+    EXPECT_NEAR(scene.surfaces[6].area, 1.0f, 1e-5f);
+    EXPECT_NEAR(scene.surfaces[6].normal.y, 1.0f, 1e-5f);
+}
+
+TEST(Charts, CoverEveryTriangleExactlyOnce) {
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        std::vector<std::vector<int>> seen(scene.objects.size());
+        for (size_t o = 0; o < scene.objects.size(); ++o)
+            seen[o].assign(scene.objects[o].mesh.triangles.size(), 0);
+        for (int c = 0; c < int(scene.atlas.charts.size()); ++c) {
+            const Chart& chart = scene.atlas.charts[size_t(c)];
+            const Surface& surface = scene.surfaces[size_t(chart.surface)];
+            EXPECT_EQ(chart.object, surface.object);
+            EXPECT_NE(std::find(surface.charts.begin(), surface.charts.end(), c),
+                      surface.charts.end());
+            for (int t : chart.triangles) {
+                ++seen[size_t(chart.object)][size_t(t)];
+                EXPECT_EQ(scene.triangle_surface[size_t(chart.object)][size_t(t)], chart.surface);
+            }
+        }
+        for (const auto& per_object : seen)
+            for (int n : per_object) EXPECT_EQ(n, 1);
+        size_t listed = 0;
+        for (const Surface& surface : scene.surfaces) listed += surface.charts.size();
+        EXPECT_EQ(listed, scene.atlas.charts.size());
+    }
+}
+
+TEST(Charts, NormalsStayWithinTheCone) {
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        const float cos_cone = std::cos(scene.settings.lightmap.chart_cone * kPi / 180.0f);
+        for (const Chart& chart : scene.atlas.charts) {
+            EXPECT_NEAR(glm::length(chart.axis), 1.0f, 1e-5f);
+            EXPECT_NEAR(glm::dot(glm::cross(chart.u_axis, chart.v_axis), chart.axis), 1.0f, 1e-5f);
+            for (int t : chart.triangles)
+                EXPECT_GE(glm::dot(triangle_normal(scene.objects[size_t(chart.object)].mesh, t),
+                                   chart.axis),
+                          cos_cone - 1e-5f);
+        }
+    }
+}
+
+TEST(Charts, TexelWorldSizeWithin25Percent) {
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        const double ts = scene.atlas.texel_size;
+        ASSERT_GT(ts, 0.0);
+        double worst = 0.0;
+        for (const Chart& chart : scene.atlas.charts)
+            for (int t : chart.triangles) {
+                const auto q = corner_uvs(scene, chart.object, t);
+                const double texel_area = 0.5 * cross2(q[1] - q[0], q[2] - q[0]);
+                ASSERT_GT(texel_area, 0.0) << "chart triangles keep their winding";
+                const double world = triangle_area(scene.objects[size_t(chart.object)].mesh, t);
+                const double size = std::sqrt(world / texel_area) / ts;
+                worst = std::max(worst, std::abs(size - 1.0));
+            }
+        EXPECT_LE(worst, 0.25);
+        // The 30° cone bounds the stretch at sqrt(1 / cos 30°) = 1.075.
+        EXPECT_LE(worst, 0.0746);
+    }
+}
+
+TEST(Charts, SpiralRampIsCutWhereItFolds) {
+    const Scene scene = make_scene({make_spiral_ramp(2.5f, 40, 0.3f)}, 0.1f);
+    ASSERT_EQ(scene.surfaces.size(), 1u);
+    EXPECT_GE(scene.atlas.charts.size(), 3u);
+    for (const Chart& chart : scene.atlas.charts)
+        for (size_t i = 0; i < chart.triangles.size(); ++i)
+            for (size_t j = i + 1; j < chart.triangles.size(); ++j)
+                ASSERT_FALSE(overlap_2d(corner_uvs(scene, 0, chart.triangles[i]),
+                                        corner_uvs(scene, 0, chart.triangles[j])))
+                    << "triangles " << chart.triangles[i] << " and " << chart.triangles[j];
+}
+
+TEST(Atlas, ChartsAndTexelsDoNotOverlap) {
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        const LightmapAtlas& atlas = scene.atlas;
+        const int g = atlas.gutter;
+        EXPECT_EQ(g, scene.settings.lightmap.gutter);
+        ASSERT_EQ(atlas.texel_index.size(), size_t(atlas.width) * size_t(atlas.height));
+        EXPECT_EQ(atlas.width & (atlas.width - 1), 0) << "width is a power of two";
+        // Padded rectangles stay inside the atlas and apart.
+        for (size_t a = 0; a < atlas.charts.size(); ++a) {
+            const Chart& ca = atlas.charts[a];
+            EXPECT_GE(ca.x - g, 0);
+            EXPECT_GE(ca.y - g, 0);
+            EXPECT_LE(ca.x + ca.width + g, atlas.width);
+            EXPECT_LE(ca.y + ca.height + g, atlas.height);
+            for (size_t b = a + 1; b < atlas.charts.size(); ++b) {
+                const Chart& cb = atlas.charts[b];
+                const bool apart =
+                    ca.x + ca.width + g <= cb.x - g || cb.x + cb.width + g <= ca.x - g ||
+                    ca.y + ca.height + g <= cb.y - g || cb.y + cb.height + g <= ca.y - g;
+                EXPECT_TRUE(apart) << "charts " << a << " and " << b;
+            }
+            // Every corner lies strictly inside its chart's rectangle.
+            for (int t : ca.triangles)
+                for (const glm::dvec2& uv : corner_uvs(scene, ca.object, t)) {
+                    EXPECT_GT(uv.x, ca.x);
+                    EXPECT_LT(uv.x, ca.x + ca.width);
+                    EXPECT_GT(uv.y, ca.y);
+                    EXPECT_LT(uv.y, ca.y + ca.height);
+                }
+        }
+        // One record per used texel, each inside its chart's rectangle.
+        std::set<std::pair<int, int>> used;
+        for (int i = 0; i < int(atlas.texels.size()); ++i) {
+            const TexelRecord& r = atlas.texels[size_t(i)];
+            EXPECT_TRUE(used.insert({r.x, r.y}).second) << r.x << "," << r.y;
+            ASSERT_GE(r.chart, 0);
+            const Chart& chart = atlas.charts[size_t(r.chart)];
+            EXPECT_GE(r.x, chart.x);
+            EXPECT_LT(r.x, chart.x + chart.width);
+            EXPECT_GE(r.y, chart.y);
+            EXPECT_LT(r.y, chart.y + chart.height);
+            EXPECT_EQ(atlas.texel_at(r.x, r.y), i);
+        }
+        const auto unused = std::count(atlas.texel_index.begin(), atlas.texel_index.end(), -1);
+        EXPECT_EQ(size_t(unused) + atlas.texels.size(), atlas.texel_index.size());
+    }
+}
+
+// Barycentric weights of the point of the triangle's plane nearest p, and p's distance to it.
+glm::dvec3 barycentric_3d(const Mesh& mesh, int t, const glm::dvec3& p, double* off_plane) {
+    const glm::uvec3 tri = mesh.triangles[size_t(t)];
+    const glm::dvec3 a(mesh.positions[tri.x]), b(mesh.positions[tri.y]), c(mesh.positions[tri.z]);
+    const glm::dvec3 n = glm::cross(b - a, c - a);
+    const double nn = glm::dot(n, n);
+    *off_plane = std::abs(glm::dot(p - a, n)) / std::sqrt(nn);
+    const double w1 = glm::dot(glm::cross(p - a, c - a), n) / nn;
+    const double w2 = glm::dot(glm::cross(b - a, p - a), n) / nn;
+    return {1.0 - w1 - w2, w1, w2};
+}
+
+TEST(Atlas, TexelPositionsLieOnTheirChartTriangle) {
+    int snapped = 0;
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        const double ts = scene.atlas.texel_size;
+        for (const TexelRecord& r : scene.atlas.texels) {
+            const Chart& chart = scene.atlas.charts[size_t(r.chart)];
+            const Mesh& mesh = scene.objects[size_t(r.object)].mesh;
+            EXPECT_EQ(r.object, chart.object);
+            EXPECT_EQ(r.surface, chart.surface);
+            ASSERT_TRUE(
+                std::binary_search(chart.triangles.begin(), chart.triangles.end(), r.triangle));
+            double off_plane = 0.0;
+            const glm::dvec3 w =
+                barycentric_3d(mesh, r.triangle, glm::dvec3(r.position), &off_plane);
+            EXPECT_LE(off_plane, 1e-4 * ts);
+            EXPECT_GE(std::min({w.x, w.y, w.z}), -1e-5);
+            const glm::vec3 n = triangle_normal(mesh, r.triangle);
+            EXPECT_NEAR(glm::dot(r.normal, n), 1.0f, 1e-5f);
+            // The position seen in the atlas: the texel centre, or the nearest chart point to it.
+            const glm::dvec2 uv(
+                (glm::dot(glm::dvec3(r.position), glm::dvec3(chart.u_axis)) - chart.origin.x) / ts +
+                    chart.x,
+                (glm::dot(glm::dvec3(r.position), glm::dvec3(chart.v_axis)) - chart.origin.y) / ts +
+                    chart.y);
+            const double from_centre = glm::length(uv - glm::dvec2(r.x + 0.5, r.y + 0.5));
+            EXPECT_LE(from_centre, 0.7072);
+            if (from_centre > 1e-3) {
+                ++snapped;
+                EXPECT_GT(std::min({w.x, w.y, w.z}), 0.0) << "snapped strictly inside";
+            }
+        }
+    }
+    EXPECT_GT(snapped, 0) << "texels at chart borders are snapped";
+}
+
+TEST(Atlas, TexelAreasSumToSurfaceArea) {
+    for (const auto& [name, scene] : invariant_scenes()) {
+        SCOPED_TRACE(name);
+        std::vector<double> sums(scene.surfaces.size(), 0.0);
+        for (const TexelRecord& r : scene.atlas.texels) {
+            EXPECT_GT(r.area, 0.0f);
+            EXPECT_LE(r.area, 1.2 * scene.atlas.texel_size * scene.atlas.texel_size);
+            sums[size_t(r.surface)] += r.area;
+        }
+        for (size_t s = 0; s < scene.surfaces.size(); ++s)
+            EXPECT_NEAR(sums[s], scene.surfaces[s].area, 0.01 * scene.surfaces[s].area)
+                << "surface " << s;
+    }
+}
+
+TEST(Atlas, DefaultTexelSizeIsAFifthOfTheScene) {
+    Scene scene = make_scene({make_box({5.0f, 1.0f, 1.0f})}, 0.0f);
+    EXPECT_FLOAT_EQ(scene.atlas.texel_size, 1.0f);
+    // A 5×1 face gets 5 texels plus a margin column, centred; a 1×1 end 1 plus a margin.
+    int longest = 0, shortest = 100;
+    for (const Chart& chart : scene.atlas.charts) {
+        longest = std::max({longest, chart.width, chart.height});
+        shortest = std::min({shortest, chart.width, chart.height});
+    }
+    EXPECT_EQ(longest, 6);
+    EXPECT_EQ(shortest, 2);
+}
+
+bool same_atlas(const LightmapAtlas& a, const LightmapAtlas& b) {
+    if (a.width != b.width || a.height != b.height || a.texel_size != b.texel_size ||
+        a.texel_index != b.texel_index || a.corner_uvs != b.corner_uvs ||
+        a.charts.size() != b.charts.size() || a.texels.size() != b.texels.size())
+        return false;
+    for (size_t i = 0; i < a.charts.size(); ++i) {
+        const Chart &x = a.charts[i], &y = b.charts[i];
+        if (x.triangles != y.triangles || x.axis != y.axis || x.origin != y.origin || x.x != y.x ||
+            x.y != y.y || x.width != y.width || x.height != y.height)
+            return false;
+    }
+    for (size_t i = 0; i < a.texels.size(); ++i) {
+        const TexelRecord &x = a.texels[i], &y = b.texels[i];
+        if (x.triangle != y.triangle || x.position != y.position || x.area != y.area ||
+            x.x != y.x || x.y != y.y)
+            return false;
+    }
+    return true;
+}
+
+TEST(Atlas, Deterministic) {
+    auto first = invariant_scenes(), second = invariant_scenes();
+    for (size_t i = 0; i < first.size(); ++i) {
+        SCOPED_TRACE(first[i].first);
+        EXPECT_TRUE(same_atlas(first[i].second.atlas, second[i].second.atlas));
+        EXPECT_EQ(first[i].second.triangle_surface, second[i].second.triangle_surface);
+    }
+}
+
+TEST(Atlas, EmptySceneGivesEmptyAtlas) {
+    const Scene scene = make_scene({Mesh{}}, 0.0f);
+    EXPECT_TRUE(scene.surfaces.empty());
+    EXPECT_TRUE(scene.atlas.charts.empty());
+    EXPECT_TRUE(scene.atlas.texels.empty());
+}
+
+// Larsen's bumpy floor at two sizes: reports wall-clock time (no threshold: tests count, they do
+// not time) and checks the distortion bound on the large one.
+TEST(Atlas, BumpyFloors13kAnd133k) {
+    for (int resolution : {81, 258}) {
+        const Mesh floor = make_bumpy_plane(10.0f, 10.0f, resolution, 0.5f, 1);
+        const size_t triangles = floor.triangles.size();
+        const auto start = std::chrono::steady_clock::now();
+        const Scene scene = make_scene({floor}, 0.05f);
+        const double seconds =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        std::printf(
+            "[   INFO   ] bumpy floor, %zu triangles: %zu surfaces, %zu charts, %dx%d atlas, "
+            "%zu texels, %.3f s\n",
+            triangles, scene.surfaces.size(), scene.atlas.charts.size(), scene.atlas.width,
+            scene.atlas.height, scene.atlas.texels.size(), seconds);
+        double area = 0.0;
+        for (const TexelRecord& r : scene.atlas.texels) area += r.area;
+        EXPECT_NEAR(area, mesh_area(floor), 1e-3 * mesh_area(floor));
+    }
+}
+
+}  // namespace
+}  // namespace ag
