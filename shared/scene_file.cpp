@@ -1,0 +1,498 @@
+// JSON scene files (docs/scene-format.md): parse with duplicate-key detection, validate every
+// value with its JSON path, build objects, lights and camera, then derive surfaces and the atlas.
+#include "shared/scene_file.h"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <glm/gtc/quaternion.hpp>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "shared/charts.h"
+#include "shared/input_error.h"
+#include "shared/json_read.h"
+#include "shared/mesh_io.h"
+#include "shared/scene_edit.h"
+#include "shared/settings_json.h"
+#include "shared/shapes.h"
+
+namespace ag {
+namespace {
+
+using Json = nlohmann::json;
+namespace fs = std::filesystem;
+
+constexpr std::array kShapeNames = {"box", "sphere", "quad", "bumpy_plane"};
+enum class ShapeType { box, sphere, quad, bumpy_plane };
+
+std::string format_vec(const glm::vec3& v) {
+    return "[" + JsonInput::format_number(v.x) + ", " + JsonInput::format_number(v.y) + ", " +
+           JsonInput::format_number(v.z) + "]";
+}
+
+// 1-based line and column of the character at 0-based `index` (clamped to the end of `text`).
+std::string line_column(const std::string& text, size_t index) {
+    index = std::min(index, text.size());
+    size_t line = 1, line_start = 0;
+    for (size_t i = 0; i < index; ++i)
+        if (text[i] == '\n') {
+            ++line;
+            line_start = i + 1;
+        }
+    return "line " + std::to_string(line) + ", column " + std::to_string(index - line_start + 1);
+}
+
+// nlohmann keeps the last of repeated keys silently; a repeated key in a scene file is almost
+// always a copy-paste slip, so the parser callback tracks the JSON path and rejects it.
+Json parse_json(const std::string& text, const std::string& file) {
+    struct Frame {
+        bool is_array = false;
+        long index = -1;
+        std::string key;
+        std::set<std::string> keys;
+    };
+    std::vector<Frame> stack;
+    auto element_starts = [&] {
+        if (!stack.empty() && stack.back().is_array) ++stack.back().index;
+    };
+    auto callback = [&](int, Json::parse_event_t event, Json& parsed) {
+        switch (event) {
+            case Json::parse_event_t::object_start:
+                element_starts();
+                stack.push_back({false});
+                break;
+            case Json::parse_event_t::array_start:
+                element_starts();
+                stack.push_back({true});
+                break;
+            case Json::parse_event_t::object_end:
+            case Json::parse_event_t::array_end:
+                stack.pop_back();
+                break;
+            case Json::parse_event_t::key: {
+                Frame& frame = stack.back();
+                frame.key = parsed.get<std::string>();
+                if (!frame.keys.insert(frame.key).second) {
+                    std::string path;
+                    for (const Frame& f : stack)
+                        path = f.is_array ? JsonInput::child(path, size_t(f.index))
+                                          : JsonInput::child(path, f.key);
+                    throw_input_error(file, path, "duplicate key; expected each key once");
+                }
+                break;
+            }
+            case Json::parse_event_t::value:
+                element_starts();
+                break;
+        }
+        return true;
+    };
+    try {
+        return Json::parse(text, callback, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+    } catch (const Json::parse_error& e) {
+        // e.byte is the 1-based offset of the last character read.
+        std::string message = e.what();
+        const size_t column = message.find("column ");
+        const size_t colon = message.find(": ", column == std::string::npos ? 0 : column);
+        if (colon != std::string::npos) message = message.substr(colon + 2);
+        throw_input_error(file, line_column(text, e.byte > 0 ? e.byte - 1 : 0),
+                          "invalid JSON: " + message);
+    } catch (const Json::out_of_range& e) {
+        // Number overflow ("1e999"): nlohmann names the literal but not where it is.
+        std::string message = e.what();
+        const size_t open = message.find('\''), close = message.rfind('\'');
+        std::string place;
+        if (open != std::string::npos && close > open) {
+            const size_t at = text.find(message.substr(open + 1, close - open - 1));
+            if (at != std::string::npos) place = line_column(text, at);
+            message = "number " + message.substr(open, close - open + 1) +
+                      " is out of range; expected a finite number";
+        }
+        throw_input_error(file, place, message);
+    }
+}
+
+class SceneParser {
+public:
+    SceneParser(const std::string& path) : in_(path), base_(fs::path(path).parent_path()) {}
+
+    Scene parse(const Json& root) {
+        in_.object(root, "");
+        in_.check_keys(
+            root, "",
+            {"name", "units", "camera", "materials", "lights", "objects", "settings", "script"});
+        scene_.path = in_.file();
+        scene_.name = fs::path(in_.file()).stem().string();
+        if (const Json* v = JsonInput::find(root, "name")) scene_.name = in_.string(*v, "/name");
+        if (const Json* v = JsonInput::find(root, "units"))
+            scene_.length_unit = in_.string(*v, "/units");
+        if (const Json* v = JsonInput::find(root, "settings"))
+            read_settings(*v, scene_.settings, in_.file(), "/settings");
+        read_camera(in_.require(root, "", "camera", "a camera {eye, target, ...}"));
+        read_materials(in_.require(root, "", "materials", "an object of named materials"));
+        read_lights(in_.require(root, "", "lights", "an array of lights (may be empty)"));
+        read_objects(in_.require(root, "", "objects", "an array of objects"));
+        if (const Json* v = JsonInput::find(root, "script"))
+            scene_.script = existing_file(*v, "/script", "Lua script");
+        init_versions(scene_);
+        make_surfaces_and_atlas(scene_);
+        return std::move(scene_);
+    }
+
+private:
+    // A path relative to the scene file, which must name an existing regular file.
+    std::string existing_file(const Json& value, const std::string& path, const char* what) {
+        const std::string name = in_.string(value, path);
+        const fs::path resolved = fs::path(name).is_absolute() ? fs::path(name) : base_ / name;
+        std::error_code ec;
+        if (!fs::is_regular_file(resolved, ec))
+            in_.fail(path, std::string("expected an existing ") + what + " file, got \"" + name +
+                               "\" (looked for " + resolved.string() + ")");
+        return resolved.string();
+    }
+
+    void read_camera(const Json& json) {
+        const std::string path = "/camera";
+        in_.object(json, path);
+        in_.check_keys(json, path, {"eye", "target", "up", "fov_y", "resolution"});
+        Camera& c = scene_.camera;
+        c.eye = in_.vec3(in_.require(json, path, "eye", "[x, y, z]"), path + "/eye");
+        c.target = in_.vec3(in_.require(json, path, "target", "[x, y, z]"), path + "/target");
+        if (const Json* v = JsonInput::find(json, "up")) c.up = in_.vec3(*v, path + "/up");
+        if (const Json* v = JsonInput::find(json, "fov_y"))
+            c.fov_y = float(in_.number(*v, path + "/fov_y", 0, 180, true, true));
+        if (const Json* v = JsonInput::find(json, "resolution")) {
+            const std::string rpath = path + "/resolution";
+            if (!v->is_array() || v->size() != 2)
+                in_.fail(rpath, "expected [width, height], got " + JsonInput::describe(*v));
+            c.width = int(in_.integer((*v)[0], rpath + "/0", 1, 16384));
+            c.height = int(in_.integer((*v)[1], rpath + "/1", 1, 16384));
+        }
+        const glm::vec3 view = c.target - c.eye;
+        if (!(glm::length(view) > 0.0f))
+            in_.fail(path + "/target",
+                     "expected a target different from the eye, got the eye " + format_vec(c.eye));
+        const float up_length = glm::length(c.up);
+        if (!(up_length > 0.0f) ||
+            glm::length(glm::cross(view / glm::length(view), c.up / up_length)) < 1e-4f)
+            in_.fail(path + "/up", "expected an up vector not parallel to the view direction " +
+                                       format_vec(view) + ", got " + format_vec(c.up));
+    }
+
+    void read_materials(const Json& json) {
+        const std::string path = "/materials";
+        in_.object(json, path);
+        for (const auto& item : json.items()) {
+            const std::string mpath = JsonInput::child(path, item.key());
+            const Json& m = in_.object(item.value(), mpath);
+            if (item.key().empty()) in_.fail(mpath, "expected a non-empty material name");
+            in_.check_keys(m, mpath, {"type", "albedo", "ior", "emission"});
+            Material mat;
+            mat.name = item.key();
+            if (const Json* v = JsonInput::find(m, "type"))
+                mat.type = MaterialType(in_.choice(*v, mpath + "/type", kMaterialTypeNames));
+            // Specular albedo tints the reflected/refracted light; untinted unless given.
+            if (mat.type != MaterialType::diffuse) mat.albedo = glm::vec3(1.0f);
+            if (const Json* v = JsonInput::find(m, "albedo"))
+                mat.albedo = in_.color(*v, mpath + "/albedo", 0, 1);
+            if (const Json* v = JsonInput::find(m, "ior")) {
+                if (mat.type != MaterialType::glass)
+                    in_.fail(mpath + "/ior", "ior applies to glass only; expected no ior for a " +
+                                                 std::string(kMaterialTypeNames[size_t(mat.type)]) +
+                                                 " material");
+                mat.ior = float(in_.number(*v, mpath + "/ior", 1, 4));
+            }
+            if (const Json* v = JsonInput::find(m, "emission"))
+                mat.emission = in_.color(*v, mpath + "/emission", 0, JsonInput::kInf);
+            materials_[mat.name] = mat;
+        }
+    }
+
+    void read_lights(const Json& json) {
+        const std::string path = "/lights";
+        in_.array(json, path);
+        for (size_t i = 0; i < json.size(); ++i) {
+            const std::string lpath = JsonInput::child(path, i);
+            const Json& l = in_.object(json[i], lpath);
+            Light light;
+            light.type = LightType(in_.choice(in_.require(l, lpath, "type", "point or quad"),
+                                              lpath + "/type", kLightTypeNames));
+            if (light.type == LightType::point)
+                in_.check_keys(l, lpath, {"name", "type", "position", "intensity", "enabled"});
+            else
+                in_.check_keys(l, lpath, {"name", "type", "corners", "radiance", "enabled"});
+            light.name =
+                in_.string(in_.require(l, lpath, "name", "a unique light name"), lpath + "/name");
+            if (scene_.find_light(light.name) >= 0)
+                in_.fail(lpath + "/name",
+                         "expected a unique light name, got \"" + light.name + "\" a second time");
+            if (const Json* v = JsonInput::find(l, "enabled"))
+                light.enabled = in_.boolean(*v, lpath + "/enabled");
+            if (light.type == LightType::point) {
+                light.position =
+                    in_.vec3(in_.require(l, lpath, "position", "[x, y, z]"), lpath + "/position");
+                light.intensity = in_.color(in_.require(l, lpath, "intensity", "[r, g, b] in W/sr"),
+                                            lpath + "/intensity", 0, JsonInput::kInf);
+            } else {
+                read_quad_corners(in_.require(l, lpath, "corners", "4 corners [[x, y, z], ...]"),
+                                  lpath + "/corners", light);
+                light.radiance =
+                    in_.color(in_.require(l, lpath, "radiance", "[r, g, b] in W/(sr·unit²)"),
+                              lpath + "/radiance", 0, JsonInput::kInf);
+            }
+            scene_.lights.push_back(light);
+        }
+    }
+
+    void read_quad_corners(const Json& json, const std::string& path, Light& light) {
+        if (!json.is_array() || json.size() != 4)
+            in_.fail(path, "expected 4 corners [[x, y, z], ...], got " + JsonInput::describe(json));
+        for (size_t k = 0; k < 4; ++k)
+            light.corners[k] = in_.vec3(json[k], JsonInput::child(path, k));
+        const std::array<glm::vec3, 4>& c = light.corners;
+        const glm::vec3 e1 = c[1] - c[0], e3 = c[3] - c[0];
+        const float scale = std::max(glm::length(e1), glm::length(e3));
+        if (!(glm::length(glm::cross(e1, e3)) > 1e-6f * scale * scale))
+            in_.fail(path,
+                     "expected a parallelogram of non-zero area, got corners 0, 1 and 3 "
+                     "on one line");
+        const glm::vec3 expected = c[1] + c[3] - c[0];
+        if (glm::length(c[2] - expected) > 1e-4f * scale)
+            in_.fail(path + "/2",
+                     "expected a parallelogram: corner 2 = corner 1 + corner 3 - "
+                     "corner 0 = " +
+                         format_vec(expected) + ", got " + format_vec(c[2]));
+    }
+
+    void read_objects(const Json& json) {
+        const std::string path = "/objects";
+        in_.array(json, path);
+        if (json.empty()) in_.fail(path, "expected at least one object, got an empty array");
+        for (size_t i = 0; i < json.size(); ++i) {
+            const std::string opath = JsonInput::child(path, i);
+            const Json& o = in_.object(json[i], opath);
+            in_.check_keys(
+                o, opath,
+                {"name", "material", "dynamic", "mesh", "scale", "shape", "offset", "transform"});
+            Object object;
+            object.name =
+                in_.string(in_.require(o, opath, "name", "a unique object name"), opath + "/name");
+            if (scene_.find_object(object.name) >= 0)
+                in_.fail(opath + "/name", "expected a unique object name, got \"" + object.name +
+                                              "\" a second time");
+            const std::string material = in_.string(
+                in_.require(o, opath, "material", "the name of a material"), opath + "/material");
+            const auto it = materials_.find(material);
+            if (it == materials_.end()) {
+                std::string list;
+                for (const auto& [name, unused] : materials_)
+                    list += (list.empty() ? "" : ", ") + name;
+                in_.fail(opath + "/material", "unknown material \"" + material +
+                                                  "\"; expected one of " +
+                                                  (list.empty() ? "(none defined)" : list));
+            }
+            object.material = it->second;
+            if (const Json* v = JsonInput::find(o, "dynamic"))
+                object.dynamic = in_.boolean(*v, opath + "/dynamic");
+            read_geometry(o, opath, object);
+            if (const Json* v = JsonInput::find(o, "transform"))
+                object.transform = read_transform(*v, opath + "/transform");
+            scene_.objects.push_back(std::move(object));
+        }
+    }
+
+    void read_geometry(const Json& o, const std::string& opath, Object& object) {
+        const Json* mesh = JsonInput::find(o, "mesh");
+        const Json* shape = JsonInput::find(o, "shape");
+        if (mesh && shape) in_.fail(opath, "expected either \"mesh\" or \"shape\", got both");
+        if (!mesh && !shape)
+            in_.fail(opath, "missing key \"mesh\" or \"shape\"; expected one of them");
+        if (mesh) {
+            const std::string file = existing_file(*mesh, opath + "/mesh", "mesh");
+            try {
+                object.mesh = load_mesh(file);
+            } catch (const InputError& e) {
+                in_.fail(opath + "/mesh", std::string("expected a usable mesh; ") + e.what());
+            }
+            object.source = mesh->get<std::string>();
+            if (const Json* v = JsonInput::find(o, "scale")) {
+                const std::string spath = opath + "/scale";
+                const glm::vec3 s =
+                    v->is_number() ? glm::vec3(float(in_.number(*v, spath))) : in_.vec3(*v, spath);
+                if (s.x == 0.0f || s.y == 0.0f || s.z == 0.0f)
+                    in_.fail(spath, "expected non-zero scale factors, got " + format_vec(s));
+                scale_mesh(object.mesh, s);
+            }
+        } else {
+            if (JsonInput::find(o, "scale"))
+                in_.fail(opath + "/scale",
+                         "scale applies to meshes only; expected the size in "
+                         "the shape itself");
+            object.mesh = read_shape(*shape, opath + "/shape");
+            object.source = (*shape)["type"].get<std::string>();
+        }
+        if (const Json* v = JsonInput::find(o, "offset")) {
+            const glm::vec3 offset = in_.vec3(*v, opath + "/offset");
+            for (glm::vec3& p : object.mesh.positions) p += offset;
+        }
+        for (const glm::vec3& p : object.mesh.positions)
+            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+                in_.fail(opath, "expected finite vertex positions after scale and offset, got " +
+                                    format_vec(p));
+    }
+
+    // Positive finite extents: [x, y, z] for a box, [width, depth] for planes.
+    glm::vec3 positive_size(const Json& json, const std::string& path, int n) {
+        const char* form = n == 3 ? "[x, y, z]" : "[width, depth]";
+        if (!json.is_array() || int(json.size()) != n)
+            in_.fail(path, std::string("expected ") + form + " of positive numbers, got " +
+                               JsonInput::describe(json));
+        glm::vec3 size(0.0f);
+        for (int k = 0; k < n; ++k)
+            size[k] = float(in_.number(json[size_t(k)], JsonInput::child(path, size_t(k)), 0,
+                                       JsonInput::kInf, true));
+        return size;
+    }
+
+    Mesh read_shape(const Json& json, const std::string& path) {
+        in_.object(json, path);
+        const auto type = ShapeType(
+            in_.choice(in_.require(json, path, "type", "box, sphere, quad or bumpy_plane"),
+                       path + "/type", kShapeNames));
+        Mesh mesh;
+        switch (type) {
+            case ShapeType::box: {
+                in_.check_keys(json, path, {"type", "size", "open_bottom"});
+                mesh = make_box(
+                    positive_size(in_.require(json, path, "size", "[x, y, z]"), path + "/size", 3));
+                if (const Json* v = JsonInput::find(json, "open_bottom");
+                    v && in_.boolean(*v, path + "/open_bottom"))
+                    remove_bottom(mesh);
+                break;
+            }
+            case ShapeType::sphere: {
+                in_.check_keys(json, path, {"type", "radius", "subdivisions"});
+                const double radius = in_.number(in_.require(json, path, "radius", "a number > 0"),
+                                                 path + "/radius", 0, JsonInput::kInf, true);
+                long long subdivisions = 3;
+                if (const Json* v = JsonInput::find(json, "subdivisions"))
+                    subdivisions = in_.integer(*v, path + "/subdivisions", 0, 7);
+                mesh = make_sphere(float(radius), int(subdivisions));
+                break;
+            }
+            case ShapeType::quad: {
+                in_.check_keys(json, path, {"type", "size"});
+                const glm::vec3 size = positive_size(
+                    in_.require(json, path, "size", "[width, depth]"), path + "/size", 2);
+                mesh = make_quad(size.x, size.y);
+                break;
+            }
+            case ShapeType::bumpy_plane: {
+                in_.check_keys(json, path, {"type", "size", "resolution", "amplitude", "seed"});
+                const glm::vec3 size = positive_size(
+                    in_.require(json, path, "size", "[width, depth]"), path + "/size", 2);
+                const long long resolution =
+                    in_.integer(in_.require(json, path, "resolution", "an integer in [1, 2048]"),
+                                path + "/resolution", 1, 2048);
+                const double amplitude = in_.number(
+                    in_.require(json, path, "amplitude", "a number >= 0"), path + "/amplitude", 0);
+                long long seed = 1;
+                if (const Json* v = JsonInput::find(json, "seed"))
+                    seed = in_.integer(*v, path + "/seed", 0, 4294967295ll);
+                mesh = make_bumpy_plane(size.x, size.y, int(resolution), float(amplitude),
+                                        uint32_t(seed));
+                break;
+            }
+        }
+        const size_t total = mesh.triangles.size();
+        const int dropped = remove_degenerate_triangles(mesh);
+        if (mesh.triangles.empty())
+            in_.fail(path, "expected a shape with non-zero area, got " + std::to_string(total) +
+                               " degenerate triangles (is it too small?)");
+        if (dropped > 0)
+            warn(in_.file() + ": " + path + ": dropped " + std::to_string(dropped) +
+                 " degenerate triangles");
+        return mesh;
+    }
+
+    // An open box (five faces) stands on a floor without a hidden bottom surface, as the blocks
+    // of the Cornell box do.
+    static void remove_bottom(Mesh& mesh) {
+        std::vector<glm::uvec3> kept;
+        for (int t = 0; t < int(mesh.triangles.size()); ++t)
+            if (triangle_normal(mesh, t).y > -0.5f) kept.push_back(mesh.triangles[size_t(t)]);
+        mesh.triangles = std::move(kept);
+    }
+
+    glm::quat read_rotation(const Json& json, const std::string& path) {
+        in_.object(json, path);
+        in_.check_keys(json, path, {"axis", "degrees"});
+        const glm::vec3 axis =
+            in_.vec3(in_.require(json, path, "axis", "[x, y, z]"), path + "/axis");
+        if (!(glm::length(axis) > 0.0f))
+            in_.fail(path + "/axis", "expected a non-zero axis, got " + format_vec(axis));
+        const double degrees =
+            in_.number(in_.require(json, path, "degrees", "a number"), path + "/degrees");
+        return glm::angleAxis(glm::radians(float(degrees)), glm::normalize(axis));
+    }
+
+    Transform read_transform(const Json& json, const std::string& path) {
+        in_.object(json, path);
+        in_.check_keys(json, path, {"translate", "rotate", "rotate_euler"});
+        Transform t;
+        if (const Json* v = JsonInput::find(json, "translate"))
+            t.translation = in_.vec3(*v, path + "/translate");
+        const Json* rotate = JsonInput::find(json, "rotate");
+        const Json* euler = JsonInput::find(json, "rotate_euler");
+        if (rotate && euler)
+            in_.fail(path, "expected either \"rotate\" or \"rotate_euler\", got both");
+        if (rotate && rotate->is_array()) {
+            // Applied in the order listed: the first rotation acts on the object first.
+            for (size_t k = 0; k < rotate->size(); ++k)
+                t.rotation =
+                    read_rotation((*rotate)[k], JsonInput::child(path + "/rotate", k)) * t.rotation;
+        } else if (rotate) {
+            if (!rotate->is_object())
+                in_.fail(path + "/rotate",
+                         "expected {\"axis\": [x, y, z], \"degrees\": d} or a "
+                         "list of them, got " +
+                             JsonInput::describe(*rotate));
+            t.rotation = read_rotation(*rotate, path + "/rotate");
+        } else if (euler) {
+            const glm::vec3 d = in_.vec3(*euler, path + "/rotate_euler");
+            // About the world X, then Y, then Z axes.
+            t.rotation = glm::angleAxis(glm::radians(d.z), glm::vec3(0, 0, 1)) *
+                         glm::angleAxis(glm::radians(d.y), glm::vec3(0, 1, 0)) *
+                         glm::angleAxis(glm::radians(d.x), glm::vec3(1, 0, 0));
+        }
+        return t;
+    }
+
+    JsonInput in_;
+    fs::path base_;
+    Scene scene_;
+    std::map<std::string, Material> materials_;
+};
+
+}  // namespace
+
+Scene parse_scene(const std::string& json_text, const std::string& path) {
+    return SceneParser(path).parse(parse_json(json_text, path));
+}
+
+Scene load_scene(const std::string& path) {
+    std::error_code ec;
+    if (!fs::exists(path, ec)) throw_input_error(path, "", "cannot open scene file: no such file");
+    if (!fs::is_regular_file(path, ec))
+        throw_input_error(path, "", "cannot open scene file: not a regular file");
+    std::ifstream file(path, std::ios::binary);
+    if (!file) throw_input_error(path, "", "cannot open scene file: permission denied");
+    std::ostringstream text;
+    text << file.rdbuf();
+    if (file.bad()) throw_input_error(path, "", "cannot read scene file");
+    return parse_scene(text.str(), path);
+}
+
+}  // namespace ag

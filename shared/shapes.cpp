@@ -1,0 +1,151 @@
+// Built-in shapes: box, icosphere, quad and bumpy height field, all counter-clockwise outward.
+#include "shared/shapes.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <utility>
+
+namespace ag {
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+// Convex shapes centred at the origin: a front face points away from the centre. Fixing the
+// winding from that saves hand-checking every index table.
+void orient_outward(Mesh& mesh) {
+    for (int i = 0; i < int(mesh.triangles.size()); ++i) {
+        glm::uvec3& t = mesh.triangles[size_t(i)];
+        const glm::vec3 centroid =
+            (mesh.positions[t.x] + mesh.positions[t.y] + mesh.positions[t.z]) / 3.0f;
+        if (glm::dot(triangle_cross(mesh, i), centroid) < 0.0f) std::swap(t.y, t.z);
+    }
+}
+
+// splitmix64: a fixed, portable generator so bump fields are identical on every platform
+// (std:: distributions are not).
+struct SplitMix {
+    uint64_t state;
+    uint64_t next() {
+        uint64_t z = (state += 0x9E3779B97F4A7C15ull);
+        z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+        z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+        return z ^ (z >> 31);
+    }
+    float uniform(float lo, float hi) {
+        return lo + (hi - lo) * float(double(next() >> 11) * 0x1.0p-53);
+    }
+};
+
+}  // namespace
+
+Mesh make_box(const glm::vec3& size) {
+    Mesh mesh;
+    const glm::vec3 h = 0.5f * size;
+    // Corner i has x = +h.x if bit 0 is set, y if bit 1, z if bit 2. Sharing the 8 corners keeps
+    // the box closed, which crease segmentation and shadow-volume adjacency rely on.
+    for (int i = 0; i < 8; ++i)
+        mesh.positions.push_back(
+            {(i & 1) ? h.x : -h.x, (i & 2) ? h.y : -h.y, (i & 4) ? h.z : -h.z});
+    constexpr unsigned kFaces[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                       {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+    for (const auto& f : kFaces) {
+        mesh.triangles.push_back({f[0], f[1], f[2]});
+        mesh.triangles.push_back({f[0], f[2], f[3]});
+    }
+    orient_outward(mesh);
+    return mesh;
+}
+
+Mesh make_sphere(float radius, int subdivisions) {
+    Mesh mesh;
+    const float t = (1.0f + std::sqrt(5.0f)) / 2.0f;
+    const glm::vec3 ico[12] = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                               {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                               {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+    for (const glm::vec3& p : ico) mesh.positions.push_back(glm::normalize(p));
+    mesh.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
+                      {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
+                      {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
+                      {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+    orient_outward(mesh);
+
+    for (int s = 0; s < subdivisions; ++s) {
+        // Shared edge midpoints keep the sphere watertight.
+        std::map<std::pair<unsigned, unsigned>, unsigned> midpoints;
+        auto midpoint = [&](unsigned a, unsigned b) {
+            const auto key = std::minmax(a, b);
+            auto [it, inserted] = midpoints.try_emplace(key, unsigned(mesh.positions.size()));
+            if (inserted)
+                mesh.positions.push_back(glm::normalize(mesh.positions[a] + mesh.positions[b]));
+            return it->second;
+        };
+        std::vector<glm::uvec3> finer;
+        finer.reserve(mesh.triangles.size() * 4);
+        for (const glm::uvec3& tri : mesh.triangles) {
+            const unsigned ab = midpoint(tri.x, tri.y), bc = midpoint(tri.y, tri.z),
+                           ca = midpoint(tri.z, tri.x);
+            finer.push_back({tri.x, ab, ca});
+            finer.push_back({tri.y, bc, ab});
+            finer.push_back({tri.z, ca, bc});
+            finer.push_back({ab, bc, ca});
+        }
+        mesh.triangles = std::move(finer);
+    }
+    for (glm::vec3& p : mesh.positions) p *= radius;
+    return mesh;
+}
+
+Mesh make_quad(float width, float depth) {
+    const float x = 0.5f * width, z = 0.5f * depth;
+    Mesh mesh;
+    mesh.positions = {{-x, 0, -z}, {-x, 0, z}, {x, 0, z}, {x, 0, -z}};
+    mesh.triangles = {{0, 1, 2}, {0, 2, 3}};  // (−x,−z) → (−x,+z) → (+x,+z) turns about +Y
+    return mesh;
+}
+
+Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude, uint32_t seed) {
+    // A few plane waves of random direction, 1.5–4 cycles across the plane, under the window
+    // sin(πu)·sin(πv): the edges stay at height 0 so the plane meets walls without gaps, and the
+    // bumps stay gentle enough at any resolution that adjacent faces remain within a 30° crease
+    // angle (one surface, as Larsen's bumpy floor in Fig. 10.1).
+    constexpr int kWaves = 6;
+    SplitMix rng{0x5EEDB0F5ull ^ (uint64_t(seed) << 32 | seed)};
+    glm::vec2 frequency[kWaves];
+    float phase[kWaves], weight[kWaves], weight_sum = 0.0f;
+    for (int k = 0; k < kWaves; ++k) {
+        const float angle = rng.uniform(0.0f, 2.0f * kPi);
+        const float cycles = rng.uniform(1.5f, 4.0f);
+        frequency[k] = 2.0f * kPi * cycles * glm::vec2(std::cos(angle), std::sin(angle));
+        phase[k] = rng.uniform(0.0f, 2.0f * kPi);
+        weight[k] = rng.uniform(0.5f, 1.0f);
+        weight_sum += weight[k];
+    }
+    auto height = [&](float u, float v) {
+        float h = 0.0f;
+        for (int k = 0; k < kWaves; ++k)
+            h += weight[k] * std::sin(frequency[k].x * u + frequency[k].y * v + phase[k]);
+        return amplitude * std::sin(kPi * u) * std::sin(kPi * v) * h / weight_sum;
+    };
+
+    Mesh mesh;
+    const int n = resolution + 1;
+    mesh.positions.reserve(size_t(n) * size_t(n));
+    for (int j = 0; j < n; ++j)
+        for (int i = 0; i < n; ++i) {
+            const float u = float(i) / float(resolution), v = float(j) / float(resolution);
+            mesh.positions.push_back({(u - 0.5f) * width, height(u, v), (v - 0.5f) * depth});
+        }
+    mesh.triangles.reserve(2 * size_t(resolution) * size_t(resolution));
+    for (int j = 0; j < resolution; ++j)
+        for (int i = 0; i < resolution; ++i) {
+            const unsigned v00 = unsigned(j * n + i), v10 = v00 + 1, v01 = v00 + unsigned(n),
+                           v11 = v01 + 1;
+            // Same turn as make_quad: (−x,−z) → (−x,+z) → (+x,+z) faces +Y.
+            mesh.triangles.push_back({v00, v01, v11});
+            mesh.triangles.push_back({v00, v11, v10});
+        }
+    return mesh;
+}
+
+}  // namespace ag

@@ -1,0 +1,157 @@
+// Mesh files through OpenMesh: round trips in all four formats, polygon triangulation,
+// degenerate faces dropped with a warning, and clear errors for bad files.
+#include "shared/mesh_io.h"
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "shared/input_error.h"
+#include "shared/shapes.h"
+
+namespace ag {
+namespace {
+
+namespace fs = std::filesystem;
+
+class MeshIo : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("ag_mesh_io_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string write(const std::string& name, const std::string& text) {
+        const std::string path = (dir_ / name).string();
+        std::ofstream(path, std::ios::binary) << text;
+        return path;
+    }
+    std::string path(const std::string& name) const { return (dir_ / name).string(); }
+
+    // The InputError message load_mesh gives, or "" if it loads.
+    static std::string load_error(const std::string& file) {
+        try {
+            load_mesh(file);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "";
+    }
+
+    fs::path dir_;
+};
+
+TEST_F(MeshIo, RoundTripsEveryFormat) {
+    const Mesh sphere = make_sphere(1.5f, 2);
+    for (const char* ext : {".obj", ".ply", ".off", ".stl"}) {
+        SCOPED_TRACE(ext);
+        const std::string file = path(std::string("sphere") + ext);
+        save_mesh(sphere, file);
+        const Mesh loaded = load_mesh(file);
+        EXPECT_EQ(loaded.triangles.size(), sphere.triangles.size());
+        // STL is a triangle soup; OpenMesh welds it back to shared vertices.
+        EXPECT_EQ(loaded.positions.size(), sphere.positions.size());
+        EXPECT_NEAR(mesh_area(loaded), mesh_area(sphere), 1e-3f * mesh_area(sphere));
+        // Winding survives: every face still points away from the centre.
+        for (int t = 0; t < int(loaded.triangles.size()); ++t) {
+            const glm::uvec3 tri = loaded.triangles[size_t(t)];
+            const glm::vec3 c =
+                loaded.positions[tri.x] + loaded.positions[tri.y] + loaded.positions[tri.z];
+            ASSERT_GT(glm::dot(triangle_normal(loaded, t), c), 0.0f) << "triangle " << t;
+        }
+    }
+}
+
+TEST_F(MeshIo, ReadsHandWrittenFilesAndTriangulatesPolygons) {
+    const Mesh obj = load_mesh(write("quad.obj",
+                                     "# unit quad as one polygon\n"
+                                     "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3 4\n"));
+    EXPECT_EQ(obj.triangles.size(), 2u);
+    EXPECT_NEAR(mesh_area(obj), 1.0f, 1e-6f);
+    EXPECT_GT(triangle_normal(obj, 0).z, 0.99f);
+
+    const Mesh off = load_mesh(write("pentagon.off",
+                                     "OFF\n5 1 0\n0 0 0\n2 0 0\n2 1 0\n1 2 0\n0 1 0\n"
+                                     "5 0 1 2 3 4\n"));
+    EXPECT_EQ(off.triangles.size(), 3u);
+    EXPECT_NEAR(mesh_area(off), 3.0f, 1e-5f);
+
+    const Mesh ply = load_mesh(write("tri.ply",
+                                     "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                     "property float x\nproperty float y\nproperty float z\n"
+                                     "element face 1\nproperty list uchar int vertex_indices\n"
+                                     "end_header\n0 0 0\n2 0 0\n0 2 0\n3 0 1 2\n"));
+    EXPECT_EQ(ply.triangles.size(), 1u);
+    EXPECT_NEAR(mesh_area(ply), 2.0f, 1e-6f);
+
+    const Mesh stl = load_mesh(write("tri.stl",
+                                     "solid t\nfacet normal 0 0 1\nouter loop\n"
+                                     "vertex 0 0 0\nvertex 3 0 0\nvertex 0 1 0\n"
+                                     "endloop\nendfacet\nendsolid t\n"));
+    EXPECT_EQ(stl.triangles.size(), 1u);
+    EXPECT_NEAR(mesh_area(stl), 1.5f, 1e-6f);
+}
+
+TEST_F(MeshIo, DropsDegenerateTrianglesWithAWarningNamingTheFile) {
+    // OFF hands every face to OpenMesh's importer, which refuses repeated vertices itself; both
+    // kinds of degenerate face are counted.
+    const std::string file = write("some_bad.off",
+                                   "OFF\n5 4 0\n0 0 0\n1 0 0\n0 1 0\n2 0 0\n1 1 1\n"
+                                   "3 0 1 2\n"    // good
+                                   "3 0 3 1\n"    // collinear: zero area
+                                   "3 0 0 2\n"    // repeated vertex
+                                   "3 1 4 2\n");  // good
+    ::testing::internal::CaptureStderr();
+    const Mesh mesh = load_mesh(file);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(mesh.triangles.size(), 2u);
+    EXPECT_EQ(mesh.positions.size(), 4u) << "unused vertices are dropped";
+    EXPECT_NE(err.find("some_bad.off: dropped 2 of 4 faces"), std::string::npos) << err;
+
+    ::testing::internal::CaptureStderr();
+    const Mesh obj = load_mesh(write("sliver.obj",
+                                     "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 2 0 0\n"
+                                     "f 1 2 3\nf 1 4 2\n"));
+    const std::string obj_err = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(obj.triangles.size(), 1u);
+    EXPECT_NE(obj_err.find("sliver.obj: dropped 1 of 2 faces"), std::string::npos) << obj_err;
+}
+
+TEST_F(MeshIo, RejectsEmptyAndFullyDegenerateMeshes) {
+    std::string err = load_error(write("empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
+    EXPECT_NE(err.find("empty.obj"), std::string::npos) << err;
+    EXPECT_NE(err.find("no faces"), std::string::npos) << err;
+
+    ::testing::internal::CaptureStderr();
+    err = load_error(write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\nf 3 2 1\n"));
+    ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("flat.obj"), std::string::npos) << err;
+    EXPECT_NE(err.find("all 2 faces are degenerate"), std::string::npos) << err;
+}
+
+TEST_F(MeshIo, RejectsMissingUnsupportedAndCorruptFiles) {
+    std::string err = load_error(path("nowhere.obj"));
+    EXPECT_NE(err.find("nowhere.obj"), std::string::npos) << err;
+    EXPECT_NE(err.find("no such file"), std::string::npos) << err;
+
+    err = load_error(write("mesh.xyz", "1 2 3\n"));
+    EXPECT_NE(err.find("mesh.xyz"), std::string::npos) << err;
+    EXPECT_NE(err.find("expected .obj, .ply, .off or .stl"), std::string::npos) << err;
+
+    ::testing::internal::CaptureStderr();  // OpenMesh explains on its own stream too
+    err = load_error(write("garbage.ply", "this is not a ply file\n"));
+    ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("garbage.ply"), std::string::npos) << err;
+    EXPECT_NE(err.find("not a valid ply file"), std::string::npos) << err;
+
+    EXPECT_THROW(save_mesh(make_box(glm::vec3(1.0f)), path("box.xyz")), InputError);
+    EXPECT_THROW(save_mesh(make_box(glm::vec3(1.0f)), path("missing_dir/box.obj")), InputError);
+}
+
+}  // namespace
+}  // namespace ag

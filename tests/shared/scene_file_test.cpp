@@ -1,0 +1,425 @@
+// Scene files: every scene in scenes/ loads; malformed files fail with their own clear message
+// naming the file, the JSON path and what was expected (docs/scene-format.md).
+#include "shared/scene_file.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <glm/gtc/quaternion.hpp>
+#include <map>
+#include <nlohmann/json.hpp>
+#include <set>
+
+#include "shared/input_error.h"
+#include "shared/mesh_io.h"
+#include "shared/shapes.h"
+
+namespace ag {
+namespace {
+
+namespace fs = std::filesystem;
+using Json = nlohmann::json;
+
+const fs::path kScenes = fs::path(AG_SOURCE_DIR) / "scenes";
+
+std::vector<fs::path> scene_files() {
+    std::vector<fs::path> files;
+    for (const auto& entry : fs::directory_iterator(kScenes))
+        if (entry.path().extension() == ".json") files.push_back(entry.path());
+    std::sort(files.begin(), files.end());
+    return files;
+}
+
+// The largest angle (degrees) between the normals of two edge-adjacent triangles.
+float max_dihedral_degrees(const Mesh& mesh) {
+    std::map<std::pair<unsigned, unsigned>, std::vector<int>> edges;
+    for (int t = 0; t < int(mesh.triangles.size()); ++t)
+        for (int k = 0; k < 3; ++k) {
+            const unsigned a = mesh.triangles[size_t(t)][k];
+            const unsigned b = mesh.triangles[size_t(t)][(k + 1) % 3];
+            edges[std::minmax(a, b)].push_back(t);
+        }
+    float worst = 0.0f;
+    for (const auto& [edge, faces] : edges)
+        for (size_t i = 1; i < faces.size(); ++i) {
+            const float c =
+                glm::dot(triangle_normal(mesh, faces[0]), triangle_normal(mesh, faces[i]));
+            worst = std::max(worst, glm::degrees(std::acos(std::clamp(c, -1.0f, 1.0f))));
+        }
+    return worst;
+}
+
+class SceneFile : public ::testing::Test {
+protected:
+    void SetUp() override {
+        dir_ = fs::temp_directory_path() /
+               ("ag_scene_file_" +
+                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
+        fs::remove_all(dir_);
+        fs::create_directories(dir_);
+    }
+    void TearDown() override { fs::remove_all(dir_); }
+
+    std::string write(const std::string& name, const std::string& text) {
+        const std::string path = (dir_ / name).string();
+        std::ofstream(path, std::ios::binary) << text;
+        return path;
+    }
+
+    // A small valid scene that each malformed case breaks in one place.
+    static Json base_scene() {
+        return Json::parse(R"({
+            "name": "base",
+            "units": "m",
+            "camera": {"eye": [0, 1, -5], "target": [0, 1, 0], "fov_y": 40,
+                       "resolution": [64, 48]},
+            "materials": {"white": {"albedo": 0.75}, "glass": {"type": "glass", "ior": 1.5}},
+            "lights": [
+                {"name": "lamp", "type": "point", "position": [0, 1.9, 0], "intensity": 10},
+                {"name": "panel", "type": "quad", "radiance": [5, 5, 5],
+                 "corners": [[-0.5, 1.99, -0.5], [0.5, 1.99, -0.5], [0.5, 1.99, 0.5],
+                             [-0.5, 1.99, 0.5]]}
+            ],
+            "objects": [
+                {"name": "floor", "material": "white", "shape": {"type": "quad", "size": [4, 4]}},
+                {"name": "ball", "material": "glass", "dynamic": true,
+                 "shape": {"type": "sphere", "radius": 0.5, "subdivisions": 2},
+                 "transform": {"translate": [0, 0.5, 0]}}
+            ]
+        })");
+    }
+
+    // The InputError message for scene text written as `name`, or "" if it loads.
+    std::string load_error(const std::string& name, const std::string& text) {
+        const std::string file = write(name, text);
+        try {
+            load_scene(file);
+        } catch (const InputError& e) {
+            return e.what();
+        }
+        return "";
+    }
+
+    fs::path dir_;
+};
+
+TEST_F(SceneFile, EverySceneInTheRepositoryLoads) {
+    const std::vector<fs::path> files = scene_files();
+    ASSERT_GE(files.size(), 4u);
+    for (const fs::path& file : files) {
+        SCOPED_TRACE(file.string());
+        Scene scene;
+        ASSERT_NO_THROW(scene = load_scene(file.string()));
+        EXPECT_FALSE(scene.objects.empty());
+        EXPECT_GT(scene.triangle_count(), 0u);
+        EXPECT_EQ(scene.object_versions.size(), scene.objects.size());
+        EXPECT_EQ(scene.light_versions.size(), scene.lights.size());
+    }
+}
+
+TEST_F(SceneFile, CornellMatchesLarsensFigure13_1) {
+    const Scene scene = load_scene((kScenes / "cornell.json").string());
+    EXPECT_EQ(scene.name, "cornell");
+    EXPECT_EQ(scene.length_unit, "mm");
+    EXPECT_EQ(scene.settings.photons.groups, 77);
+    EXPECT_EQ(scene.settings.photons.photons_per_group, 40);
+    EXPECT_EQ(scene.settings.lightmap.texel_size, 111.0f);
+    EXPECT_EQ(scene.settings.caustics.photons, 10000);
+    EXPECT_EQ(scene.settings.caustics.frames, 8);
+    EXPECT_EQ(scene.settings.gather.texels_per_frame, 20);
+    ASSERT_EQ(scene.lights.size(), 1u);
+    EXPECT_EQ(scene.camera.width, 512);
+    const int cube = scene.find_object("cube"), sphere = scene.find_object("sphere");
+    ASSERT_GE(cube, 0);
+    ASSERT_GE(sphere, 0);
+    EXPECT_TRUE(scene.objects[size_t(cube)].dynamic);
+    EXPECT_TRUE(scene.objects[size_t(sphere)].dynamic);
+    EXPECT_EQ(scene.objects[size_t(sphere)].material.type, MaterialType::glass);
+    EXPECT_FLOAT_EQ(scene.objects[size_t(sphere)].material.ior, 1.5f);
+
+    // Walls face into the room: the world normal of every wall points at the room's centre.
+    const glm::vec3 centre(277.5f);
+    for (const char* wall : {"floor", "ceiling", "back_wall", "left_wall", "right_wall"}) {
+        SCOPED_TRACE(wall);
+        const int i = scene.find_object(wall);
+        ASSERT_GE(i, 0);
+        const Object& o = scene.objects[size_t(i)];
+        const glm::vec3 n = o.transform.apply_vector(triangle_normal(o.mesh, 0));
+        const glm::vec3 p = o.transform.apply_point(o.mesh.positions[0]);
+        EXPECT_GT(glm::dot(n, centre - p), 0.0f);
+        EXPECT_NEAR(mesh_area(o.mesh), 555.0f * 555.0f, 1.0f);
+    }
+    // The red wall is on the camera's left: camera right is cross(view, up).
+    const glm::vec3 right = glm::cross(scene.camera.target - scene.camera.eye, scene.camera.up);
+    const Object& red = scene.objects[size_t(scene.find_object("left_wall"))];
+    EXPECT_LT(glm::dot(red.transform.translation - scene.camera.eye, right), 0.0f);
+    EXPECT_GT(red.material.albedo.r, red.material.albedo.g);
+}
+
+TEST_F(SceneFile, TwoRoomsHaveADoorFillingTheDoorway) {
+    const Scene scene = load_scene((kScenes / "two_rooms.json").string());
+    EXPECT_EQ(scene.lights.size(), 4u);
+    const int door = scene.find_object("door");
+    ASSERT_GE(door, 0);
+    const Object& d = scene.objects[size_t(door)];
+    EXPECT_TRUE(d.dynamic);
+    // The hinge is the object's origin, so rotate_object swings the door open about it.
+    const Bounds b = mesh_bounds(d.mesh);
+    EXPECT_FLOAT_EQ(b.min.y, 0.0f);
+    EXPECT_FLOAT_EQ(b.min.z, 0.0f);
+    EXPECT_EQ(d.transform.translation, glm::vec3(555, 0, 200));
+}
+
+TEST_F(SceneFile, BumpyCornellBoxesHaveTheThesisPolygonCounts) {
+    const struct {
+        const char* file;
+        size_t min, max;
+    } cases[] = {{"bumpy_13k.json", 12000, 14000}, {"bumpy_133k.json", 125000, 140000}};
+    for (const auto& c : cases) {
+        SCOPED_TRACE(c.file);
+        const Scene scene = load_scene((kScenes / c.file).string());
+        EXPECT_GE(scene.triangle_count(), c.min);
+        EXPECT_LE(scene.triangle_count(), c.max);
+        // Larsen Fig. 10.1: 16 surfaces. The floor is one surface only if no two adjacent floor
+        // faces differ by more than the crease angle; the rest is 4 walls, the light panel and
+        // two five-faced blocks.
+        const Object& floor = scene.objects[size_t(scene.find_object("floor"))];
+        EXPECT_LT(max_dihedral_degrees(floor.mesh), 0.5f * scene.settings.lightmap.crease_angle);
+        int expected_surfaces = 0;
+        for (const Object& o : scene.objects) {
+            const bool block = o.source == "box";
+            EXPECT_EQ(o.mesh.triangles.size() == 10, block) << o.name;
+            expected_surfaces += block ? 5 : 1;
+        }
+        EXPECT_EQ(expected_surfaces, 16);
+        if (!scene.surfaces.empty()) {
+            EXPECT_EQ(scene.surfaces.size(), 16u);
+        }
+    }
+}
+
+TEST_F(SceneFile, ReadsTransformsMeshesScaleOffsetAndScript) {
+    save_mesh(make_box(glm::vec3(2.0f)), (dir_ / "cube.obj").string());
+    write("edit.lua", "-- nothing\n");
+    Json j = base_scene();
+    j["script"] = "edit.lua";
+    j["objects"].push_back(Json::parse(R"({
+        "name": "mesh", "material": "white", "mesh": "cube.obj", "scale": [1, 2, 3],
+        "offset": [1, 0, 0],
+        "transform": {"translate": [5, 6, 7],
+                      "rotate": [{"axis": [0, 1, 0], "degrees": 90},
+                                 {"axis": [1, 0, 0], "degrees": 90}]}})"));
+    j["objects"].push_back(Json::parse(R"({
+        "name": "euler", "material": "white", "shape": {"type": "box", "size": [1, 1, 1]},
+        "transform": {"rotate_euler": [90, 90, 0]}})"));
+    const Scene scene = load_scene(write("scene.json", j.dump()));
+    EXPECT_EQ(scene.script, (dir_ / "edit.lua").string());
+    const Object& m = scene.objects[size_t(scene.find_object("mesh"))];
+    EXPECT_EQ(m.source, "cube.obj");
+    const Bounds b = mesh_bounds(m.mesh);
+    EXPECT_EQ(b.min, glm::vec3(0, -2, -3));
+    EXPECT_EQ(b.max, glm::vec3(2, 2, 3));
+    EXPECT_EQ(m.transform.translation, glm::vec3(5, 6, 7));
+    // Listed rotations apply in order: +X → (Y 90°) → −Z → (X 90°) → +Y.
+    const glm::vec3 x = m.transform.apply_vector({1, 0, 0});
+    EXPECT_NEAR(glm::distance(x, glm::vec3(0, 1, 0)), 0.0f, 1e-6f);
+    const Object& e = scene.objects[size_t(scene.find_object("euler"))];
+    // rotate_euler turns about world X first, then Y: +Y → +Z → +X.
+    EXPECT_NEAR(glm::distance(e.transform.apply_vector({0, 1, 0}), glm::vec3(1, 0, 0)), 0.0f,
+                1e-6f);
+    // A quad light keeps its corners and the defaults fill in what the file leaves out.
+    EXPECT_EQ(scene.lights[1].type, LightType::quad);
+    EXPECT_NEAR(scene.lights[1].quad_normal().y, -1.0f, 1e-6f);  // a ceiling panel faces down
+    EXPECT_EQ(scene.camera.up, glm::vec3(0, 1, 0));
+    EXPECT_EQ(scene.objects[0].material.albedo, glm::vec3(0.75f));
+}
+
+TEST_F(SceneFile, SyntaxErrorsGiveLineAndColumn) {
+    std::string err = load_error("syntax.json", "{\n  \"name\": \"x\",\n  \"units\" \"m\"\n}\n");
+    EXPECT_NE(err.find("syntax.json: line 3, column 13: invalid JSON"), std::string::npos) << err;
+    err = load_error("truncated.json", "{\n  \"name\": \"x\",\n");
+    EXPECT_NE(err.find("truncated.json: line 3, column 1: invalid JSON"), std::string::npos) << err;
+    err = load_error("overflow.json", "{\n  \"camera\": {\"fov_y\": 1e999}\n}");
+    EXPECT_NE(err.find("overflow.json: line 2, column 23: number '1e999' is out of range; "
+                       "expected a finite number"),
+              std::string::npos)
+        << err;
+}
+
+TEST_F(SceneFile, MissingSceneFileIsAClearError) {
+    const std::string missing = (dir_ / "absent.json").string();
+    try {
+        load_scene(missing);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_EQ(std::string(e.what()), missing + ": cannot open scene file: no such file");
+    }
+}
+
+// Each malformed scene breaks one thing and must say which, where and what was expected.
+TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
+    write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    struct Case {
+        const char* name;
+        std::function<void(Json&)> edit;
+        const char* path;
+        const char* expected;
+    };
+    const std::vector<Case> cases = {
+        {"unknown_top_key", [](Json& j) { j["objets"] = Json::array(); }, "/objets",
+         "unknown key; expected one of name, units, camera, materials, lights, objects"},
+        {"missing_camera", [](Json& j) { j.erase("camera"); }, "/",
+         "missing key \"camera\"; expected a camera"},
+        {"fov_type", [](Json& j) { j["camera"]["fov_y"] = "wide"; }, "/camera/fov_y",
+         "expected a number in (0, 180), got the string \"wide\""},
+        {"fov_range", [](Json& j) { j["camera"]["fov_y"] = 180; }, "/camera/fov_y",
+         "expected a number in (0, 180), got 180"},
+        {"eye_is_target",
+         [](Json& j) {
+             j["camera"]["target"] = {0, 1, -5};
+         },
+         "/camera/target", "expected a target different from the eye"},
+        {"up_parallel",
+         [](Json& j) {
+             j["camera"]["up"] = {0, 0, 2};
+         },
+         "/camera/up", "expected an up vector not parallel to the view direction"},
+        {"resolution_zero",
+         [](Json& j) {
+             j["camera"]["resolution"] = {0, 48};
+         },
+         "/camera/resolution/0", "expected an integer in [1, 16384], got 0"},
+        {"albedo_range",
+         [](Json& j) {
+             j["materials"]["white"]["albedo"] = {0.5, 1.5, 0.5};
+         },
+         "/materials/white/albedo/1", "expected a number in [0, 1], got 1.5"},
+        {"material_type", [](Json& j) { j["materials"]["white"]["type"] = "metal"; },
+         "/materials/white/type", "expected one of diffuse, mirror, glass, got \"metal\""},
+        {"ior_on_diffuse", [](Json& j) { j["materials"]["white"]["ior"] = 1.3; },
+         "/materials/white/ior", "ior applies to glass only"},
+        {"unknown_material", [](Json& j) { j["objects"][0]["material"] = "gold"; },
+         "/objects/0/material", "unknown material \"gold\"; expected one of glass, white"},
+        {"duplicate_object", [](Json& j) { j["objects"][1]["name"] = "floor"; }, "/objects/1/name",
+         "expected a unique object name, got \"floor\" a second time"},
+        {"duplicate_light", [](Json& j) { j["lights"][1]["name"] = "lamp"; }, "/lights/1/name",
+         "expected a unique light name"},
+        {"light_type", [](Json& j) { j["lights"][0]["type"] = "spot"; }, "/lights/0/type",
+         "expected one of point, quad, got \"spot\""},
+        {"light_key_of_other_type", [](Json& j) { j["lights"][0]["radiance"] = 1; },
+         "/lights/0/radiance", "unknown key; expected one of name, type, position, intensity"},
+        {"negative_intensity",
+         [](Json& j) {
+             j["lights"][0]["intensity"] = {1, -1, 1};
+         },
+         "/lights/0/intensity/1", "expected a number >= 0, got -1"},
+        {"not_parallelogram",
+         [](Json& j) {
+             j["lights"][1]["corners"][2] = {0.7, 1.99, 0.5};
+         },
+         "/lights/1/corners/2",
+         "expected a parallelogram: corner 2 = corner 1 + corner 3 - corner 0 = [0.5, 1.99, 0.5]"},
+        {"three_corners", [](Json& j) { j["lights"][1]["corners"].erase(3); }, "/lights/1/corners",
+         "expected 4 corners [[x, y, z], ...], got an array of 3 elements"},
+        {"no_objects", [](Json& j) { j["objects"] = Json::array(); }, "/objects",
+         "expected at least one object"},
+        {"missing_mesh_file",
+         [](Json& j) {
+             j["objects"][0] = {{"name", "m"}, {"material", "white"}, {"mesh", "nope.obj"}};
+         },
+         "/objects/0/mesh", "expected an existing mesh file, got \"nope.obj\""},
+        {"degenerate_mesh",
+         [](Json& j) {
+             j["objects"][0] = {{"name", "m"}, {"material", "white"}, {"mesh", "flat.obj"}};
+         },
+         "/objects/0/mesh", "all 1 faces are degenerate"},
+        {"mesh_and_shape", [](Json& j) { j["objects"][0]["mesh"] = "flat.obj"; }, "/objects/0",
+         "expected either \"mesh\" or \"shape\", got both"},
+        {"scale_on_shape", [](Json& j) { j["objects"][0]["scale"] = 2; }, "/objects/0/scale",
+         "scale applies to meshes only"},
+        {"negative_size",
+         [](Json& j) {
+             j["objects"][0]["shape"]["size"] = {4, -1};
+         },
+         "/objects/0/shape/size/1", "expected a number > 0, got -1"},
+        {"zero_radius", [](Json& j) { j["objects"][1]["shape"]["radius"] = 0; },
+         "/objects/1/shape/radius", "expected a number > 0, got 0"},
+        {"subdivisions", [](Json& j) { j["objects"][1]["shape"]["subdivisions"] = 9; },
+         "/objects/1/shape/subdivisions", "expected an integer in [0, 7], got 9"},
+        {"shape_type", [](Json& j) { j["objects"][1]["shape"]["type"] = "torus"; },
+         "/objects/1/shape/type", "expected one of box, sphere, quad, bumpy_plane"},
+        {"shape_key",
+         [](Json& j) {
+             j["objects"][1]["shape"]["size"] = {1, 1, 1};
+         },
+         "/objects/1/shape/size", "unknown key; expected one of type, radius, subdivisions"},
+        {"huge_number",
+         [](Json& j) {
+             j["objects"][1]["transform"]["translate"] = {0, 1e39, 0};
+         },
+         "/objects/1/transform/translate/1", "expected a finite number, got 1e+39"},
+        {"zero_axis",
+         [](Json& j) {
+             j["objects"][1]["transform"]["rotate"] = {{"axis", {0, 0, 0}}, {"degrees", 5}};
+         },
+         "/objects/1/transform/rotate/axis", "expected a non-zero axis"},
+        {"dynamic_type", [](Json& j) { j["objects"][1]["dynamic"] = "yes"; }, "/objects/1/dynamic",
+         "expected true or false, got the string \"yes\""},
+        {"missing_script", [](Json& j) { j["script"] = "edit.lua"; }, "/script",
+         "expected an existing Lua script file, got \"edit.lua\""},
+        {"settings_key",
+         [](Json& j) {
+             j["settings"] = {{"photons", {{"gropus", 3}}}};
+         },
+         "/settings/photons/gropus", "unknown key; expected one of groups, photons_per_group"},
+        {"settings_enum",
+         [](Json& j) {
+             j["settings"] = {{"gather", {{"border_correction", "clamp"}}}};
+         },
+         "/settings/gather/border_correction",
+         "expected one of none, renormalize, stretch, got \"clamp\""},
+    };
+    std::set<std::string> messages;
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.name);
+        Json j = base_scene();
+        c.edit(j);
+        const std::string file = std::string(c.name) + ".json";
+        ::testing::internal::CaptureStderr();  // the mesh reader may explain on stderr too
+        const std::string err = load_error(file, j.dump(2));
+        ::testing::internal::GetCapturedStderr();
+        ASSERT_FALSE(err.empty()) << "loaded without error";
+        EXPECT_NE(err.find(file + ": " + c.path + ": "), std::string::npos) << err;
+        EXPECT_NE(err.find(c.expected), std::string::npos) << err;
+        EXPECT_TRUE(messages.insert(err.substr(err.find(file) + file.size())).second) << err;
+    }
+    EXPECT_GE(messages.size(), 12u);
+}
+
+TEST_F(SceneFile, DuplicateJsonKeysAreRejected) {
+    const std::string err = load_error(
+        "dup.json", R"({"camera": {"eye": [0, 0, 1], "eye": [0, 0, 2], "target": [0, 0, 0]}})");
+    EXPECT_NE(err.find("dup.json: /camera/eye: duplicate key"), std::string::npos) << err;
+    const std::string err2 =
+        load_error("dup_in_array.json",
+                   R"({"objects": [{"name": "a"}, {"name": "b", "material": "x", "name": "c"}]})");
+    EXPECT_NE(err2.find("dup_in_array.json: /objects/1/name: duplicate key"), std::string::npos)
+        << err2;
+}
+
+TEST_F(SceneFile, ParseSceneResolvesPathsAgainstTheSceneFile) {
+    save_mesh(make_box(glm::vec3(1.0f)), (dir_ / "box.ply").string());
+    Json j = base_scene();
+    j["objects"][0] = {{"name", "m"}, {"material", "white"}, {"mesh", "box.ply"}};
+    const Scene scene = parse_scene(j.dump(), (dir_ / "virtual.json").string());
+    EXPECT_EQ(scene.objects[0].mesh.triangles.size(), 12u);
+    EXPECT_EQ(scene.name, "base");
+    EXPECT_EQ(scene.path, (dir_ / "virtual.json").string());
+}
+
+}  // namespace
+}  // namespace ag
