@@ -46,7 +46,7 @@ void PhotonMaps::set_group(int light, int g, const std::vector<std::vector<Trace
     for (const std::vector<TracedVertex>& path : photons) {
         group.photon_begin.push_back(uint32_t(group.vertices.size()));
         for (const TracedVertex& t : path) {
-            PathVertex v{t.surface, t.position, -1};
+            PathVertex v{t.surface, t.position, t.local_position, -1};
             if (t.stored) {
                 SurfaceHits& s = surfaces_[size_t(t.surface)];
                 v.hit = int32_t(s.hits.size());

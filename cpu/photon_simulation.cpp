@@ -18,6 +18,7 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene
     tolerance_ = scene_.settings.photons.path_tolerance * (bounds.empty() ? 1.0f : glm::length(bounds.extent()));
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());
+    invalidations_.assign(scene_.lights.size(), 0);
     for (int l = 0; l < int(scene_.lights.size()); ++l) {
         traced_power_[size_t(l)] = tracer_->photon_power(l);
         if (!scene_.lights[size_t(l)].enabled) continue;
@@ -30,10 +31,11 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene
 
 void PhotonSimulation::invalidate(int light, int group, PhotonFrameStats& stats) {
     PhotonGroup& g = maps_.group(light, group);
-    if (g.queued) return;
+    if (g.queued || !scene_.lights[size_t(light)].enabled) return;  // a dark light has no photons
     g.queued = true;
     queue_.emplace_back(light, group);
     ++stats.groups_invalidated;
+    ++invalidations_[size_t(light)];
 }
 
 void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
@@ -105,8 +107,10 @@ bool PhotonSimulation::same_path(const PhotonGroup& group, int photon, const std
         const PathVertex& v = group.vertices[i];
         const TracedVertex& t = path[i - begin];
         if (v.surface != t.surface) return false;
-        const glm::vec3 d = v.position - t.position;
-        if (glm::dot(d, d) > tol2) return false;
+        const glm::vec3 d = v.position - t.position, dl = v.local - t.local_position;
+        // World positions catch changed paths; object-space positions catch a hit that stays in
+        // place in the world while its object turns under it (e.g. a cube spinning about y).
+        if (glm::dot(d, d) > tol2 || glm::dot(dl, dl) > tol2) return false;
     }
     return true;
 }

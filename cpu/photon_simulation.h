@@ -55,6 +55,8 @@ public:
     const RayTracer& rays() const { return *rays_; }
     LightGroupState light_state(int light) const;
     uint64_t frame_index() const { return frame_; }
+    // Groups of `light` invalidated since construction (verification, edits), for diagnostics.
+    uint64_t invalidations(int light) const { return invalidations_[size_t(light)]; }
 
 private:
     void apply_changes(PhotonFrameStats& stats);
@@ -72,6 +74,7 @@ private:
     uint64_t frame_ = 0;
     float tolerance_ = 0.0f;                 // world units
     std::vector<glm::vec3> traced_power_;    // per light: photon power the stored hits carry
+    std::vector<uint64_t> invalidations_;    // per light
 };
 
 }  // namespace ag::cpu

@@ -8,6 +8,7 @@ namespace ag::cpu {
 namespace {
 
 constexpr float kPi = 3.14159265358979f;
+constexpr int kQmcBounces = 16;
 
 // Orthonormal basis around unit n (Duff et al. 2017).
 void basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
@@ -77,7 +78,9 @@ void PhotonTracer::refresh() {
     groups_ = s.groups;
     per_group_ = s.photons_per_group;
     max_bounces_ = s.max_bounces;
-    dimensions_ = 3 + 3 * max_bounces_;
+    // Halton dimensions for emission and the first bounces; deeper bounces (rare after Russian
+    // roulette, and their stratification no longer matters) use hashed numbers.
+    dimensions_ = 3 + 3 * std::min(max_bounces_, kQmcBounces);
     if (halton_.size() != scene_.lights.size() || (!halton_.empty() && halton_[0].dimensions() != dimensions_)) {
         halton_.clear();
         for (size_t l = 0; l < scene_.lights.size(); ++l)
@@ -89,6 +92,13 @@ glm::vec3 PhotonTracer::photon_power(int light) const {
     const Light& l = scene_.lights[size_t(light)];
     if (!l.enabled) return glm::vec3(0.0f);
     return l.power() / float(double(groups_) * double(per_group_));
+}
+
+float PhotonTracer::sample(int light, uint64_t k, int dim) const {
+    if (dim < dimensions_) return float(halton_[size_t(light)].sample(k, dim));
+    const uint32_t h = hash_u32(hash_u32(uint32_t(k) ^ hash_u32(uint32_t(k >> 32) + 0x9e3779b9u)) +
+                                uint32_t(dim) * 0x85ebca6bu + scene_.settings.seed + uint32_t(light) * 0xc2b2ae35u);
+    return float(h >> 8) * (1.0f / 16777216.0f);
 }
 
 void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
@@ -106,7 +116,7 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
     } else {
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
         const glm::vec3 n = l.quad_normal();
-        ray.origin = l.corners[0] + float(h.sample(k, 1)) * e1 + float(h.sample(k, 2)) * e3 + rays_.epsilon() * n;
+        ray.origin = l.corners[0] + sample(light, k, 1) * e1 + sample(light, k, 2) * e3 + rays_.epsilon() * n;
         ray.direction = cosine_direction(n, s.x, s.y);
     }
     glm::vec3 power = photon_power(light);
@@ -139,10 +149,10 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
             if (!front) return;
             // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
             const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
-            if (p <= 0.0f || float(h.sample(k, dim)) >= p) return;
+            if (p <= 0.0f || sample(light, k, dim) >= p) return;
             power *= m.albedo / p;
             ray.origin = hit.position + eps * facing;
-            ray.direction = cosine_direction(facing, float(h.sample(k, dim + 1)), float(h.sample(k, dim + 2)));
+            ray.direction = cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));
         } else if (m.type == MaterialType::mirror) {
             out.push_back(v);
             ray.origin = hit.position + eps * facing;
@@ -154,7 +164,7 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
             const float cos_i = -glm::dot(d, facing);
             float cos_t = 0.0f;
             const float f = fresnel(cos_i, eta, cos_t);
-            if (float(h.sample(k, dim)) < f) {
+            if (sample(light, k, dim) < f) {
                 ray.origin = hit.position + eps * facing;
                 ray.direction = glm::reflect(d, facing);
             } else {

@@ -45,6 +45,9 @@ public:
     int dimensions() const { return dimensions_; }
 
 private:
+    // QMC number `dim` of photon k (global index within the light), in [0, 1).
+    float sample(int light, uint64_t k, int dim) const;
+
     const Scene& scene_;
     const RayTracer& rays_;
     int groups_, per_group_, max_bounces_, dimensions_;

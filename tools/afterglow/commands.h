@@ -20,5 +20,7 @@ extern const Command kInfoCommand;
 int run_info(const Args& args);
 extern const Command kExportCommand;
 int run_export(const Args& args);
+extern const Command kPhotonsCommand;
+int run_photons(const Args& args);
 
 }  // namespace ag::cli

@@ -13,6 +13,7 @@ const std::vector<Subcommand>& subcommands() {
     static const std::vector<Subcommand> all = {
         {&kInfoCommand, run_info},
         {&kExportCommand, run_export},
+        {&kPhotonsCommand, run_photons},
     };
     return all;
 }

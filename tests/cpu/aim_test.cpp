@@ -1,0 +1,62 @@
+// AIM density estimation against analytic irradiance (Larsen ch. 10).
+#include "cpu/aim.h"
+
+#include <gtest/gtest.h>
+
+#include "cpu/photon_simulation.h"
+#include "test_scenes.h"
+
+namespace ag::cpu {
+
+TEST(Aim, PlaneUnderPointLightMatchesAnalyticRadiance) {
+    const float half = 1000.0f, h = 400.0f, intensity = 5000.0f, albedo = 0.6f;
+    Scene scene = test::plane_under_light(half, h, intensity, albedo);
+    scene.settings.photons.groups = 256;
+    scene.settings.photons.photons_per_group = 400;
+    scene.settings.aim.knn = 200;
+    scene.settings.lightmap.texel_size = 100.0f;
+    make_surfaces_and_atlas(scene);
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    EXPECT_EQ(aim.rebuild_all(sim.maps()), int(scene.atlas.texels.size()));
+
+    int checked = 0;
+    double worst = 0.0;
+    for (const TexelRecord& t : scene.atlas.texels) {
+        const glm::vec3 p = t.position;  // the plane does not move: object = world
+        if (std::abs(p.x) > 0.5f * half || std::abs(p.z) > 0.5f * half) continue;  // away from edges
+        const double d = glm::length(glm::vec3(0, h, 0) - p);
+        const double e = intensity * (h / d) / (d * d);  // I cosθ / d²
+        const double expected = albedo / 3.14159265358979 * e;
+        const glm::vec3 got = aim.radiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)];
+        const double rel = std::abs(got.x - expected) / expected;
+        worst = std::max(worst, rel);
+        EXPECT_LT(rel, 0.05) << "texel at " << p.x << ", " << p.z << ": " << got.x << " vs " << expected;
+        EXPECT_NEAR(got.y, got.x, 1e-6 * got.x);
+        ++checked;
+    }
+    EXPECT_GT(checked, 20);
+    std::printf("AIM vs analytic: %d texels, worst relative error %.3f\n", checked, worst);
+}
+
+TEST(Aim, UpdateFollowsDeltaAndBudget) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.settings.aim.surfaces_per_frame = 3;
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    int rebuilt = 0;
+    const int texels = aim.update(sim.maps(), &rebuilt);
+    EXPECT_EQ(rebuilt, 3);
+    EXPECT_GT(texels, 0);
+    EXPECT_EQ(int(aim.take_dirty_texels().size()), texels);
+    // Keep updating: every surface with hits is rebuilt eventually, then nothing is left.
+    for (int i = 0; i < 100 && rebuilt > 0; ++i) aim.update(sim.maps(), &rebuilt);
+    EXPECT_EQ(rebuilt, 0);
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s) EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
+}
+
+}  // namespace ag::cpu

@@ -1,0 +1,279 @@
+// Selective photon tracing invariants (Larsen ch. 9): repair equals rebuild, detection, energy.
+#include "cpu/photon_simulation.h"
+
+#include <algorithm>
+#include <map>
+#include <random>
+#include <tuple>
+
+#include <gtest/gtest.h>
+
+#include "cpu/aim.h"
+#include "test_scenes.h"
+
+namespace ag::cpu {
+
+namespace {
+
+using Key = std::tuple<uint32_t, uint32_t, uint32_t>;  // light, group, path vertex
+
+std::map<Key, PhotonHit> hits_of(const PhotonMaps& maps, int surface) {
+    std::map<Key, PhotonHit> out;
+    for (const PhotonHit& h : maps.surface(surface).hits) out[{h.light, h.group, h.vertex}] = h;
+    return out;
+}
+
+// Compares two simulations' photon hits surface by surface: same hits (by owner), positions
+// within the path tolerance, powers within float rounding.
+void expect_same_hits(const PhotonSimulation& a, const PhotonSimulation& b, float tolerance, const std::string& what) {
+    ASSERT_EQ(a.maps().surface_count(), b.maps().surface_count());
+    size_t total = 0;
+    for (int s = 0; s < int(a.maps().surface_count()); ++s) {
+        const auto ha = hits_of(a.maps(), s), hb = hits_of(b.maps(), s);
+        ASSERT_EQ(ha.size(), hb.size()) << what << ": surface " << s;
+        for (const auto& [key, hit] : ha) {
+            auto it = hb.find(key);
+            ASSERT_NE(it, hb.end()) << what << ": surface " << s;
+            EXPECT_LE(glm::length(hit.position - it->second.position), tolerance) << what << ": surface " << s;
+            for (int c = 0; c < 3; ++c)
+                EXPECT_NEAR(hit.power[c], it->second.power[c], 1e-4f * std::max(1e-20f, std::abs(it->second.power[c])))
+                    << what << ": surface " << s;
+        }
+        total += ha.size();
+        const glm::dvec3 fa = a.maps().surface(s).flux, fb = b.maps().surface(s).flux;
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(fa[c], fb[c], 1e-4 * std::max(1e-12, std::abs(fb[c]))) << what;
+    }
+    EXPECT_GT(total, 0u) << what;
+}
+
+float scene_diagonal(const Scene& s) {
+    Bounds b;
+    for (const Object& o : s.objects)
+        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return glm::length(b.extent());
+}
+
+// Applies one random edit of the kinds the issue lists.
+void random_edit(Scene& scene, std::mt19937& rng) {
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    std::vector<int> dynamic;
+    for (int i = 0; i < int(scene.objects.size()); ++i)
+        if (scene.objects[size_t(i)].dynamic) dynamic.push_back(i);
+    std::vector<int> diffuse;
+    for (int i = 0; i < int(scene.objects.size()); ++i)
+        if (scene.objects[size_t(i)].material.type == MaterialType::diffuse) diffuse.push_back(i);
+    const float step = 0.08f * scene_diagonal(scene);
+    switch (rng() % 6) {
+        case 0:
+        case 1:
+            if (!dynamic.empty()) {
+                const int o = dynamic[rng() % dynamic.size()];
+                translate_object(scene, o, {step * u(rng), 0.0f, step * u(rng)});
+                if (rng() % 2) rotate_object(scene, o, {0, 1, 0}, 30.0f * u(rng));
+            }
+            break;
+        case 2: {
+            const int l = int(rng() % scene.lights.size());
+            set_light_position(scene, l, scene.lights[size_t(l)].center() + 0.3f * step * glm::vec3(u(rng), u(rng), u(rng)));
+            break;
+        }
+        case 3: {
+            const int l = int(rng() % scene.lights.size());
+            set_light_enabled(scene, l, !scene.lights[size_t(l)].enabled);
+            break;
+        }
+        case 4: {
+            const int l = int(rng() % scene.lights.size());
+            const glm::vec3 c = scene.lights[size_t(l)].type == LightType::point ? scene.lights[size_t(l)].intensity
+                                                                                 : scene.lights[size_t(l)].radiance;
+            set_light_color(scene, l, c * glm::vec3(0.5f + 0.5f * std::abs(u(rng)), 1.0f, 0.7f + 0.5f * std::abs(u(rng))));
+            break;
+        }
+        case 5: {
+            const int o = diffuse[rng() % diffuse.size()];
+            set_albedo(scene, o, glm::vec3(0.2f + 0.6f * std::abs(u(rng)), 0.3f + 0.6f * std::abs(u(rng)), 0.5f));
+            break;
+        }
+    }
+}
+
+// Runs frames until every photon has been verified since the last edit and no group waits.
+int settle(PhotonSimulation& sim) {
+    const int per_group = sim.scene().settings.photons.photons_per_group;
+    int frames = 0;
+    for (int quiet = 0; quiet < per_group || !sim.settled(); ++frames) {
+        const PhotonFrameStats st = sim.frame();
+        quiet = (st.groups_invalidated == 0 && st.groups_retraced == 0) ? quiet + 1 : 0;
+        if (frames > 100000) break;
+    }
+    return frames;
+}
+
+void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits) {
+    Scene scene = load_scene(test::scene_path(scene_file));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    std::mt19937 rng(seed);
+    for (int e = 0; e < edits; ++e) {
+        random_edit(scene, rng);
+        // A few frames between edits, sometimes none, so edits overlap with repairs in flight.
+        const int frames = int(rng() % 4);
+        for (int f = 0; f < frames; ++f) sim.frame();
+    }
+    if (!scene.lights[0].enabled) set_light_enabled(scene, 0, true);  // keep something to compare
+    settle(sim);
+
+    PhotonSimulation fresh(scene, pool);
+    fresh.trace_all();
+    expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene_diagonal(scene),
+                     scene_file + " seed " + std::to_string(seed));
+}
+
+}  // namespace
+
+TEST(SelectiveTracing, RepairEqualsRebuildCornell) {
+    for (uint32_t seed = 1; seed <= 12; ++seed) repair_equals_rebuild("cornell.json", seed, 6);
+}
+
+TEST(SelectiveTracing, RepairEqualsRebuildTwoRooms) {
+    for (uint32_t seed = 100; seed <= 108; ++seed) repair_equals_rebuild("two_rooms.json", seed, 6);
+}
+
+TEST(SelectiveTracing, FreshTraceIsIndependentOfThreadCount) {
+    const Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool one(1), three(3);
+    PhotonSimulation a(scene, one), b(scene, three);
+    a.trace_all();
+    b.trace_all();
+    for (int s = 0; s < int(a.maps().surface_count()); ++s) {
+        const auto& ha = a.maps().surface(s).hits;
+        const auto& hb = b.maps().surface(s).hits;
+        ASSERT_EQ(ha.size(), hb.size());
+        for (size_t i = 0; i < ha.size(); ++i) {
+            EXPECT_EQ(ha[i].position, hb[i].position);
+            EXPECT_EQ(ha[i].power, hb[i].power);
+        }
+    }
+}
+
+TEST(SelectiveTracing, MovingTheCubeInvalidatesGroupsWithinGFrames) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    const int cube = scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    translate_object(scene, cube, {60.0f, 0.0f, -40.0f});
+    int invalidated = 0;
+    for (int f = 0; f < scene.settings.photons.groups && invalidated == 0; ++f) invalidated += sim.frame().groups_invalidated;
+    EXPECT_GT(invalidated, 0);
+}
+
+TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {
+    Scene scene = load_scene(test::scene_path("two_rooms.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    const int block = scene.find_object("block");
+    ASSERT_GE(block, 0);
+    const float wall_x = 555.0f;  // the partition between room A (x < 555) and room B
+    ASSERT_LT(scene.objects[size_t(block)].transform.translation.x, wall_x);
+    std::vector<uint64_t> before;
+    for (int l = 0; l < int(scene.lights.size()); ++l) before.push_back(sim.invalidations(l));
+    for (int step = 0; step < 8; ++step) {
+        translate_object(scene, block, {15.0f, 0.0f, -10.0f});
+        rotate_object(scene, block, {0, 1, 0}, 10.0f);
+        for (int f = 0; f < 10; ++f) sim.frame();
+    }
+    settle(sim);
+    uint64_t room_a = 0;
+    for (int l = 0; l < int(scene.lights.size()); ++l) {
+        const uint64_t n = sim.invalidations(l) - before[size_t(l)];
+        if (scene.lights[size_t(l)].position.x > wall_x) EXPECT_EQ(n, 0u) << scene.lights[size_t(l)].name;
+        else room_a += n;
+    }
+    EXPECT_GT(room_a, 0u);  // the edit was seen where it happened
+}
+
+TEST(SelectiveTracing, ClosedBoxStoresPhiOverOneMinusRho) {
+    for (float rho : {0.5f, 0.8f}) {
+        const float intensity = 10.0f;
+        const Scene scene = test::closed_box(rho, intensity, 250, 64);
+        ThreadPool pool(2);
+        PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        glm::dvec3 total(0.0);
+        for (int s = 0; s < int(sim.maps().surface_count()); ++s) total += sim.maps().surface(s).flux;
+        const double phi = 4.0 * 3.14159265358979 * intensity;
+        EXPECT_NEAR(total.x / (phi / (1.0 - rho)), 1.0, 0.01) << "rho " << rho;
+        std::printf("closed box rho %.1f: stored flux / (phi / (1 - rho)) = %.5f\n", double(rho), total.x / (phi / (1.0 - rho)));
+        EXPECT_NEAR(total.y, total.x, 1e-9 * total.x);
+    }
+}
+
+TEST(SelectiveTracing, DeltaBookkeepingIsExact) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());  // resets every Δ
+    std::vector<glm::dvec3> flux0;
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s) {
+        flux0.push_back(sim.maps().surface(s).flux);
+        EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
+    }
+    std::mt19937 rng(7);
+    for (int e = 0; e < 8; ++e) {
+        random_edit(scene, rng);
+        sim.frame();
+    }
+    settle(sim);
+    bool any = false;
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s) {
+        const SurfaceHits& h = sim.maps().surface(s);
+        const glm::dvec3 change = h.flux - flux0[size_t(s)];
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(h.signed_delta[c], change[c], 1e-9 * std::max(1.0, std::abs(flux0[size_t(s)][c])));
+        // Δf sums |energy| of every add and remove, so it bounds the net change.
+        EXPECT_GE(h.delta_f + 1e-9, std::abs(energy(change)));
+        glm::dvec3 sum(0.0);
+        for (const PhotonHit& hit : h.hits) sum += glm::dvec3(hit.power);
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], h.flux[c], 1e-9 * std::max(1.0, std::abs(sum[c])));
+        any = any || h.delta_f > 0.0;
+    }
+    EXPECT_TRUE(any);
+}
+
+TEST(SelectiveTracing, SwitchingALightOffRemovesItsHitsAndOnRestoresThem) {
+    Scene scene = load_scene(test::scene_path("two_rooms.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    set_light_enabled(scene, 0, false);
+    sim.frame();
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s)
+        for (const PhotonHit& h : sim.maps().surface(s).hits) EXPECT_NE(h.light, 0u);
+    EXPECT_EQ(sim.light_state(0).valid, 0);
+    set_light_enabled(scene, 0, true);
+    settle(sim);
+    PhotonSimulation fresh(scene, pool);
+    fresh.trace_all();
+    expect_same_hits(sim, fresh, 1e-3f, "light back on");
+}
+
+TEST(SelectiveTracing, LightColourRescalesWithoutRetracing) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    settle(sim);
+    set_light_color(scene, 0, scene.lights[0].intensity * glm::vec3(0.5f, 1.0f, 2.0f));
+    const PhotonFrameStats st = sim.frame();
+    EXPECT_EQ(st.groups_invalidated, 0);
+    EXPECT_EQ(st.photons_retraced, 0);
+    PhotonSimulation fresh(scene, pool);
+    fresh.trace_all();
+    expect_same_hits(sim, fresh, 1e-3f, "recoloured");
+}
+
+}  // namespace ag::cpu
