@@ -39,11 +39,12 @@ void PhotonMaps::clear_group(int light, int g) {
     group.traced = false;
 }
 
-void PhotonMaps::set_group(int light, int g, const std::vector<std::vector<TracedVertex>>& photons) {
+void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* photons, size_t count) {
     clear_group(light, g);
     PhotonGroup& group = groups_[size_t(light)][size_t(g)];
-    group.photon_begin.reserve(photons.size() + 1);
-    for (const std::vector<TracedVertex>& path : photons) {
+    group.photon_begin.reserve(count + 1);
+    for (size_t p = 0; p < count; ++p) {
+        const std::vector<TracedVertex>& path = photons[p];
         group.photon_begin.push_back(uint32_t(group.vertices.size()));
         for (const TracedVertex& t : path) {
             PathVertex v{t.surface, t.position, t.local_position, -1};

@@ -60,8 +60,8 @@ public:
 
     // Removes every hit of the group and forgets its paths.
     void clear_group(int light, int g);
-    // Replaces the group's paths with `photons` (one traced path per photon) and adds the hits.
-    void set_group(int light, int g, const std::vector<std::vector<TracedVertex>>& photons);
+    // Replaces the group's paths with photons[0..count) (one traced path each) and adds the hits.
+    void set_group(int light, int g, const std::vector<TracedVertex>* photons, size_t count);
     // Multiplies the power of every hit of the group by `ratio` (light colour edits).
     void rescale_group(int light, int g, const glm::vec3& ratio);
 

@@ -117,15 +117,16 @@ bool PhotonSimulation::same_path(const PhotonGroup& group, int photon, const std
 
 void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& groups) {
     const int per_group = scene_.settings.photons.photons_per_group;
-    std::vector<std::vector<std::vector<TracedVertex>>> traced(groups.size(),
-                                                               std::vector<std::vector<TracedVertex>>(size_t(per_group)));
-    pool_.parallel_for(groups.size() * size_t(per_group), [&](size_t job) {
+    const size_t jobs = groups.size() * size_t(per_group);
+    if (traced_.size() < jobs) traced_.resize(jobs);
+    pool_.parallel_for(jobs, [&](size_t job) {
         const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
-        tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced[gi][p]);
+        traced_[job].clear();  // keeps its capacity from earlier frames
+        tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
     }, 8);
     // Merge in group order on this thread: the maps end up identical for any thread count.
     for (size_t gi = 0; gi < groups.size(); ++gi) {
-        maps_.set_group(groups[gi].first, groups[gi].second, traced[gi]);
+        maps_.set_group(groups[gi].first, groups[gi].second, &traced_[gi * size_t(per_group)], size_t(per_group));
         maps_.group(groups[gi].first, groups[gi].second).queued = false;
     }
 }

@@ -75,6 +75,7 @@ private:
     float tolerance_ = 0.0f;                 // world units
     std::vector<glm::vec3> traced_power_;    // per light: photon power the stored hits carry
     std::vector<uint64_t> invalidations_;    // per light
+    std::vector<std::vector<TracedVertex>> traced_;  // re-used path buffers, one per photon job
 };
 
 }  // namespace ag::cpu

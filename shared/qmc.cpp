@@ -61,6 +61,7 @@ Halton::Halton(int dimensions, uint32_t seed) : dimensions_(dimensions), seed_(s
     assert(dimensions > 0 && dimensions <= 1000);
     if (seed_ == 0) return;
     permutations_.resize(size_t(dimensions));
+    tails_.resize(size_t(dimensions));
     for (int d = 0; d < dimensions; ++d) {
         const uint32_t base = nth_prime(d);
         const int digits = digits_for_base(base);
@@ -76,6 +77,10 @@ Halton::Halton(int dimensions, uint32_t seed) : dimensions_(dimensions), seed_(s
                 std::swap(p[k], p[state % (k + 1)]);
             }
         }
+        std::vector<double>& tail = tails_[size_t(d)];
+        tail.assign(size_t(digits) + 1, 0.0);
+        for (int j = digits - 1; j >= 0; --j)
+            tail[size_t(j)] = tail[size_t(j) + 1] + double(perm[size_t(j) * base]) * std::pow(double(base), -double(j + 1));
     }
 }
 
@@ -86,15 +91,16 @@ double Halton::sample(uint64_t index, int dimension) const {
     // Scrambled radical inverse: permute every digit, including the infinite tail of zeros up to
     // the digit budget, so the point set stays stratified in every elementary interval.
     const uint16_t* perm = permutations_[size_t(dimension)].data();
-    const int digits = digits_for_base(base);
     const double inv_base = 1.0 / double(base);
     double factor = inv_base, value = 0.0;
-    for (int j = 0; j < digits && factor > 1e-17; ++j) {
-        const uint64_t digit = index % base;
-        index /= base;
-        value += double(perm[size_t(j) * base + digit]) * factor;
+    int j = 0;
+    for (; index > 0; ++j) {
+        const uint64_t next = index / base;
+        value += double(perm[size_t(j) * base + (index - next * base)]) * factor;
+        index = next;
         factor *= inv_base;
     }
+    value += tails_[size_t(dimension)][size_t(j)];  // the permuted zeros beyond the index's digits
     return value < 1.0 ? value : std::nextafter(1.0, 0.0);
 }
 

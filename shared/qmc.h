@@ -27,6 +27,9 @@ private:
     uint32_t seed_;
     // permutations_[d] holds base(d) digit permutations, one per digit position (up to 64/log2 b).
     std::vector<std::vector<uint16_t>> permutations_;
+    // tails_[d][j]: value of the permuted zero digits from position j on, so a sample loops only
+    // over the index's own digits.
+    std::vector<std::vector<double>> tails_;
 };
 
 // Stateless 32-bit hash (for decorrelating sequences; not a QMC point set).

@@ -22,5 +22,7 @@ extern const Command kExportCommand;
 int run_export(const Args& args);
 extern const Command kPhotonsCommand;
 int run_photons(const Args& args);
+extern const Command kBenchCommand;
+int run_bench(const Args& args);
 
 }  // namespace ag::cli

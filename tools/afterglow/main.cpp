@@ -14,6 +14,7 @@ const std::vector<Subcommand>& subcommands() {
         {&kInfoCommand, run_info},
         {&kExportCommand, run_export},
         {&kPhotonsCommand, run_photons},
+        {&kBenchCommand, run_bench},
     };
     return all;
 }
