@@ -785,6 +785,9 @@ void make_surfaces_and_atlas(Scene& scene) {
             const double length = glm::length(normal_sums[size_t(s)]);
             surface.normal =
                 length > 0.0 ? glm::vec3(normal_sums[size_t(s)] / length) : glm::vec3(0.0f);
+            // Mirrors and glass reflect no diffuse light: they keep their surfaces (photon paths
+            // name them) but get no lightmap texels.
+            if (scene.objects[size_t(oi)].material.type != MaterialType::diffuse) continue;
             std::vector<ChartCut> cuts =
                 cut_charts(mesh, adjacency, info, local, s, surface.triangles, cos_cone, chart_of,
                            tried, stamp, grid);

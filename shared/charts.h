@@ -14,7 +14,9 @@ namespace ag {
 std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int* surface_count);
 
 // Fills scene.surfaces, scene.triangle_surface and scene.atlas from the objects' meshes and
-// scene.settings.lightmap (crease angle, chart cone, texel size, gutter). Deterministic.
+// scene.settings.lightmap (crease angle, chart cone, texel size, gutter). Every object gets
+// surfaces; only diffuse objects get charts and texels (specular ones have no lightmap).
+// Deterministic.
 void make_surfaces_and_atlas(Scene& scene);
 
 }  // namespace ag

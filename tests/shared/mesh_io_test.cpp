@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "temp_dir.h"
+
 #include <filesystem>
 #include <fstream>
 
@@ -15,24 +17,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-class MeshIo : public ::testing::Test {
+class MeshIo : public test::TempDirTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("ag_mesh_io_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::string write(const std::string& name, const std::string& text) {
-        const std::string path = (dir_ / name).string();
-        std::ofstream(path, std::ios::binary) << text;
-        return path;
-    }
-    std::string path(const std::string& name) const { return (dir_ / name).string(); }
-
     // The InputError message load_mesh gives, or "" if it loads.
     static std::string load_error(const std::string& file) {
         try {
@@ -42,8 +28,6 @@ protected:
         }
         return "";
     }
-
-    fs::path dir_;
 };
 
 TEST_F(MeshIo, RoundTripsEveryFormat) {

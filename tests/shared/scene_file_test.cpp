@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "temp_dir.h"
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -53,23 +55,8 @@ float max_dihedral_degrees(const Mesh& mesh) {
     return worst;
 }
 
-class SceneFile : public ::testing::Test {
+class SceneFile : public test::TempDirTest {
 protected:
-    void SetUp() override {
-        dir_ = fs::temp_directory_path() /
-               ("ag_scene_file_" +
-                std::string(::testing::UnitTest::GetInstance()->current_test_info()->name()));
-        fs::remove_all(dir_);
-        fs::create_directories(dir_);
-    }
-    void TearDown() override { fs::remove_all(dir_); }
-
-    std::string write(const std::string& name, const std::string& text) {
-        const std::string path = (dir_ / name).string();
-        std::ofstream(path, std::ios::binary) << text;
-        return path;
-    }
-
     // A small valid scene that each malformed case breaks in one place.
     static Json base_scene() {
         return Json::parse(R"({
@@ -103,8 +90,6 @@ protected:
         }
         return "";
     }
-
-    fs::path dir_;
 };
 
 TEST_F(SceneFile, EverySceneInTheRepositoryLoads) {

@@ -1,6 +1,8 @@
 // afterglow photons SCENE --frames N --dump FILE: runs the CPU photon simulation and AIM stage
 // (Larsen ch. 9, 10) and reports the state per surface, per light and per frame.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 
@@ -25,6 +27,8 @@ const Command kPhotonsCommand{
         {"dump", "", "FILE.json", "write the state as JSON (atomically)"},
         {"threads", "", "N", "worker threads (default: settings.threads, 0 = all cores)"},
         {"quiet", "q", "", "no per-frame lines on stderr"},
+        {"aim", "", "FILE", "write the AIM atlas (radiance per texel, scaled up 8x) as EXR or PNG"},
+        {"exposure", "", "EV", "exposure for a PNG written by --aim (default: auto, 99th percentile to 0.8)"},
     },
     1,
     1,
@@ -67,6 +71,28 @@ int run_photons(const Args& args) {
     const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::cout << "frames " << frames << " in " << total_s << " s, " << sim.maps().hit_count() << " photon hits on "
               << scene.surfaces.size() << " surfaces, " << pool.size() << " worker threads\n";
+
+    if (args.has("aim")) {
+        // Rebuild every surface so the picture shows the current state, then write it scaled up.
+        aim.rebuild_all(sim.maps());
+        const int scale = 8, w = scene.atlas.width, h = scene.atlas.height;
+        Image image(w * scale, h * scale);
+        std::vector<float> lum;
+        for (int y = 0; y < h * scale; ++y)
+            for (int x = 0; x < w * scale; ++x) {
+                // Atlas row 0 is at the bottom in GL; show it at the bottom of the picture too.
+                const glm::vec3 c = aim.radiance()[size_t(h - 1 - y / scale) * size_t(w) + size_t(x / scale)];
+                image.set_rgb(x, y, c);
+                if (c != glm::vec3(0.0f)) lum.push_back((c.x + c.y + c.z) / 3.0f);
+            }
+        float ev = float(args.get_double("exposure", 0.0));
+        if (!args.has("exposure") && !lum.empty()) {
+            std::nth_element(lum.begin(), lum.begin() + std::ptrdiff_t(lum.size() * 99 / 100), lum.end());
+            ev = std::log2(0.8f / std::max(1e-30f, lum[lum.size() * 99 / 100]));
+        }
+        write_image(image, args.get("aim"), ev);
+        std::cerr << "afterglow photons: wrote " << args.get("aim") << "\n";
+    }
 
     if (args.has("dump")) {
         nlohmann::json surfaces = nlohmann::json::array();
