@@ -148,4 +148,6 @@ int run_bench(const Args& args) {
     throw CliError("afterglow bench: unknown benchmark '" + what + "' (expected photons or knn)");
 }
 
+static const Registration kRegistration(kBenchCommand, run_bench, 90);
+
 }  // namespace ag::cli

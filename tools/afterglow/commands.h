@@ -11,18 +11,17 @@ namespace ag::cli {
 struct Subcommand {
     const Command* command;
     int (*run)(const Args& args);
+    int order;  // position in `afterglow --help`
 };
 
-// Every subcommand, in the order `afterglow --help` lists them.
-const std::vector<Subcommand>& subcommands();
+// Every subcommand, sorted by `order`. Each subcommand's source file registers itself with a
+// static `Registration`, so adding a command touches no shared file.
+std::vector<Subcommand>& subcommands();
 
-extern const Command kInfoCommand;
-int run_info(const Args& args);
-extern const Command kExportCommand;
-int run_export(const Args& args);
-extern const Command kPhotonsCommand;
-int run_photons(const Args& args);
-extern const Command kBenchCommand;
-int run_bench(const Args& args);
+struct Registration {
+    Registration(const Command& command, int (*run)(const Args&), int order) {
+        subcommands().push_back({&command, run, order});
+    }
+};
 
 }  // namespace ag::cli

@@ -28,4 +28,6 @@ int run_export(const Args& args) {
     return 0;
 }
 
+static const Registration kRegistration(kExportCommand, run_export, 20);
+
 }  // namespace ag::cli

@@ -80,4 +80,6 @@ int run_info(const Args& args) {
     return 0;
 }
 
+static const Registration kRegistration(kInfoCommand, run_info, 10);
+
 }  // namespace ag::cli

@@ -1,4 +1,5 @@
 // afterglow: one executable with subcommands (yocto's yscene, pbrt's long flags).
+#include <algorithm>
 #include <exception>
 #include <iostream>
 #include <string>
@@ -9,13 +10,8 @@
 
 namespace ag::cli {
 
-const std::vector<Subcommand>& subcommands() {
-    static const std::vector<Subcommand> all = {
-        {&kInfoCommand, run_info},
-        {&kExportCommand, run_export},
-        {&kPhotonsCommand, run_photons},
-        {&kBenchCommand, run_bench},
-    };
+std::vector<Subcommand>& subcommands() {
+    static std::vector<Subcommand> all;
     return all;
 }
 
@@ -29,7 +25,8 @@ void print_usage(std::ostream& out) {
     for (const auto& s : ag::cli::subcommands()) {
         std::string name = s.command->name;
         name.resize(10, ' ');
-        out << "  " << name << " " << s.command->summary << "\n";
+        const std::string& summary = s.command->summary;  // first sentence only
+        out << "  " << name << " " << summary.substr(0, summary.find(". ")) << "\n";
     }
     out << "\n'afterglow COMMAND --help' shows a command's options. Docs: README.md, docs/.\n";
 }
@@ -38,6 +35,8 @@ void print_usage(std::ostream& out) {
 
 int main(int argc, char** argv) {
     using namespace ag::cli;
+    std::stable_sort(subcommands().begin(), subcommands().end(),
+                     [](const Subcommand& a, const Subcommand& b) { return a.order < b.order; });
     if (argc < 2) {
         print_usage(std::cerr);
         return 2;

@@ -125,4 +125,6 @@ int run_photons(const Args& args) {
     return 0;
 }
 
+static const Registration kRegistration(kPhotonsCommand, run_photons, 30);
+
 }  // namespace ag::cli
