@@ -1,0 +1,38 @@
+#include "gpu/gl.h"
+
+namespace ag::gpu::gl {
+
+#define AG_GL_DEFINE(type, name) type name = nullptr;
+AG_GL_FUNCTIONS(AG_GL_DEFINE)
+#undef AG_GL_DEFINE
+
+void load(GetProc get_proc) {
+#define AG_GL_LOAD(type, name)                                                       \
+    name = reinterpret_cast<type>(get_proc("gl" #name));                            \
+    if (!name) throw GlError("OpenGL entry point gl" #name " is missing from the context");
+    AG_GL_FUNCTIONS(AG_GL_LOAD)
+#undef AG_GL_LOAD
+}
+
+}  // namespace ag::gpu::gl
+
+namespace ag::gpu {
+
+void check_gl(const char* where) {
+    const GLenum e = gl::GetError();
+    if (e != GL_NO_ERROR) throw GlError(std::string("OpenGL error 0x") + [&] {
+        char buf[16];
+        std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
+        return std::string(buf);
+    }() + " in " + where);
+}
+
+}  // namespace ag::gpu
+
+namespace ag::gpu {
+
+// For backends whose headers clash with gl.h (they include the system GL header).
+void throw_gl_error(const std::string& message) { throw GlError(message); }
+void load_gl(void* (*get_proc)(const char*)) { gl::load(get_proc); }
+
+}  // namespace ag::gpu

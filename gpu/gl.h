@@ -1,0 +1,125 @@
+// OpenGL 4.5 core entry points, loaded at run time from whichever context backend is current
+// (OSMesa, EGL or GLFW). Only the Khronos core header is used, so no system GL header or loader
+// library is needed and the three backends share one code path.
+#pragma once
+
+#include <cstdio>
+#include <stdexcept>
+#include <string>
+
+#include <GL/glcorearb.h>
+
+#define AG_GL_FUNCTIONS(X)                                                                      \
+    X(PFNGLGETSTRINGPROC, GetString)                                                             \
+    X(PFNGLGETINTEGERVPROC, GetIntegerv)                                                         \
+    X(PFNGLGETERRORPROC, GetError)                                                               \
+    X(PFNGLFINISHPROC, Finish)                                                                   \
+    X(PFNGLFLUSHPROC, Flush)                                                                     \
+    X(PFNGLENABLEPROC, Enable)                                                                   \
+    X(PFNGLDISABLEPROC, Disable)                                                                 \
+    X(PFNGLVIEWPORTPROC, Viewport)                                                               \
+    X(PFNGLSCISSORPROC, Scissor)                                                                 \
+    X(PFNGLCLEARPROC, Clear)                                                                     \
+    X(PFNGLCLEARCOLORPROC, ClearColor)                                                           \
+    X(PFNGLCLEARDEPTHPROC, ClearDepth)                                                           \
+    X(PFNGLCLEARSTENCILPROC, ClearStencil)                                                       \
+    X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                                     \
+    X(PFNGLDEPTHFUNCPROC, DepthFunc)                                                             \
+    X(PFNGLDEPTHMASKPROC, DepthMask)                                                             \
+    X(PFNGLCOLORMASKPROC, ColorMask)                                                             \
+    X(PFNGLSTENCILFUNCPROC, StencilFunc)                                                         \
+    X(PFNGLSTENCILOPPROC, StencilOp)                                                             \
+    X(PFNGLSTENCILOPSEPARATEPROC, StencilOpSeparate)                                             \
+    X(PFNGLSTENCILMASKPROC, StencilMask)                                                         \
+    X(PFNGLBLENDFUNCPROC, BlendFunc)                                                             \
+    X(PFNGLBLENDEQUATIONPROC, BlendEquation)                                                     \
+    X(PFNGLCULLFACEPROC, CullFace)                                                               \
+    X(PFNGLPOLYGONOFFSETPROC, PolygonOffset)                                                     \
+    X(PFNGLPIXELSTOREIPROC, PixelStorei)                                                         \
+    X(PFNGLREADPIXELSPROC, ReadPixels)                                                           \
+    X(PFNGLREADBUFFERPROC, ReadBuffer)                                                           \
+    X(PFNGLDRAWBUFFERSPROC, DrawBuffers)                                                         \
+    X(PFNGLDRAWARRAYSPROC, DrawArrays)                                                           \
+    X(PFNGLDRAWELEMENTSPROC, DrawElements)                                                       \
+    X(PFNGLCREATESHADERPROC, CreateShader)                                                       \
+    X(PFNGLSHADERSOURCEPROC, ShaderSource)                                                       \
+    X(PFNGLCOMPILESHADERPROC, CompileShader)                                                     \
+    X(PFNGLGETSHADERIVPROC, GetShaderiv)                                                         \
+    X(PFNGLGETSHADERINFOLOGPROC, GetShaderInfoLog)                                               \
+    X(PFNGLDELETESHADERPROC, DeleteShader)                                                       \
+    X(PFNGLCREATEPROGRAMPROC, CreateProgram)                                                     \
+    X(PFNGLATTACHSHADERPROC, AttachShader)                                                       \
+    X(PFNGLLINKPROGRAMPROC, LinkProgram)                                                         \
+    X(PFNGLGETPROGRAMIVPROC, GetProgramiv)                                                       \
+    X(PFNGLGETPROGRAMINFOLOGPROC, GetProgramInfoLog)                                             \
+    X(PFNGLDELETEPROGRAMPROC, DeleteProgram)                                                     \
+    X(PFNGLUSEPROGRAMPROC, UseProgram)                                                           \
+    X(PFNGLGETUNIFORMLOCATIONPROC, GetUniformLocation)                                           \
+    X(PFNGLUNIFORM1IPROC, Uniform1i)                                                             \
+    X(PFNGLUNIFORM1FPROC, Uniform1f)                                                             \
+    X(PFNGLUNIFORM2FPROC, Uniform2f)                                                             \
+    X(PFNGLUNIFORM3FPROC, Uniform3f)                                                             \
+    X(PFNGLUNIFORM4FPROC, Uniform4f)                                                             \
+    X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                                           \
+    X(PFNGLUNIFORMMATRIX4FVPROC, UniformMatrix4fv)                                               \
+    X(PFNGLGENBUFFERSPROC, GenBuffers)                                                           \
+    X(PFNGLDELETEBUFFERSPROC, DeleteBuffers)                                                     \
+    X(PFNGLBINDBUFFERPROC, BindBuffer)                                                           \
+    X(PFNGLBUFFERDATAPROC, BufferData)                                                           \
+    X(PFNGLBUFFERSUBDATAPROC, BufferSubData)                                                     \
+    X(PFNGLGENVERTEXARRAYSPROC, GenVertexArrays)                                                 \
+    X(PFNGLDELETEVERTEXARRAYSPROC, DeleteVertexArrays)                                           \
+    X(PFNGLBINDVERTEXARRAYPROC, BindVertexArray)                                                 \
+    X(PFNGLENABLEVERTEXATTRIBARRAYPROC, EnableVertexAttribArray)                                 \
+    X(PFNGLVERTEXATTRIBPOINTERPROC, VertexAttribPointer)                                         \
+    X(PFNGLGENTEXTURESPROC, GenTextures)                                                         \
+    X(PFNGLDELETETEXTURESPROC, DeleteTextures)                                                   \
+    X(PFNGLBINDTEXTUREPROC, BindTexture)                                                         \
+    X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                                                     \
+    X(PFNGLTEXIMAGE2DPROC, TexImage2D)                                                           \
+    X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                                                     \
+    X(PFNGLTEXPARAMETERIPROC, TexParameteri)                                                     \
+    X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                                                   \
+    X(PFNGLGETTEXIMAGEPROC, GetTexImage)                                                         \
+    X(PFNGLGENFRAMEBUFFERSPROC, GenFramebuffers)                                                 \
+    X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)                                           \
+    X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                                                 \
+    X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)                                       \
+    X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer)                                 \
+    X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)                                   \
+    X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers)                                               \
+    X(PFNGLDELETERENDERBUFFERSPROC, DeleteRenderbuffers)                                         \
+    X(PFNGLBINDRENDERBUFFERPROC, BindRenderbuffer)                                               \
+    X(PFNGLRENDERBUFFERSTORAGEPROC, RenderbufferStorage)                                         \
+    X(PFNGLBLITFRAMEBUFFERPROC, BlitFramebuffer)                                                 \
+    X(PFNGLGENQUERIESPROC, GenQueries)                                                           \
+    X(PFNGLDELETEQUERIESPROC, DeleteQueries)                                                     \
+    X(PFNGLBEGINQUERYPROC, BeginQuery)                                                           \
+    X(PFNGLENDQUERYPROC, EndQuery)                                                               \
+    X(PFNGLGETQUERYOBJECTUIVPROC, GetQueryObjectuiv)
+
+namespace ag::gpu::gl {
+
+#define AG_GL_DECLARE(type, name) extern type name;
+AG_GL_FUNCTIONS(AG_GL_DECLARE)
+#undef AG_GL_DECLARE
+
+// Loads every entry point through `get_proc` (the backend's GetProcAddress). Throws GlError
+// naming the first missing function.
+using GetProc = void* (*)(const char* name);
+void load(GetProc get_proc);
+
+}  // namespace ag::gpu::gl
+
+namespace ag::gpu {
+
+// A GL context could not be made or GL failed: the message says what and where.
+class GlError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+// Throws GlError if glGetError reports an error (`where` names the call site).
+void check_gl(const char* where);
+
+}  // namespace ag::gpu

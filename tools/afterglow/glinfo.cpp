@@ -1,0 +1,34 @@
+// afterglow glinfo [--gl BACKEND]: which GL context a backend gives (for reports and bug hunts).
+#include <iostream>
+
+#include "gpu/gl_context.h"
+#include "tools/afterglow/commands.h"
+
+namespace ag::cli {
+
+const Command kGlinfoCommand{
+    "glinfo",
+    "[--gl auto|osmesa|egl|window]",
+    "Create a GL 4.5 core context with the chosen backend and print its renderer and version.",
+    {{"gl", "", "BACKEND", "auto (EGL on a GPU, else OSMesa), osmesa (default), egl or window"}},
+    0,
+    0,
+};
+
+int run_glinfo(const Args& args) {
+    gpu::GlBackend backend;
+    try {
+        backend = gpu::parse_gl_backend(args.get("gl", "osmesa"));
+    } catch (const std::invalid_argument& e) {
+        throw CliError(std::string("afterglow glinfo: --gl: ") + e.what());
+    }
+    auto context = gpu::make_gl_context(backend);
+    std::cout << "backend  " << gpu::kGlBackendNames[size_t(context->backend())] << "\n"
+              << "renderer " << context->renderer() << "\n"
+              << "version  " << context->version() << "\n";
+    return 0;
+}
+
+static const Registration kRegistration(kGlinfoCommand, run_glinfo, 80);
+
+}  // namespace ag::cli
