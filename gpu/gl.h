@@ -58,6 +58,7 @@
     X(PFNGLUNIFORM1IPROC, Uniform1i)                                                             \
     X(PFNGLUNIFORM1FPROC, Uniform1f)                                                             \
     X(PFNGLUNIFORM2FPROC, Uniform2f)                                                             \
+    X(PFNGLUNIFORM2IPROC, Uniform2i)                                                             \
     X(PFNGLUNIFORM3FPROC, Uniform3f)                                                             \
     X(PFNGLUNIFORM4FPROC, Uniform4f)                                                             \
     X(PFNGLUNIFORM3FVPROC, Uniform3fv)                                                           \

@@ -1,0 +1,422 @@
+#include "gpu/frame_renderer.h"
+
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "shared/camera.h"
+
+namespace ag::gpu {
+
+namespace {
+
+constexpr int kMaxLights = 64;
+
+// Shared by every scene pass: identical position math keeps depth equal between passes.
+const char* kSceneVertex = R"(
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec2 uv;
+uniform mat4 model, view_projection;
+out vec3 v_world;
+out vec3 v_normal;
+out vec2 v_uv;
+invariant gl_Position;
+void main() {
+    vec4 world = model * vec4(position, 1.0);
+    v_world = world.xyz;
+    v_normal = mat3(model) * normal;
+    v_uv = uv;
+    gl_Position = view_projection * world;
+}
+)";
+
+const char* kLightsGlsl = R"(
+const int kMaxLights = 64;
+uniform int light_count;
+uniform vec3 light_position[kMaxLights];
+uniform vec3 light_intensity[kMaxLights];
+uniform vec3 light_normal[kMaxLights];
+uniform int light_one_sided[kMaxLights];
+const float kPi = 3.14159265358979;
+// Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d².
+vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
+    vec3 to_light = light_position[i] - p;
+    float d2 = max(dot(to_light, to_light), 1e-12);
+    vec3 l = to_light * inversesqrt(d2);
+    float cos_s = max(dot(n, l), 0.0);
+    float cos_l = light_one_sided[i] != 0 ? max(dot(light_normal[i], -l), 0.0) : 1.0;
+    return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2;
+}
+)";
+
+const char* kSpecularGlsl = R"(
+uniform samplerCube environment;
+uniform int material;   // 0 diffuse, 1 mirror, 2 glass
+uniform float ior;
+uniform vec3 eye;
+float fresnel(float cos_i, float eta) {
+    float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
+    if (sin2_t >= 1.0) return 1.0;
+    float cos_t = sqrt(1.0 - sin2_t);
+    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5 * (rs * rs + rp * rp);
+}
+vec3 specular_radiance(vec3 p, vec3 n) {
+    vec3 v = normalize(p - eye);
+    vec3 nf = dot(v, n) < 0.0 ? n : -n;
+    vec3 reflected = texture(environment, reflect(v, nf)).rgb;
+    if (material == 1) return reflected;
+    float eta = dot(v, n) < 0.0 ? 1.0 / ior : ior;
+    float f = fresnel(-dot(v, nf), eta);
+    vec3 t = refract(v, nf, eta);
+    vec3 refracted = f < 1.0 ? texture(environment, t).rgb : vec3(0.0);
+    return f * reflected + (1.0 - f) * refracted;
+}
+)";
+
+// G-buffer pass: emission → direct, ρ·IIM → indirect, cube-map lookups → specular, caustics.
+const std::string kGbufferFragment = std::string(kSpecularGlsl) + R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform sampler2D iim;
+uniform sampler2D caustics;
+uniform int has_caustics;
+uniform vec3 albedo;
+uniform vec3 emission;
+uniform vec2 screen;
+layout(location = 0) out vec4 out_direct;
+layout(location = 1) out vec4 out_indirect;
+layout(location = 2) out vec4 out_specular;
+layout(location = 3) out vec4 out_caustics;
+void main() {
+    vec3 n = normalize(v_normal);
+    out_direct = vec4(0.0, 0.0, 0.0, 1.0);
+    out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
+    out_specular = vec4(0.0, 0.0, 0.0, 1.0);
+    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
+    if (material != 0) {
+        out_specular.rgb = specular_radiance(v_world, n);
+        return;
+    }
+    out_direct.rgb = emission;
+    out_indirect.rgb = albedo * texture(iim, v_uv).rgb;  // L_indirect = IIM × albedo
+    if (has_caustics != 0) out_caustics.rgb = texture(caustics, gl_FragCoord.xy / screen).rgb;
+}
+)";
+
+// One light sample, added where the stencil says the pixel is outside its shadow volumes.
+const std::string kLightingFragment = std::string(kLightsGlsl) + R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform vec3 albedo;
+uniform int light_index;
+layout(location = 0) out vec4 out_direct;
+void main() {
+    out_direct = vec4(direct_from(light_index, v_world, normalize(v_normal), albedo), 0.0);
+}
+)";
+
+const char* kVolumeVertex = R"(
+layout(location = 0) in vec4 position;
+uniform mat4 view_projection;
+void main() { gl_Position = view_projection * position; }
+)";
+const char* kVolumeFragment = R"(
+out vec4 color;
+void main() { color = vec4(0.0); }
+)";
+
+// What a mirror or glass object sees: the diffuse scene with emission, indirect and unshadowed
+// direct light (cube maps are rendered every frame, Larsen ch. 13).
+const std::string kEnvironmentFragment = std::string(kLightsGlsl) + R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform sampler2D iim;
+uniform vec3 albedo;
+uniform vec3 emission;
+uniform int diffuse;
+out vec4 color;
+void main() {
+    if (diffuse == 0) { color = vec4(0.0, 0.0, 0.0, 1.0); return; }
+    vec3 n = normalize(v_normal);
+    vec3 c = emission + albedo * texture(iim, v_uv).rgb;
+    for (int i = 0; i < light_count; ++i) c += direct_from(i, v_world, n, albedo);
+    color = vec4(c, 1.0);
+}
+)";
+
+float scene_diagonal(const Scene& scene) {
+    Bounds b;
+    for (const Object& o : scene.objects)
+        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b.empty() ? 1.0f : glm::length(b.extent());
+}
+
+}  // namespace
+
+std::vector<LightSample> light_samples(const Scene& scene) {
+    std::vector<LightSample> out;
+    for (const Light& l : scene.lights) {
+        if (!l.enabled) continue;
+        if (l.type == LightType::point) {
+            out.push_back({l.position, l.intensity, glm::vec3(0.0f), false});
+            continue;
+        }
+        const int n = std::max(1, int(std::lround(std::sqrt(double(scene.settings.direct.area_light_samples)))));
+        const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
+        // Each cell of area A/n² emits I(ω) = L · (A/n²) · cosθ towards the front.
+        const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
+        for (int j = 0; j < n; ++j)
+            for (int i = 0; i < n; ++i)
+                out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 + (float(j) + 0.5f) / float(n) * e3,
+                               intensity, l.quad_normal(), true});
+    }
+    if (int(out.size()) > kMaxLights) out.resize(kMaxLights);
+    return out;
+}
+
+FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
+    : scene_(scene), meshes_(meshes), width_(width), height_(height) {
+    gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
+    lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
+    volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
+    environment_ = Program("cube-map environment", kSceneVertex, kEnvironmentFragment);
+
+    fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    for (size_t i = 0; i < aov_.size(); ++i) {
+        aov_[i] = make_float_texture(width, height);
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, aov_[i].get(), 0);
+    }
+    depth_stencil_ = make_renderbuffer();
+    gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height);
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_.get());
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("frame: framebuffer incomplete");
+
+    for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
+    volume_vbo_ = make_buffer();
+    volume_vao_ = make_vertex_array();
+    gl::BindVertexArray(volume_vao_.get());
+    gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
+    gl::EnableVertexAttribArray(0);
+    gl::VertexAttribPointer(0, 4, GL_FLOAT, GL_FALSE, 0, nullptr);
+    gl::BindVertexArray(0);
+
+    const int cube = scene.settings.specular.cube_map_size;
+    cube_maps_.resize(scene.objects.size());
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+        if (scene.objects[o].material.type == MaterialType::diffuse) continue;
+        cube_maps_[o] = make_texture();
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o].get());
+        for (int f = 0; f < 6; ++f)
+            gl::TexImage2D(GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f), 0, GL_RGBA16F, cube, cube, 0, GL_RGBA, GL_FLOAT, nullptr);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+    }
+    cube_depth_ = make_renderbuffer();
+    gl::BindRenderbuffer(GL_RENDERBUFFER, cube_depth_.get());
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, cube, cube);
+    cube_fbo_ = make_framebuffer();
+    near_ = 1e-3f * scene_diagonal(scene);
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("FrameRenderer");
+}
+
+void FrameRenderer::set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const {
+    p.set("light_count", int(lights.size()));
+    for (size_t i = 0; i < lights.size(); ++i) {
+        const std::string k = "[" + std::to_string(i) + "]";
+        p.set(("light_position" + k).c_str(), lights[i].position);
+        p.set(("light_intensity" + k).c_str(), lights[i].intensity);
+        p.set(("light_normal" + k).c_str(), lights[i].normal);
+        p.set(("light_one_sided" + k).c_str(), lights[i].one_sided ? 1 : 0);
+    }
+}
+
+void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>& lights) {
+    const int size = scene_.settings.specular.cube_map_size;
+    const float far_plane = 4.0f * scene_diagonal(scene_);
+    // Face order +X −X +Y −Y +Z −Z with the GL cube-map conventions for up vectors.
+    const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    const glm::vec3 ups[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+    const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, near_, far_plane);
+    environment_.use();
+    environment_.set("iim", 0);
+    set_light_uniforms(environment_, lights);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, iim);
+    gl::BindFramebuffer(GL_FRAMEBUFFER, cube_fbo_.get());
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, cube_depth_.get());
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    gl::DrawBuffers(1, &draw);
+    gl::Viewport(0, 0, size, size);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthFunc(GL_LESS);
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
+    for (size_t s = 0; s < scene_.objects.size(); ++s) {
+        if (!cube_maps_[s]) continue;
+        const glm::vec3 centre = scene_.objects[s].transform.apply_point(mesh_bounds(scene_.objects[s].mesh).center());
+        for (int f = 0; f < 6; ++f) {
+            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f),
+                                     cube_maps_[s].get(), 0);
+            gl::ClearColor(0, 0, 0, 1);
+            gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+            environment_.set("view_projection", projection * glm::lookAt(centre, centre + dirs[f], ups[f]));
+            for (size_t o = 0; o < scene_.objects.size(); ++o) {
+                if (o == s) continue;  // an object does not see itself in its own cube map
+                const Object& obj = scene_.objects[o];
+                environment_.set("model", model_matrix(obj));
+                environment_.set("albedo", obj.material.albedo);
+                environment_.set("emission", obj.material.emission);
+                environment_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
+                meshes_.draw(o);
+            }
+        }
+    }
+    check_gl("FrameRenderer::render_cube_maps");
+}
+
+void FrameRenderer::draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection) {
+    std::vector<glm::vec4> triangles;
+    for (size_t o = 0; o < scene_.objects.size(); ++o)
+        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]), light.position, triangles);
+    if (triangles.empty()) return;
+    gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
+    gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)), triangles.data(), GL_STREAM_DRAW);
+    volume_.use();
+    volume_.set("view_projection", view_projection);
+    gl::BindVertexArray(volume_vao_.get());
+    gl::DrawArrays(GL_TRIANGLES, 0, GLsizei(triangles.size()));
+}
+
+void FrameRenderer::render(GLuint iim, GLuint caustics) {
+    const std::vector<LightSample> lights = light_samples(scene_);
+    render_cube_maps(iim, lights);
+
+    Camera camera = scene_.camera;
+    camera.width = width_;
+    camera.height = height_;
+    // Infinite far plane: shadow volumes extruded to w = 0 are never clipped.
+    const glm::mat4 projection =
+        glm::infinitePerspective(glm::radians(camera.fov_y), float(width_) / float(height_), near_);
+    const glm::mat4 view_projection = projection * view_matrix(camera);
+
+    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    gl::DrawBuffers(4, all);
+    gl::Viewport(0, 0, width_, height_);
+    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::DepthMask(GL_TRUE);
+    gl::StencilMask(0xFF);
+    gl::ClearColor(0, 0, 0, 1);
+    gl::ClearDepth(1.0);
+    gl::ClearStencil(0);
+    gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthFunc(GL_LESS);
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
+    gl::Disable(GL_CULL_FACE);
+
+    // 1. G-buffer: depth, emission, indirect, specular, caustics.
+    gbuffer_.use();
+    gbuffer_.set("view_projection", view_projection);
+    gbuffer_.set("iim", 0);
+    gbuffer_.set("caustics", 1);
+    gbuffer_.set("environment", 2);
+    gbuffer_.set("has_caustics", caustics ? 1 : 0);
+    gbuffer_.set("screen", glm::vec2(float(width_), float(height_)));
+    gbuffer_.set("eye", camera.eye);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, iim);
+    gl::ActiveTexture(GL_TEXTURE1);
+    gl::BindTexture(GL_TEXTURE_2D, caustics);
+    for (size_t o = 0; o < scene_.objects.size(); ++o) {
+        const Object& obj = scene_.objects[o];
+        gbuffer_.set("model", model_matrix(obj));
+        gbuffer_.set("albedo", obj.material.albedo);
+        gbuffer_.set("emission", obj.material.emission);
+        gbuffer_.set("material", int(obj.material.type));
+        gbuffer_.set("ior", obj.material.ior);
+        gl::ActiveTexture(GL_TEXTURE2);
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o] ? cube_maps_[o].get() : 0);
+        meshes_.draw(o);
+    }
+
+    // 2. Per light: shadow volumes into the stencil (depth-fail), then add its light where the
+    //    count is zero (eq. 13.2).
+    gl::DepthMask(GL_FALSE);
+    gl::Enable(GL_STENCIL_TEST);
+    gl::Enable(GL_DEPTH_CLAMP);
+    const GLenum direct_only = GL_COLOR_ATTACHMENT0;
+    for (size_t i = 0; i < lights.size(); ++i) {
+        gl::Clear(GL_STENCIL_BUFFER_BIT);
+        if (scene_.settings.direct.shadows) {
+            gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            gl::DepthFunc(GL_LESS);
+            gl::StencilFunc(GL_ALWAYS, 0, 0xFF);
+            gl::StencilOpSeparate(GL_BACK, GL_KEEP, GL_INCR_WRAP, GL_KEEP);
+            gl::StencilOpSeparate(GL_FRONT, GL_KEEP, GL_DECR_WRAP, GL_KEEP);
+            draw_shadow_volumes(lights[i], view_projection);
+            gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        }
+        gl::DrawBuffers(1, &direct_only);
+        gl::StencilFunc(GL_EQUAL, 0, 0xFF);
+        gl::StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+        gl::DepthFunc(GL_LEQUAL);
+        gl::Enable(GL_BLEND);
+        gl::BlendFunc(GL_ONE, GL_ONE);
+        lighting_.use();
+        lighting_.set("view_projection", view_projection);
+        set_light_uniforms(lighting_, {lights[i]});
+        lighting_.set("light_index", 0);
+        for (size_t o = 0; o < scene_.objects.size(); ++o) {
+            const Object& obj = scene_.objects[o];
+            if (obj.material.type != MaterialType::diffuse) continue;
+            lighting_.set("model", model_matrix(obj));
+            lighting_.set("albedo", obj.material.albedo);
+            meshes_.draw(o);
+        }
+        gl::Disable(GL_BLEND);
+        gl::DrawBuffers(4, all);
+    }
+    gl::Disable(GL_DEPTH_CLAMP);
+    gl::Disable(GL_STENCIL_TEST);
+    gl::DepthMask(GL_TRUE);
+    gl::DepthFunc(GL_LESS);
+    gl::BindVertexArray(0);
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("FrameRenderer::render");
+}
+
+FrameImages FrameRenderer::read_back() const {
+    FrameImages out;
+    out.frame = Image(width_, height_);
+    for (size_t a = 0; a < aov_.size(); ++a) {
+        const std::vector<float> rgba = read_rgba(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + a), 0, 0, width_, height_);
+        Image& img = out.aov[a];
+        img = Image(width_, height_);
+        for (int y = 0; y < height_; ++y)
+            for (int x = 0; x < width_; ++x) {
+                const float* p = &rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4];  // GL rows bottom-up
+                img.set_rgb(x, y, {p[0], p[1], p[2]});
+            }
+    }
+    // The frame is the sum of its terms (eq. 13.1), summed here so the AOVs add up exactly.
+    for (size_t i = 0; i < out.frame.pixels.size(); ++i)
+        out.frame.pixels[i] = out.aov[0].pixels[i] + out.aov[1].pixels[i] + out.aov[2].pixels[i] + out.aov[3].pixels[i];
+    return out;
+}
+
+}  // namespace ag::gpu

@@ -1,0 +1,76 @@
+// The composed frame (Larsen ch. 13, eq. 13.1): L = L_indirect + L_caustics + L_specular
+// + Σ_lights L_direct(i)·shadow(i). Each term is rendered into its own float attachment, so the
+// component images (thesis Fig. 13.1) sum exactly to the frame. Direct light is shaded per pixel
+// for every point light (quad lights as a grid of point lights) with hard shadows from stencil
+// shadow volumes; indirect light is IIM × albedo; mirrors and glass look up a dynamic cube map.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/gl_objects.h"
+#include "gpu/scene_meshes.h"
+#include "gpu/shadow_volumes.h"
+#include "shared/image.h"
+#include "shared/scene.h"
+
+namespace ag::gpu {
+
+enum class Aov { direct, indirect, specular, caustics };
+inline constexpr std::array kAovNames = {"direct", "indirect", "specular", "caustics"};
+
+// A point light standing in for a light or a piece of a quad light: intensity I (W/sr) towards
+// directions in front of `normal` (one-sided, scaled by the cosine) or everywhere.
+struct LightSample {
+    glm::vec3 position{0.0f};
+    glm::vec3 intensity{0.0f};
+    glm::vec3 normal{0.0f};
+    bool one_sided = false;
+};
+
+// The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples).
+std::vector<LightSample> light_samples(const Scene& scene);
+
+struct FrameImages {
+    Image frame;
+    std::array<Image, 4> aov;  // indexed by Aov
+};
+
+class FrameRenderer {
+public:
+    FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height);
+
+    // Renders the current scene. `iim` and `caustics` are GL textures (atlas-sized IIM;
+    // screen-sized caustic radiance, or 0 for none).
+    void render(GLuint iim, GLuint caustics = 0);
+    FrameImages read_back() const;  // rows top-first, linear radiance
+
+    int width() const { return width_; }
+    int height() const { return height_; }
+    GLuint framebuffer() const { return fbo_.get(); }
+    GLuint aov_texture(Aov a) const { return aov_[size_t(a)].get(); }
+
+private:
+    void render_cube_maps(GLuint iim, const std::vector<LightSample>& lights);
+    void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
+    void set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const;
+
+    const Scene& scene_;
+    const SceneMeshes& meshes_;
+    int width_, height_;
+    Program gbuffer_, lighting_, volume_, environment_;
+    std::array<Texture, 4> aov_;
+    Renderbuffer depth_stencil_;
+    Framebuffer fbo_;
+    std::vector<ShadowCaster> casters_;
+    Buffer volume_vbo_;
+    VertexArray volume_vao_;
+    // Cube maps, one per specular object (index by object; empty for diffuse objects).
+    std::vector<Texture> cube_maps_;
+    Renderbuffer cube_depth_;
+    Framebuffer cube_fbo_;
+    float near_ = 1.0f;
+};
+
+}  // namespace ag::gpu

@@ -1,0 +1,99 @@
+#include "gpu/gl_objects.h"
+
+namespace ag::gpu {
+
+Buffer make_buffer() {
+    GLuint id = 0;
+    gl::GenBuffers(1, &id);
+    return Buffer(id);
+}
+Texture make_texture() {
+    GLuint id = 0;
+    gl::GenTextures(1, &id);
+    return Texture(id);
+}
+Framebuffer make_framebuffer() {
+    GLuint id = 0;
+    gl::GenFramebuffers(1, &id);
+    return Framebuffer(id);
+}
+Renderbuffer make_renderbuffer() {
+    GLuint id = 0;
+    gl::GenRenderbuffers(1, &id);
+    return Renderbuffer(id);
+}
+VertexArray make_vertex_array() {
+    GLuint id = 0;
+    gl::GenVertexArrays(1, &id);
+    return VertexArray(id);
+}
+
+namespace {
+GLuint compile(const std::string& name, GLenum type, const std::string& source) {
+    const GLuint s = gl::CreateShader(type);
+    const std::string full = "#version 450 core\n" + source;
+    const char* text = full.c_str();
+    gl::ShaderSource(s, 1, &text, nullptr);
+    gl::CompileShader(s);
+    GLint ok = 0;
+    gl::GetShaderiv(s, GL_COMPILE_STATUS, &ok);
+    if (!ok) {
+        char log[4096];
+        gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
+        gl::DeleteShader(s);
+        throw GlError("shader '" + name + (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
+                      " does not compile:\n" + log);
+    }
+    return s;
+}
+}  // namespace
+
+Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment) {
+    const GLuint vs = compile(name, GL_VERTEX_SHADER, vertex);
+    const GLuint fs = compile(name, GL_FRAGMENT_SHADER, fragment);
+    id_ = Handle<detail::delete_program>(gl::CreateProgram());
+    gl::AttachShader(id_.get(), vs);
+    gl::AttachShader(id_.get(), fs);
+    gl::LinkProgram(id_.get());
+    gl::DeleteShader(vs);
+    gl::DeleteShader(fs);
+    GLint ok = 0;
+    gl::GetProgramiv(id_.get(), GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[4096];
+        gl::GetProgramInfoLog(id_.get(), sizeof log, nullptr, log);
+        throw GlError("program '" + name + "' does not link:\n" + log);
+    }
+}
+
+Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
+    Texture t = make_texture();
+    gl::BindTexture(GL_TEXTURE_2D, t.get());
+    gl::TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, width, height, 0, GL_RGBA, GL_FLOAT, rgba);
+    if (mip) {
+        int w = width, h = height;
+        for (int level = 1; w > 1 || h > 1; ++level) {
+            w = std::max(1, w / 2);
+            h = std::max(1, h / 2);
+            gl::TexImage2D(GL_TEXTURE_2D, level, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
+        }
+    }
+    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mip ? GL_NEAREST_MIPMAP_NEAREST : GL_NEAREST);
+    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    check_gl("make_float_texture");
+    return t;
+}
+
+std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height) {
+    std::vector<float> out(size_t(width) * size_t(height) * 4);
+    gl::BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
+    gl::ReadBuffer(attachment);
+    gl::PixelStorei(GL_PACK_ALIGNMENT, 4);
+    gl::ReadPixels(x, y, width, height, GL_RGBA, GL_FLOAT, out.data());
+    check_gl("read_rgba");
+    return out;
+}
+
+}  // namespace ag::gpu

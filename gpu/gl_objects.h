@@ -1,0 +1,88 @@
+// RAII handles for GL objects and small helpers (programs, float textures, framebuffers).
+#pragma once
+
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/gl.h"
+
+namespace ag::gpu {
+
+// A move-only GL name with its deleter.
+template <void (*Delete)(GLuint)>
+class Handle {
+public:
+    Handle() = default;
+    explicit Handle(GLuint id) : id_(id) {}
+    ~Handle() { reset(); }
+    Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, 0)) {}
+    Handle& operator=(Handle&& o) noexcept {
+        if (this != &o) {
+            reset();
+            id_ = std::exchange(o.id_, 0);
+        }
+        return *this;
+    }
+    Handle(const Handle&) = delete;
+    Handle& operator=(const Handle&) = delete;
+    GLuint get() const { return id_; }
+    explicit operator bool() const { return id_ != 0; }
+    void reset() {
+        if (id_) Delete(id_);
+        id_ = 0;
+    }
+
+private:
+    GLuint id_ = 0;
+};
+
+namespace detail {
+inline void delete_buffer(GLuint id) { gl::DeleteBuffers(1, &id); }
+inline void delete_texture(GLuint id) { gl::DeleteTextures(1, &id); }
+inline void delete_framebuffer(GLuint id) { gl::DeleteFramebuffers(1, &id); }
+inline void delete_renderbuffer(GLuint id) { gl::DeleteRenderbuffers(1, &id); }
+inline void delete_vertex_array(GLuint id) { gl::DeleteVertexArrays(1, &id); }
+inline void delete_program(GLuint id) { gl::DeleteProgram(id); }
+}  // namespace detail
+
+using Buffer = Handle<detail::delete_buffer>;
+using Texture = Handle<detail::delete_texture>;
+using Framebuffer = Handle<detail::delete_framebuffer>;
+using Renderbuffer = Handle<detail::delete_renderbuffer>;
+using VertexArray = Handle<detail::delete_vertex_array>;
+
+Buffer make_buffer();
+Texture make_texture();
+Framebuffer make_framebuffer();
+Renderbuffer make_renderbuffer();
+VertexArray make_vertex_array();
+
+// A linked program with uniform setters. Compile/link errors throw GlError with the log and
+// the shader's name.
+class Program {
+public:
+    Program() = default;
+    Program(const std::string& name, const std::string& vertex, const std::string& fragment);
+    void use() const { gl::UseProgram(id_.get()); }
+    GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
+    void set(const char* u, int v) const { gl::Uniform1i(location(u), v); }
+    void set(const char* u, float v) const { gl::Uniform1f(location(u), v); }
+    void set(const char* u, const glm::vec2& v) const { gl::Uniform2f(location(u), v.x, v.y); }
+    void set(const char* u, const glm::vec3& v) const { gl::Uniform3f(location(u), v.x, v.y, v.z); }
+    void set(const char* u, const glm::vec4& v) const { gl::Uniform4f(location(u), v.x, v.y, v.z, v.w); }
+    void set(const char* u, const glm::mat4& m) const { gl::UniformMatrix4fv(location(u), 1, GL_FALSE, &m[0][0]); }
+
+private:
+    Handle<detail::delete_program> id_;
+};
+
+// RGBA32F texture of w × h (nearest filtering, clamped); `mip` allocates a full mip chain.
+Texture make_float_texture(int width, int height, bool mip = false, const float* rgba = nullptr);
+
+// Reads an RGBA32F framebuffer attachment back (rows bottom-up, as GL stores them).
+std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height);
+
+}  // namespace ag::gpu

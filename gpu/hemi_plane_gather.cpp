@@ -1,0 +1,202 @@
+#include "gpu/hemi_plane_gather.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+namespace ag::gpu {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+const char* kVertex = R"(
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+layout(location = 2) in vec2 uv;
+uniform mat4 model, view_projection;
+out vec2 v_uv;
+void main() {
+    v_uv = uv;
+    gl_Position = view_projection * model * vec4(position, 1.0);
+}
+)";
+
+// rgb: weight × AIM radiance; alpha: weight if the pixel shows a back face (texel behind or
+// inside geometry), so after the reduction alpha is the share of such pixels.
+const char* kFragment = R"(
+in vec2 v_uv;
+uniform sampler2D aim;
+uniform sampler2D weights;
+uniform ivec2 tile_origin;
+uniform int resolution;
+uniform int specular;
+out vec4 color;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
+    float w = texelFetch(weights, p, 0).r;
+    if (!gl_FrontFacing) { color = vec4(0.0, 0.0, 0.0, w); return; }
+    vec3 radiance = specular != 0 ? vec3(0.0) : texture(aim, v_uv).rgb;
+    color = vec4(w * radiance, 0.0);
+}
+)";
+
+// ∫∫ over [x0,x1]×[y0,y1] of 1/(π(x²+y²+1)²): the cosine-weighted solid angle of a rectangle
+// at unit distance, by 8×8 Gauss-free midpoint subdivision (exact enough: the integrand is smooth).
+double pixel_weight(double x0, double x1, double y0, double y1) {
+    constexpr int kSub = 8;
+    double sum = 0.0;
+    for (int j = 0; j < kSub; ++j)
+        for (int i = 0; i < kSub; ++i) {
+            const double x = x0 + (i + 0.5) * (x1 - x0) / kSub, y = y0 + (j + 0.5) * (y1 - y0) / kSub;
+            const double d = x * x + y * y + 1.0;
+            sum += 1.0 / (kPi * d * d);
+        }
+    return sum * (x1 - x0) * (y1 - y0) / (kSub * kSub);
+}
+
+}  // namespace
+
+double hemi_plane_coverage(float half_width) {
+    const double a = half_width, s = a / std::sqrt(1.0 + a * a);
+    return 4.0 / kPi * s * std::atan(s);
+}
+
+std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCorrection correction) {
+    const int r = resolution;
+    const double a = half_width, step = 2.0 * a / r;
+    std::vector<double> w(size_t(r) * size_t(r));
+    double sum = 0.0;
+    for (int j = 0; j < r; ++j)
+        for (int i = 0; i < r; ++i) {
+            const double x0 = -a + i * step, y0 = -a + j * step;
+            w[size_t(j) * r + size_t(i)] = pixel_weight(x0, x0 + step, y0, y0 + step);
+            sum += w[size_t(j) * r + size_t(i)];
+        }
+    if (correction == BorderCorrection::renormalize) {
+        for (double& v : w) v /= sum;  // Larsen: scale up by the covered fraction
+    } else if (correction == BorderCorrection::stretch) {
+        // Gautron: directions beyond the plane are pushed radially (same azimuth) onto the
+        // border pixel they would leave through; integrate their cosine-weighted solid angle.
+        constexpr int kTheta = 256, kPhi = 1024;
+        const double theta_edge_min = std::atan(a);  // below this the plane covers every azimuth
+        for (int k = 0; k < kPhi; ++k) {
+            const double phi = (k + 0.5) * 2.0 * kPi / kPhi;
+            const double cx = std::cos(phi), cy = std::sin(phi);
+            // Where the azimuth leaves the square: t = a / max(|cx|, |cy|).
+            const double t = a / std::max(std::abs(cx), std::abs(cy));
+            const double theta_edge = std::atan(t);
+            // Cosine-weighted measure of θ ∈ [θ_edge, π/2] at this azimuth: ∫ cos sin dθ dφ / π.
+            const double measure = 0.5 * std::cos(theta_edge) * std::cos(theta_edge) * (2.0 * kPi / kPhi) / kPi;
+            const double bx = std::clamp(t * cx, -a, a), by = std::clamp(t * cy, -a, a);
+            const int i = std::clamp(int((bx + a) / step), 0, r - 1), j = std::clamp(int((by + a) / step), 0, r - 1);
+            w[size_t(j) * r + size_t(i)] += measure;
+            (void)theta_edge_min;
+        }
+        (void)kTheta;
+    }
+    return std::vector<float>(w.begin(), w.end());
+}
+
+HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles)
+    : scene_(scene), meshes_(meshes) {
+    resolution_ = 1;
+    while (resolution_ < scene.settings.gather.plane_resolution) resolution_ *= 2;  // mip alignment
+    level_ = 0;
+    while ((1 << level_) < resolution_) ++level_;
+    tiles_x_ = std::max(1, int(std::ceil(std::sqrt(double(tiles)))));
+    const int size = tiles_x_ * resolution_;
+    program_ = Program("hemi-plane gather", kVertex, kFragment);
+    color_ = make_float_texture(size, size, true);
+    const std::vector<float> w = hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
+                                                    scene.settings.gather.border_correction);
+    std::vector<float> rgba(w.size() * 4, 0.0f);
+    for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
+    weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
+    depth_ = make_renderbuffer();
+    gl::BindRenderbuffer(GL_RENDERBUFFER, depth_.get());
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, size, size);
+    fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color_.get(), 0);
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("hemi-plane gather: framebuffer incomplete");
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("HemiPlaneGather");
+}
+
+std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture) {
+    std::vector<GatherResult> out(texels.size());
+    const int per_pass = tiles_x_ * tiles_x_, size = tiles_x_ * resolution_;
+    const float a = scene_.settings.gather.plane_half_width;
+    Bounds bounds;
+    for (const Object& o : scene_.objects)
+        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
+    const float diagonal = glm::length(bounds.extent());
+    const float near_plane = 1e-4f * diagonal, far_plane = 4.0f * diagonal;
+    const float offset = 2e-5f * diagonal;  // leave the surface, stay inside thin gaps
+
+    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    gl::DrawBuffers(1, &draw);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthFunc(GL_LESS);
+    gl::Disable(GL_CULL_FACE);
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
+    program_.use();
+    program_.set("aim", 0);
+    program_.set("weights", 1);
+    program_.set("resolution", resolution_);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, aim_texture);
+    gl::ActiveTexture(GL_TEXTURE1);
+    gl::BindTexture(GL_TEXTURE_2D, weights_.get());
+    // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
+    const glm::mat4 projection = glm::frustum(-a * near_plane, a * near_plane, -a * near_plane, a * near_plane,
+                                              near_plane, far_plane);
+
+    for (size_t first = 0; first < texels.size(); first += size_t(per_pass)) {
+        const size_t count = std::min(texels.size() - first, size_t(per_pass));
+        gl::Viewport(0, 0, size, size);
+        gl::ClearColor(0, 0, 0, 0);
+        gl::ClearDepth(1.0);
+        gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        for (size_t k = 0; k < count; ++k) {
+            const TexelRecord& t = scene_.atlas.texels[size_t(texels[first + k])];
+            const Object& owner = scene_.objects[size_t(t.object)];
+            const glm::vec3 n = glm::normalize(owner.transform.apply_vector(t.normal));
+            const glm::vec3 p = owner.transform.apply_point(t.position) + offset * n;
+            const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+            const glm::mat4 view = glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
+            const glm::mat4 vp = projection * view;
+            const int tx = int(k) % tiles_x_, ty = int(k) / tiles_x_;
+            gl::Viewport(tx * resolution_, ty * resolution_, resolution_, resolution_);
+            gl::Uniform2i(program_.location("tile_origin"), tx * resolution_, ty * resolution_);
+            program_.set("view_projection", vp);
+            for (size_t o = 0; o < scene_.objects.size(); ++o) {
+                program_.set("model", model_matrix(scene_.objects[o]));
+                program_.set("specular", scene_.objects[o].material.type == MaterialType::diffuse ? 0 : 1);
+                meshes_.draw(o);
+            }
+        }
+        // One reduction for the whole batch: level log2(R) holds every tile's mean.
+        gl::BindTexture(GL_TEXTURE_2D, color_.get());
+        gl::GenerateMipmap(GL_TEXTURE_2D);
+        std::vector<float> means(size_t(tiles_x_) * size_t(tiles_x_) * 4);
+        gl::GetTexImage(GL_TEXTURE_2D, level_, GL_RGBA, GL_FLOAT, means.data());
+        const float pixels = float(resolution_) * float(resolution_);
+        for (size_t k = 0; k < count; ++k) {
+            const float* m = &means[4 * k];  // tile k is at (k % tiles_x, k / tiles_x): row-major
+            out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
+            out[first + k].back_fraction = pixels * m[3];
+        }
+    }
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("HemiPlaneGather::gather");
+    return out;
+}
+
+}  // namespace ag::gpu

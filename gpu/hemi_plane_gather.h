@@ -1,0 +1,55 @@
+// Hemi-plane final gathering (Larsen ch. 11): from a texel's centre, looking along its normal,
+// render the scene textured with AIM radiance onto one enlarged plane, weight every pixel by
+// eq. 11.2, F(x,y) = ΔA / (π (x² + y² + 1)²), and sum by mipmap reduction in float. Many texels
+// are gathered per pass: each owns an R×R tile of one framebuffer and a single mipmap pass leaves
+// every tile's mean at level log2(R). The part of the hemisphere the plane misses is corrected by
+// Larsen's renormalisation or Gautron's border stretch (Gautron 2006, Table 4.1).
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/gl_objects.h"
+#include "gpu/scene_meshes.h"
+#include "shared/scene.h"
+
+namespace ag::gpu {
+
+// Per-pixel weights of an R×R hemi-plane of half-width a (at unit distance), row-major from the
+// plane's (−a, −a) corner. Exact per pixel (integrated, not point-sampled); `correction` adds the
+// missing hemisphere as in settings. Sum: coverage for none, 1 for renormalize and stretch.
+std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCorrection correction);
+
+// Cosine-weighted fraction of the hemisphere a square of half-width a at unit distance covers:
+// (4/π)·s·atan(s), s = a/√(1+a²).
+double hemi_plane_coverage(float half_width);
+
+struct GatherResult {
+    glm::vec3 iim{0.0f};       // E_indirect / π: L_indirect = albedo × iim
+    float back_fraction = 0.0f;  // weighted share of the view that shows back faces
+};
+
+class HemiPlaneGather {
+public:
+    // `tiles` texels are gathered per pass (rounded to a square of tiles).
+    HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256);
+
+    // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
+    // (atlas-sized RGBA32F, linear filtering). Results in the same order.
+    std::vector<GatherResult> gather(const std::vector<int>& texels, GLuint aim_texture);
+
+    int resolution() const { return resolution_; }
+    int tiles_per_pass() const { return tiles_x_ * tiles_x_; }
+
+private:
+    const Scene& scene_;
+    const SceneMeshes& meshes_;
+    int resolution_, tiles_x_, level_;
+    Program program_;
+    Texture color_, weights_;
+    Renderbuffer depth_;
+    Framebuffer fbo_;
+};
+
+}  // namespace ag::gpu

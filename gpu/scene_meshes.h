@@ -1,0 +1,37 @@
+// The scene's geometry on the GPU: one vertex buffer per object (triangle soup in object space
+// with face normals and atlas UVs, so charts keep their own UVs), drawn with the object's current
+// transform. Uploaded once; rigid edits only change the model matrix.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/gl_objects.h"
+#include "shared/scene.h"
+
+namespace ag::gpu {
+
+// Vertex layout: location 0 position (vec3), 1 normal (vec3), 2 lightmap uv (vec2, [0,1]).
+class SceneMeshes {
+public:
+    explicit SceneMeshes(const Scene& scene);
+
+    size_t object_count() const { return objects_.size(); }
+    // Draws object `i` (binds its VAO); the caller sets the program and uniforms.
+    void draw(size_t i) const;
+    int triangle_count(size_t i) const { return objects_[i].triangles; }
+
+private:
+    struct GpuObject {
+        VertexArray vao;
+        Buffer vbo;
+        int triangles = 0;
+    };
+    std::vector<GpuObject> objects_;
+};
+
+// The model matrix of an object (world = M · object).
+inline glm::mat4 model_matrix(const Object& o) { return o.transform.matrix(); }
+
+}  // namespace ag::gpu

@@ -1,0 +1,30 @@
+// Stencil shadow volumes (Larsen ch. 13; Carmack's depth-fail): for every closed mesh, the
+// silhouette edges seen from a point light extruded to infinity, with near and far caps, built on
+// the CPU from edge adjacency each frame (objects and lights move).
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "shared/mesh.h"
+
+namespace ag::gpu {
+
+// Edge adjacency of a closed mesh (positions welded exactly). Empty if the mesh is not closed
+// (an edge without exactly two faces): open meshes cast no volume shadows.
+struct ShadowCaster {
+    bool closed = false;
+    std::vector<glm::vec3> positions;     // welded
+    std::vector<glm::uvec3> triangles;    // into positions
+    std::vector<glm::ivec3> neighbours;   // per triangle edge (k, k+1): the adjacent triangle
+};
+
+ShadowCaster make_shadow_caster(const Mesh& mesh);
+
+// Appends the volume of `caster` (transformed by `model`) for a point light at `light` as
+// homogeneous world-space triangles (w = 0 at infinity), consistently wound outwards.
+void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model, const glm::vec3& light,
+                          std::vector<glm::vec4>& out);
+
+}  // namespace ag::gpu

@@ -1,0 +1,79 @@
+// The progressive pipeline of one frame (DESIGN.md "The frame, as data flows through it"): scene
+// edits → selective photon tracing and AIM rebuilds on worker threads, concurrently with the GL
+// thread's gathering and drawing, which use the previous frame's AIM (double buffering) →
+// IIM texels scheduled by Δi under a budget, blended in over several frames → the composed frame.
+#pragma once
+
+#include <chrono>
+#include <deque>
+#include <future>
+#include <memory>
+#include <vector>
+
+#include "cpu/aim.h"
+#include "cpu/photon_simulation.h"
+#include "gpu/frame_renderer.h"
+#include "gpu/hemi_plane_gather.h"
+#include "gpu/lightmap_texture.h"
+#include "gpu/scene_meshes.h"
+#include "shared/parallel.h"
+#include "shared/scene.h"
+
+namespace ag::cli {
+
+struct PipelineStats {
+    uint64_t frame = 0;
+    cpu::PhotonFrameStats photons;
+    int iim_texels_gathered = 0;
+    int iim_texels_pending = 0;
+    int iim_texels_invalid = 0;  // back-face texels repaired from neighbours
+    // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
+    // thread; wait_ms is what the GL thread then waited for them.
+    double photon_ms = 0, aim_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0, frame_ms = 0;
+};
+
+class Pipeline {
+public:
+    // A GL context must be current. `width`×`height` is the frame size.
+    Pipeline(Scene& scene, int width, int height, int threads);
+    ~Pipeline();
+
+    // One progressive frame; the scene may have been edited since the last call.
+    PipelineStats frame();
+    // Waits for the photon work in flight (call before editing the scene).
+    void sync();
+
+    gpu::FrameImages images() const { return renderer_->read_back(); }
+    const gpu::FrameRenderer& renderer() const { return *renderer_; }
+    GLuint iim_texture() const { return iim_texture_->id(); }
+    GLuint aim_texture() const { return aim_texture_->id(); }
+    bool converged() const;  // nothing queued, pending or blending
+
+private:
+    void schedule_from_deltas();
+    void gather(PipelineStats& stats);
+    void blend(PipelineStats& stats);
+
+    Scene& scene_;
+    ThreadPool pool_;
+    std::unique_ptr<cpu::PhotonSimulation> photons_;
+    std::unique_ptr<cpu::Aim> aim_;
+    std::unique_ptr<gpu::SceneMeshes> meshes_;
+    std::unique_ptr<gpu::HemiPlaneGather> gatherer_;
+    std::unique_ptr<gpu::FrameRenderer> renderer_;
+    std::unique_ptr<gpu::LightmapTexture> aim_texture_, iim_texture_;
+    std::future<cpu::PhotonFrameStats> photon_work_;
+    std::vector<int> aim_dirty_;  // AIM texels changed by the last photon frame, to upload
+    std::vector<glm::vec3> staged_aim_;  // their values, copied at the hand-over (no data race)
+
+    // IIM: texels waiting for a gather (FIFO, each once), and the blend from old to new values.
+    std::deque<int> pending_;          // texel record indices
+    std::vector<char> is_pending_;
+    std::vector<glm::vec3> iim_from_, iim_to_, iim_shown_;  // atlas-sized
+    std::vector<int> blend_start_;     // per atlas texel: frame the new value arrived, −1 = done
+    std::vector<int> blending_;        // atlas texels currently blending
+    uint64_t frame_ = 0;
+    double photon_cpu_ms_ = 0, aim_cpu_ms_ = 0;  // written by the worker, read after get()
+};
+
+}  // namespace ag::cli

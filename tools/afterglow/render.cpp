@@ -1,0 +1,118 @@
+// afterglow render SCENE -o out.exr: the progressive pipeline, headless, for N frames.
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "gpu/gl_context.h"
+#include "shared/image.h"
+#include "shared/scene_file.h"
+#include "tools/afterglow/commands.h"
+#include "tools/afterglow/pipeline.h"
+#include "tools/afterglow/progress.h"
+
+namespace ag::cli {
+
+const Command kRenderCommand{
+    "render",
+    "SCENE -o OUT.exr [options]",
+    "Run the progressive pipeline headless for N frames (photon work on worker threads while the "
+    "GL thread gathers and draws) and write the last frame as EXR and PNG. --aov also writes the "
+    "direct, indirect, specular and caustics terms, which sum to the frame.",
+    {
+        {"output", "o", "OUT.exr", "the EXR to write; a PNG with the same stem is written beside it"},
+        {"frames", "n", "N", "frames to run (default 30)"},
+        {"size", "", "WxH", "image size (default: the scene camera's resolution)"},
+        {"aov", "", "", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"},
+        {"gl", "", "BACKEND", "osmesa (default), egl, auto (EGL on a GPU, else OSMesa)"},
+        {"gather", "", "BACKEND", "gl (default) | cpu | auto: the IIM final-gather backend"},
+        {"exposure", "", "EV", "PNG exposure in stops (default 0: radiance 1 is white)"},
+        {"threads", "", "N", "worker threads for photon work (default: settings.threads)"},
+        {"quiet", "q", "", "no progress bar"},
+    },
+    1,
+    1,
+};
+
+namespace {
+
+void parse_size(const std::string& text, int& w, int& h) {
+    int a = 0, b = 0;
+    char x = 0, extra = 0;
+    if (std::sscanf(text.c_str(), "%d%c%d%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') || a <= 0 ||
+        b <= 0 || a > 16384 || b > 16384)
+        throw CliError("afterglow render: --size expects WxH with positive integers up to 16384, got '" + text + "'");
+    w = a;
+    h = b;
+}
+
+std::string with_suffix(const std::string& exr, const std::string& suffix, const std::string& ext) {
+    const std::filesystem::path p(exr);
+    return (p.parent_path() / (p.stem().string() + suffix + ext)).string();
+}
+
+}  // namespace
+
+int run_render(const Args& args) {
+    if (!args.has("output")) throw CliError("afterglow render: missing -o OUT.exr");
+    const std::string out = args.get("output");
+    if (std::filesystem::path(out).extension() != ".exr")
+        throw CliError("afterglow render: -o expects a file name ending in .exr, got '" + out + "'");
+    const int frames = args.get_int("frames", 30, 1, 1000000);
+    gpu::GlBackend backend;
+    try {
+        backend = gpu::parse_gl_backend(args.get("gl", "osmesa"));
+    } catch (const std::invalid_argument& e) {
+        throw CliError(std::string("afterglow render: --gl: ") + e.what());
+    }
+    if (backend == gpu::GlBackend::window) throw CliError("afterglow render: --gl window is for `afterglow view`");
+    const std::string gather = args.get("gather", "gl");
+    if (gather != "gl" && gather != "cpu" && gather != "auto")
+        throw CliError("afterglow render: --gather expects gl, cpu or auto, got '" + gather + "'");
+    const float exposure = float(args.get_double("exposure", 0.0));
+
+    Scene scene = load_scene(args.positionals()[0]);
+    int width = scene.camera.width, height = scene.camera.height;
+    if (args.has("size")) parse_size(args.get("size"), width, height);
+    const int threads = args.get_int("threads", scene.settings.threads, 0, 1024);
+
+    auto context = gpu::make_gl_context(backend);
+    Pipeline pipeline(scene, width, height, threads);
+    Progress progress("render", frames, !args.has("quiet"));
+    PipelineStats last;
+    double total_ms = 0.0;
+    for (int f = 0; f < frames; ++f) {
+        last = pipeline.frame();
+        total_ms += last.frame_ms;
+        progress.update(f + 1);
+    }
+    progress.finish();
+    pipeline.sync();
+
+    const gpu::FrameImages images = pipeline.images();
+    std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
+    write_image(images.frame, out);
+    write_image(images.frame, with_suffix(out, "", ".png"), exposure);
+    if (args.has("aov"))
+        for (size_t a = 0; a < images.aov.size(); ++a) {
+            const std::string suffix = std::string(".") + gpu::kAovNames[a];
+            write_image(images.aov[a], with_suffix(out, suffix, ".exr"));
+            write_image(images.aov[a], with_suffix(out, suffix, ".png"), exposure);
+        }
+    std::fprintf(stderr,
+                 "afterglow render: %d frames of %dx%d in %.1f ms (%.1f fps) on %s [%s]\n"
+                 "last frame: %.2f ms (gather %.2f, draw %.2f, waited %.2f for photons %.2f + AIM %.2f on workers); "
+                 "photons verified %d, groups invalidated %d, retraced %d, queued %d; AIM texels %d; IIM texels "
+                 "gathered %d, pending %d, repaired %d\n",
+                 frames, width, height, total_ms, 1000.0 * frames / std::max(1e-9, total_ms),
+                 context->renderer().c_str(), gpu::kGlBackendNames[size_t(context->backend())], last.frame_ms,
+                 last.gather_ms, last.draw_ms, last.wait_ms, last.photon_ms, last.aim_ms,
+                 last.photons.photons_verified, last.photons.groups_invalidated, last.photons.photons_retraced,
+                 last.photons.groups_queued, last.photons.aim_texels_rebuilt, last.iim_texels_gathered,
+                 last.iim_texels_pending, last.iim_texels_invalid);
+    std::cerr << "afterglow render: wrote " << out << " and " << with_suffix(out, "", ".png") << "\n";
+    return 0;
+}
+
+static const Registration kRegistration(kRenderCommand, run_render, 5);
+
+}  // namespace ag::cli
