@@ -150,6 +150,23 @@ void main() {
 }
 )";
 
+// Eq. 13.1 on the GPU: the displayed frame is the sum of the four terms.
+const char* kComposeVertex = R"(
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // full-screen triangle
+    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)";
+const char* kComposeFragment = R"(
+uniform sampler2D direct, indirect, specular, caustics;
+out vec4 color;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    color = vec4(texelFetch(direct, p, 0).rgb + texelFetch(indirect, p, 0).rgb +
+                 texelFetch(specular, p, 0).rgb + texelFetch(caustics, p, 0).rgb, 1.0);
+}
+)";
+
 float scene_diagonal(const Scene& scene) {
     Bounds b;
     for (const Object& o : scene.objects)
@@ -199,6 +216,15 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_.get());
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("frame: framebuffer incomplete");
+
+    compose_ = Program("frame compose", kComposeVertex, kComposeFragment);
+    frame_ = make_float_texture(width, height);
+    compose_fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
+    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, frame_.get(), 0);
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("frame: compose framebuffer incomplete");
+    empty_vao_ = make_vertex_array();
 
     for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
     volume_vbo_ = make_buffer();
@@ -395,27 +421,46 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
     gl::Disable(GL_STENCIL_TEST);
     gl::DepthMask(GL_TRUE);
     gl::DepthFunc(GL_LESS);
+    compose();
     gl::BindVertexArray(0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("FrameRenderer::render");
 }
 
+void FrameRenderer::compose() {
+    gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    gl::DrawBuffers(1, &draw);
+    gl::Viewport(0, 0, width_, height_);
+    gl::Disable(GL_DEPTH_TEST);
+    gl::Disable(GL_BLEND);
+    compose_.use();
+    const char* names[4] = {"direct", "indirect", "specular", "caustics"};
+    for (int a = 0; a < 4; ++a) {
+        gl::ActiveTexture(GLenum(GL_TEXTURE0 + a));
+        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(a)].get());
+        compose_.set(names[a], a);
+    }
+    gl::BindVertexArray(empty_vao_.get());
+    gl::DrawArrays(GL_TRIANGLES, 0, 3);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::ActiveTexture(GL_TEXTURE0);
+}
+
 FrameImages FrameRenderer::read_back() const {
-    FrameImages out;
-    out.frame = Image(width_, height_);
-    for (size_t a = 0; a < aov_.size(); ++a) {
-        const std::vector<float> rgba = read_rgba(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + a), 0, 0, width_, height_);
-        Image& img = out.aov[a];
-        img = Image(width_, height_);
+    auto to_image = [&](GLuint fbo, GLenum attachment) {
+        const std::vector<float> rgba = read_rgba(fbo, attachment, 0, 0, width_, height_);
+        Image img(width_, height_);
         for (int y = 0; y < height_; ++y)
             for (int x = 0; x < width_; ++x) {
                 const float* p = &rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4];  // GL rows bottom-up
                 img.set_rgb(x, y, {p[0], p[1], p[2]});
             }
-    }
-    // The frame is the sum of its terms (eq. 13.1), summed here so the AOVs add up exactly.
-    for (size_t i = 0; i < out.frame.pixels.size(); ++i)
-        out.frame.pixels[i] = out.aov[0].pixels[i] + out.aov[1].pixels[i] + out.aov[2].pixels[i] + out.aov[3].pixels[i];
+        return img;
+    };
+    FrameImages out;
+    out.frame = to_image(compose_fbo_.get(), GL_COLOR_ATTACHMENT0);
+    for (size_t a = 0; a < aov_.size(); ++a) out.aov[a] = to_image(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + a));
     return out;
 }
 

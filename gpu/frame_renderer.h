@@ -50,6 +50,7 @@ public:
     int height() const { return height_; }
     GLuint framebuffer() const { return fbo_.get(); }
     GLuint aov_texture(Aov a) const { return aov_[size_t(a)].get(); }
+    GLuint frame_texture() const { return frame_.get(); }  // the composed L, for display
 
 private:
     void render_cube_maps(GLuint iim, const std::vector<LightSample>& lights);
@@ -60,7 +61,13 @@ private:
     const SceneMeshes& meshes_;
     int width_, height_;
     Program gbuffer_, lighting_, volume_, environment_;
+    void compose();
+
     std::array<Texture, 4> aov_;
+    Texture frame_;
+    Framebuffer compose_fbo_;
+    VertexArray empty_vao_;
+    Program compose_;
     Renderbuffer depth_stencil_;
     Framebuffer fbo_;
     std::vector<ShadowCaster> casters_;

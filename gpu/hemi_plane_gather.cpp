@@ -129,7 +129,8 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
 
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture) {
     std::vector<GatherResult> out(texels.size());
-    const int per_pass = tiles_x_ * tiles_x_, size = tiles_x_ * resolution_;
+    const int size = tiles_x_ * resolution_;
+    const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
     const float a = scene_.settings.gather.plane_half_width;
     Bounds bounds;
     for (const Object& o : scene_.objects)
@@ -150,16 +151,17 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.set("aim", 0);
     program_.set("weights", 1);
     program_.set("resolution", resolution_);
-    gl::ActiveTexture(GL_TEXTURE0);
-    gl::BindTexture(GL_TEXTURE_2D, aim_texture);
-    gl::ActiveTexture(GL_TEXTURE1);
-    gl::BindTexture(GL_TEXTURE_2D, weights_.get());
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     const glm::mat4 projection = glm::frustum(-a * near_plane, a * near_plane, -a * near_plane, a * near_plane,
                                               near_plane, far_plane);
 
     for (size_t first = 0; first < texels.size(); first += size_t(per_pass)) {
         const size_t count = std::min(texels.size() - first, size_t(per_pass));
+        // Bound every pass: the reduction below binds the tile texture on its own unit.
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, aim_texture);
+        gl::ActiveTexture(GL_TEXTURE1);
+        gl::BindTexture(GL_TEXTURE_2D, weights_.get());
         gl::Viewport(0, 0, size, size);
         gl::ClearColor(0, 0, 0, 0);
         gl::ClearDepth(1.0);
@@ -183,10 +185,16 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
             }
         }
         // One reduction for the whole batch: level log2(R) holds every tile's mean.
+        // Mesa 22.3 (llvmpipe) regenerates stale levels if the texture is still attached to the
+        // bound framebuffer: unbind it first.
+        gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+        gl::ActiveTexture(GL_TEXTURE2);
         gl::BindTexture(GL_TEXTURE_2D, color_.get());
         gl::GenerateMipmap(GL_TEXTURE_2D);
         std::vector<float> means(size_t(tiles_x_) * size_t(tiles_x_) * 4);
         gl::GetTexImage(GL_TEXTURE_2D, level_, GL_RGBA, GL_FLOAT, means.data());
+        gl::BindTexture(GL_TEXTURE_2D, 0);  // never leave the render target bound for sampling
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         const float pixels = float(resolution_) * float(resolution_);
         for (size_t k = 0; k < count; ++k) {
             const float* m = &means[4 * k];  // tile k is at (k % tiles_x, k / tiles_x): row-major
@@ -194,6 +202,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
             out[first + k].back_fraction = pixels * m[3];
         }
     }
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+    gl::ActiveTexture(GL_TEXTURE0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("HemiPlaneGather::gather");
     return out;

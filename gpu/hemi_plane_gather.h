@@ -32,7 +32,7 @@ struct GatherResult {
 
 class HemiPlaneGather {
 public:
-    // `tiles` texels are gathered per pass (rounded to a square of tiles).
+    // Up to `tiles` texels are gathered per pass (rounded up to a square of tiles).
     HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256);
 
     // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
@@ -41,11 +41,14 @@ public:
 
     int resolution() const { return resolution_; }
     int tiles_per_pass() const { return tiles_x_ * tiles_x_; }
+    // Limits a pass to `n` texels (1 = unbatched, for benchmarks); 0 = all tiles.
+    void set_max_per_pass(int n) { max_per_pass_ = n; }
 
 private:
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int resolution_, tiles_x_, level_;
+    int max_per_pass_ = 0;
     Program program_;
     Texture color_, weights_;
     Renderbuffer depth_;

@@ -1,0 +1,104 @@
+// The composed frame (Larsen ch. 13): shadow volumes and the AOV sum.
+#include "gpu/frame_renderer.h"
+
+#include <gtest/gtest.h>
+
+#include "gl_fixture.h"
+#include "gpu/lightmap_texture.h"
+#include "shared/camera.h"
+#include "shared/charts.h"
+#include "shared/scene_edit.h"
+#include "shared/scene_file.h"
+#include "shared/shapes.h"
+
+namespace ag::gpu {
+
+namespace {
+
+// A floor, a closed box hovering above it, a point light above the box, a camera looking down.
+Scene occluder_scene() {
+    Scene s;
+    s.path = "frame_test";
+    Object floor;
+    floor.name = "floor";
+    floor.mesh = make_quad(10.0f, 10.0f);
+    s.objects.push_back(floor);
+    Object box;
+    box.name = "box";
+    box.mesh = make_box(glm::vec3(1.0f));
+    box.transform.translation = {0.0f, 2.0f, 0.0f};
+    box.dynamic = true;
+    s.objects.push_back(box);
+    Light l;
+    l.name = "lamp";
+    l.position = {0.0f, 5.0f, 0.0f};
+    l.intensity = glm::vec3(25.0f);
+    s.lights.push_back(l);
+    s.camera.eye = {0.0f, 9.0f, -6.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y = 60.0f;
+    s.camera.width = s.camera.height = 128;
+    s.settings.lightmap.texel_size = 1.0f;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
+// The pixel where world point p lands.
+glm::ivec2 project(const Camera& c, const glm::vec3& p) {
+    const glm::vec4 clip = projection_matrix(c, 0.01f, 100.0f) * view_matrix(c) * glm::vec4(p, 1.0f);
+    const glm::vec2 ndc = glm::vec2(clip) / clip.w;
+    return {int((ndc.x * 0.5f + 0.5f) * float(c.width)), int((0.5f - ndc.y * 0.5f) * float(c.height))};
+}
+
+}  // namespace
+
+class FrameTest : public test::GlTest {};
+
+TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
+    const Scene scene = occluder_scene();
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
+    renderer.render(iim.id());
+    const FrameImages images = renderer.read_back();
+    const Image& direct = images.aov[size_t(Aov::direct)];
+    const glm::ivec2 under = project(scene.camera, {0.0f, 0.0f, 0.0f});
+    const glm::ivec2 beside = project(scene.camera, {3.0f, 0.0f, 0.0f});
+    EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f)) << "pixel " << under.x << "," << under.y;
+    // Beside: ρ/π · I cosθ / d² with ρ = 0.75, d² = 9 + 25, cosθ = 5/√34.
+    const float d2 = 34.0f, expected = 0.75f / 3.14159265f * 25.0f * (5.0f / std::sqrt(d2)) / d2;
+    EXPECT_NEAR(direct.rgb(beside.x, beside.y).x, expected, 0.03f * expected);
+    // Switching shadows off lights the point under the box too.
+    Scene unshadowed = scene;
+    unshadowed.settings.direct.shadows = false;
+    FrameRenderer plain(unshadowed, meshes, scene.camera.width, scene.camera.height);
+    plain.render(iim.id());
+    EXPECT_GT(plain.read_back().aov[size_t(Aov::direct)].rgb(under.x, under.y).x, 0.1f * expected);
+}
+
+TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    scene.camera.width = scene.camera.height = 96;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(0.2f, 0.1f, 0.05f));
+    iim.update_all(values);
+    FrameRenderer renderer(scene, meshes, 96, 96);
+    renderer.render(iim.id());
+    const FrameImages images = renderer.read_back();
+    double terms[4] = {0, 0, 0, 0};
+    for (size_t i = 0; i < images.frame.pixels.size(); ++i) {
+        float sum = 0.0f;
+        for (size_t a = 0; a < 4; ++a) {
+            sum += images.aov[a].pixels[i];
+            terms[a] += images.aov[a].pixels[i];
+        }
+        ASSERT_NEAR(images.frame.pixels[i], sum, 1e-5f * std::max(1.0f, sum)) << "pixel value " << i;
+    }
+    EXPECT_GT(terms[size_t(Aov::direct)], 0.0);
+    EXPECT_GT(terms[size_t(Aov::indirect)], 0.0);
+    EXPECT_GT(terms[size_t(Aov::specular)], 0.0);  // the glass sphere
+}
+
+}  // namespace ag::gpu

@@ -1,0 +1,131 @@
+// Hemi-plane gathering (Larsen ch. 11, eq. 11.2) against analytic answers.
+#include "gpu/hemi_plane_gather.h"
+
+#include <gtest/gtest.h>
+
+#include "gl_fixture.h"
+#include "gpu/lightmap_texture.h"
+#include "shared/charts.h"
+#include "shared/scene_edit.h"
+#include "shared/shapes.h"
+
+namespace ag::gpu {
+
+TEST(HemiPlaneWeights, SumToTheAnalyticCoverage) {
+    for (float a : {1.0f, 2.0f, 5.0f}) {
+        for (int r : {8, 16, 32}) {
+            const std::vector<float> w = hemi_plane_weights(r, a, BorderCorrection::none);
+            double sum = 0.0;
+            for (float v : w) sum += v;
+            EXPECT_NEAR(sum, hemi_plane_coverage(a), 1e-4) << "a " << a << " r " << r;
+            for (BorderCorrection c : {BorderCorrection::renormalize, BorderCorrection::stretch}) {
+                double corrected = 0.0;
+                for (float v : hemi_plane_weights(r, a, c)) corrected += v;
+                EXPECT_NEAR(corrected, 1.0, 1e-3) << kBorderCorrectionNames[size_t(c)];
+            }
+        }
+    }
+    EXPECT_NEAR(hemi_plane_coverage(2.0f), 0.83, 0.005);  // DESIGN.md: 83% at a = 2
+    EXPECT_NEAR(hemi_plane_coverage(5.0f), 0.97, 0.005);  // 97% at a = 5
+}
+
+TEST(HemiPlaneWeights, StretchOnlyAddsToTheBorder) {
+    const int r = 16;
+    const std::vector<float> none = hemi_plane_weights(r, 2.0f, BorderCorrection::none);
+    const std::vector<float> stretch = hemi_plane_weights(r, 2.0f, BorderCorrection::stretch);
+    for (int j = 0; j < r; ++j)
+        for (int i = 0; i < r; ++i) {
+            const bool border = i == 0 || j == 0 || i == r - 1 || j == r - 1;
+            const size_t k = size_t(j) * r + size_t(i);
+            if (border) EXPECT_GT(stretch[k], none[k]);
+            else EXPECT_FLOAT_EQ(stretch[k], none[k]);
+        }
+}
+
+namespace {
+
+// A small receiver quad facing +y at the origin and a large emitter-like quad at height h facing
+// down, whose AIM radiance is set to L directly (no photons needed).
+Scene receiver_under_plane(float h, float half_size, BorderCorrection correction) {
+    Scene s;
+    s.path = "gather_test";
+    Object receiver;
+    receiver.name = "receiver";
+    receiver.mesh = make_quad(1.0f, 1.0f);
+    s.objects.push_back(receiver);
+    Object plane;
+    plane.name = "plane";
+    plane.mesh = make_quad(2.0f * half_size, 2.0f * half_size);
+    plane.transform.translation = {0.0f, h, 0.0f};
+    plane.transform.rotation = glm::angleAxis(glm::radians(180.0f), glm::vec3(1, 0, 0));  // face down
+    s.objects.push_back(plane);
+    s.settings.lightmap.texel_size = 0.5f;
+    s.settings.gather.plane_resolution = 32;
+    s.settings.gather.plane_half_width = 2.0f;
+    s.settings.gather.border_correction = correction;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
+}  // namespace
+
+class HemiPlaneGatherTest : public test::GlTest {};
+
+TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
+    const glm::vec3 radiance(2.0f, 1.0f, 0.5f);
+    for (BorderCorrection c : {BorderCorrection::none, BorderCorrection::renormalize, BorderCorrection::stretch}) {
+        // The plane reaches far beyond the frustum (|x| < 2h at a = 2) so it fills the view.
+        const Scene scene = receiver_under_plane(1.0f, 50.0f, c);
+        SceneMeshes meshes(scene);
+        LightmapTexture aim(scene.atlas);
+        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(0.0f));
+        std::vector<int> receiver_texels;
+        for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
+            const TexelRecord& t = scene.atlas.texels[size_t(i)];
+            if (t.object == 1) values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
+            else receiver_texels.push_back(i);
+        }
+        aim.update_all(values);
+        HemiPlaneGather gather(scene, meshes, 16);
+        const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
+        ASSERT_FALSE(r.empty());
+        const double expected_fraction = c == BorderCorrection::none ? hemi_plane_coverage(2.0f) : 1.0;
+        for (const GatherResult& g : r) {
+            // E = π L · fraction, and the IIM stores E / π.
+            for (int k = 0; k < 3; ++k)
+                EXPECT_NEAR(g.iim[k], radiance[k] * expected_fraction, 0.01 * radiance[k] * expected_fraction)
+                    << kBorderCorrectionNames[size_t(c)];
+            EXPECT_EQ(g.back_fraction, 0.0f);
+        }
+    }
+}
+
+TEST_F(HemiPlaneGatherTest, TexelUnderABackFaceIsFlagged) {
+    // The plane above faces up (away from the receiver): the receiver sees only its back.
+    Scene scene = receiver_under_plane(1.0f, 50.0f, BorderCorrection::renormalize);
+    scene.objects[1].transform.rotation = glm::quat(1, 0, 0, 0);
+    SceneMeshes meshes(scene);
+    LightmapTexture aim(scene.atlas);
+    std::vector<int> receiver_texels;
+    for (int i = 0; i < int(scene.atlas.texels.size()); ++i)
+        if (scene.atlas.texels[size_t(i)].object == 0) receiver_texels.push_back(i);
+    HemiPlaneGather gather(scene, meshes, 16);
+    for (const GatherResult& g : gather.gather(receiver_texels, aim.id())) EXPECT_GT(g.back_fraction, 0.9f);
+}
+
+TEST_F(HemiPlaneGatherTest, BatchedAndSingleGathersAgree) {
+    const Scene scene = receiver_under_plane(1.0f, 3.0f, BorderCorrection::stretch);  // partial view
+    SceneMeshes meshes(scene);
+    LightmapTexture aim(scene.atlas);
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(1.0f));
+    aim.update_all(values);
+    std::vector<int> all(scene.atlas.texels.size());
+    for (size_t i = 0; i < all.size(); ++i) all[i] = int(i);
+    HemiPlaneGather batched(scene, meshes, 64), single(scene, meshes, 1);
+    single.set_max_per_pass(1);
+    const auto a = batched.gather(all, aim.id()), b = single.gather(all, aim.id());
+    for (size_t i = 0; i < all.size(); ++i) EXPECT_NEAR(a[i].iim.x, b[i].iim.x, 1e-4f) << "texel " << i;
+}
+
+}  // namespace ag::gpu
