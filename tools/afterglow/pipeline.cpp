@@ -25,6 +25,7 @@ Pipeline::Pipeline(Scene& scene, int width, int height, int threads) : scene_(sc
     staged_aim_.assign(n, glm::vec3(0.0f));
     blend_start_.assign(n, -1);
     is_pending_.assign(scene_.atlas.texels.size(), 1);
+    texel_generation_.assign(scene_.atlas.texels.size(), -1);
     for (int t = 0; t < int(scene_.atlas.texels.size()); ++t) pending_.push_back(t);
 }
 
@@ -63,7 +64,17 @@ void Pipeline::gather(PipelineStats& stats) {
         is_pending_[size_t(pending_.front())] = 0;
         pending_.pop_front();
     }
+    // The rest of the budget refreshes texels gathered with older AIMs, round robin.
+    const size_t n = texel_generation_.size();
+    for (size_t visited = 0; visited < n && int(batch.size()) < scene_.settings.gather.texels_per_frame; ++visited) {
+        const size_t t = sweep_;
+        sweep_ = (sweep_ + 1) % n;
+        if (!is_pending_[t] && texel_generation_[t] < aim_generation_ &&
+            std::find(batch.begin(), batch.end(), int(t)) == batch.end())
+            batch.push_back(int(t));
+    }
     if (batch.empty()) return;
+    for (int t : batch) texel_generation_[size_t(t)] = aim_generation_;
     const std::vector<gpu::GatherResult> results = gatherer_->gather(batch, aim_texture_->id());
     const int w = scene_.atlas.width;
     std::vector<char> invalid(batch.size(), 0);
@@ -127,6 +138,7 @@ PipelineStats Pipeline::frame() {
     });
     // GL: last frame's AIM texels, then gathers and the frame.
     Clock::time_point t = Clock::now();
+    if (!aim_dirty_.empty()) ++aim_generation_;
     aim_texture_->update(staged_aim_, aim_dirty_);
     aim_dirty_.clear();
     gather(stats);
@@ -150,8 +162,14 @@ PipelineStats Pipeline::frame() {
     return stats;
 }
 
+bool Pipeline::has_stale() const {
+    for (int g : texel_generation_)
+        if (g < aim_generation_) return true;
+    return false;
+}
+
 bool Pipeline::converged() const {
-    return photons_->settled() && pending_.empty() && blending_.empty() && aim_dirty_.empty();
+    return photons_->settled() && pending_.empty() && blending_.empty() && aim_dirty_.empty() && !has_stale();
 }
 
 }  // namespace ag::cli

@@ -72,6 +72,13 @@ private:
     std::vector<glm::vec3> iim_from_, iim_to_, iim_shown_;  // atlas-sized
     std::vector<int> blend_start_;     // per atlas texel: frame the new value arrived, −1 = done
     std::vector<int> blending_;        // atlas texels currently blending
+    // AIM generations: a texel gathered before the latest AIM upload is stale. Δi picks what is
+    // re-gathered first (Larsen ch. 11); a round-robin sweep then refreshes stale texels with the
+    // rest of the budget, so the IIM settles on the final AIMs once edits stop.
+    int aim_generation_ = 0;
+    std::vector<int> texel_generation_;  // per texel record; -1 = never gathered
+    size_t sweep_ = 0;
+    bool has_stale() const;
     uint64_t frame_ = 0;
     double photon_cpu_ms_ = 0, aim_cpu_ms_ = 0;  // written by the worker, read after get()
 };
