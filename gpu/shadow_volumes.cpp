@@ -24,6 +24,32 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
             const unsigned a = c.triangles[size_t(t)][k], b = c.triangles[size_t(t)][(k + 1) % 3];
             if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second) return ShadowCaster{};
         }
+    // Small holes (a quad's outline, a box without its bottom) are closed by fans for the shadow
+    // volume only, so thin panels and open boxes still cast shadows. Large boundaries (a floor's
+    // rim) stay open: such a mesh casts no volume.
+    std::map<unsigned, unsigned> boundary_next;
+    for (const auto& [edge, owner] : edges)
+        if (!edges.count({edge.second, edge.first})) {
+            if (!boundary_next.emplace(edge.first, edge.second).second) return ShadowCaster{};
+        }
+    constexpr size_t kMaxHole = 16;
+    while (!boundary_next.empty()) {
+        std::vector<unsigned> loop{boundary_next.begin()->first};
+        for (unsigned v = boundary_next.begin()->second; v != loop.front(); v = boundary_next.at(v)) {
+            if (!boundary_next.count(v) || loop.size() > kMaxHole) return ShadowCaster{};
+            loop.push_back(v);
+        }
+        for (unsigned v : loop) boundary_next.erase(v);
+        // The fill runs each boundary edge backwards: fan (v0, v[i+1], v[i]).
+        for (size_t i = 1; i + 1 < loop.size(); ++i) {
+            const int t = int(c.triangles.size());
+            c.triangles.push_back({loop[0], loop[i + 1], loop[i]});
+            for (int k = 0; k < 3; ++k) {
+                const unsigned a = c.triangles.back()[k], b = c.triangles.back()[(k + 1) % 3];
+                if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second) return ShadowCaster{};
+            }
+        }
+    }
     c.neighbours.assign(c.triangles.size(), glm::ivec3(-1));
     for (const auto& [edge, owner] : edges) {
         auto it = edges.find({edge.second, edge.first});

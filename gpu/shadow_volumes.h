@@ -11,8 +11,9 @@
 
 namespace ag::gpu {
 
-// Edge adjacency of a closed mesh (positions welded exactly). Empty if the mesh is not closed
-// (an edge without exactly two faces): open meshes cast no volume shadows.
+// Edge adjacency of a closed mesh (positions welded exactly). Holes of up to 16 boundary edges
+// are closed by fans (a quad panel or a box without its bottom still casts a shadow); a mesh with
+// larger holes or non-manifold edges is not a caster (`closed` false).
 struct ShadowCaster {
     bool closed = false;
     std::vector<glm::vec3> positions;     // welded
