@@ -1,0 +1,177 @@
+#include "cpu/caustic_tracer.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "shared/qmc.h"
+
+namespace ag::cpu {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr int kMaxSpecularBounces = 12;
+
+glm::vec3 any_perpendicular(const glm::vec3& n) {
+    return glm::normalize(std::abs(n.x) > 0.5f ? glm::cross(n, glm::vec3(0, 1, 0)) : glm::cross(n, glm::vec3(1, 0, 0)));
+}
+
+float fresnel(float cos_i, float eta, float& cos_t) {
+    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        cos_t = 0.0f;
+        return 1.0f;
+    }
+    cos_t = std::sqrt(1.0f - sin2_t);
+    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+}  // namespace
+
+CausticTracer::CausticTracer(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
+    rays_ = std::make_unique<RayTracer>(scene_);
+    photons_.assign(scene_.lights.size() * size_t(scene_.settings.caustics.photons), CausticPhoton{});
+    for (size_t l = 0; l < scene_.lights.size(); ++l)
+        halton_.emplace_back(5 + kMaxSpecularBounces, hash_u32(scene_.settings.seed * 31337u + uint32_t(l)) | 1u);
+}
+
+std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) const {
+    std::vector<Cone> out;
+    for (int o = 0; o < int(scene_.objects.size()); ++o) {
+        const Object& obj = scene_.objects[size_t(o)];
+        if (obj.material.type == MaterialType::diffuse) continue;
+        // Bounding sphere in world space (rigid transforms keep the radius).
+        const glm::vec3 c_local = mesh_bounds(obj.mesh).center();
+        float r = 0.0f;
+        for (const glm::vec3& p : obj.mesh.positions) r = std::max(r, glm::length(p - c_local));
+        const glm::vec3 c = obj.transform.apply_point(c_local);
+        const float d = glm::length(c - from);
+        if (d <= r * 1.0001f) continue;  // the light is inside the bound: no cone (documented)
+        const double sin_a = double(r) / double(d), cos_a = std::sqrt(std::max(0.0, 1.0 - sin_a * sin_a));
+        const double one_minus_cos = sin_a * sin_a / (1.0 + cos_a);  // no cancellation
+        out.push_back({o, c, one_minus_cos, float(2.0 * 3.14159265358979 * one_minus_cos)});
+    }
+    return out;
+}
+
+CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vector<Cone>& cone_cache,
+                                          bool& hit_specular) const {
+    hit_specular = false;
+    const Light& l = scene_.lights[size_t(light)];
+    if (!l.enabled) return {};
+    const glm::vec3 centre = l.center();
+    if (cone_cache.empty()) return {};
+    const Halton& halton = halton_[size_t(light)];
+    const uint64_t k = uint64_t(index);
+
+    // Pick a cone in proportion to its solid angle, then a direction uniformly inside it.
+    float total = 0.0f;
+    for (const Cone& c : cone_cache) total += c.solid_angle;
+    float pick = float(halton.sample(k, 0)) * total;
+    const Cone* cone = &cone_cache.back();
+    for (const Cone& c : cone_cache) {
+        if (pick < c.solid_angle) {
+            cone = &c;
+            break;
+        }
+        pick -= c.solid_angle;
+    }
+    Ray ray;
+    ray.origin = centre;
+    glm::vec3 power;
+    const int n = scene_.settings.caustics.photons;
+    if (l.type == LightType::quad) {
+        const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
+        ray.origin = l.corners[0] + float(halton.sample(k, 3)) * e1 + float(halton.sample(k, 4)) * e3 +
+                     rays_->epsilon() * l.quad_normal();
+    }
+    const glm::vec3 axis = glm::normalize(cone->centre - ray.origin);
+    // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without cancellation.
+    const double x = halton.sample(k, 1) * cone->one_minus_cos;
+    const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
+    const float phi = 2.0f * kPi * float(halton.sample(k, 2));
+    const glm::vec3 u = any_perpendicular(axis), v = glm::cross(axis, u);
+    ray.direction = glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));
+    if (l.type == LightType::point) {
+        power = l.intensity * total / float(n);  // the flux into all cones, shared by n photons
+    } else {
+        const float cos_l = glm::dot(l.quad_normal(), ray.direction);
+        if (cos_l <= 0.0f) return {};
+        power = l.radiance * l.quad_area() * cos_l * total / float(n);
+    }
+
+    const float eps = rays_->epsilon();
+    bool specular_seen = false;
+    for (int bounce = 0; bounce <= kMaxSpecularBounces; ++bounce) {
+        ray.tmin = 0.0f;
+        ray.tmax = 1e30f;
+        const RayHit hit = rays_->intersect(ray);
+        if (!hit.hit) return {};
+        const Material& m = scene_.objects[size_t(hit.object)].material;
+        const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
+        const glm::vec3 facing = front ? hit.normal : -hit.normal;
+        if (m.type == MaterialType::diffuse) {
+            if (!specular_seen || !front) return {};  // not an L S+ D path, or a back face
+            return CausticPhoton{hit.position, power, facing, frame_};
+        }
+        if (bounce == 0) hit_specular = true;
+        specular_seen = true;
+        const glm::vec3 d = glm::normalize(ray.direction);
+        if (m.type == MaterialType::mirror) {
+            ray.origin = hit.position + eps * facing;
+            ray.direction = glm::reflect(d, facing);
+            continue;
+        }
+        const float eta = front ? 1.0f / m.ior : m.ior;
+        const float cos_i = -glm::dot(d, facing);
+        float cos_out = 0.0f;
+        const float f = fresnel(cos_i, eta, cos_out);
+        if (float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1))) < f) {
+            ray.origin = hit.position + eps * facing;
+            ray.direction = glm::reflect(d, facing);
+        } else {
+            ray.origin = hit.position - eps * facing;
+            ray.direction = glm::normalize(eta * d + (eta * cos_i - cos_out) * facing);
+        }
+    }
+    return {};
+}
+
+CausticStats CausticTracer::trace_slice(int slice, int slices) {
+    rays_->update(scene_);
+    const int n = scene_.settings.caustics.photons;
+    std::vector<int> jobs;  // global slot = light * n + index
+    for (int l = 0; l < int(scene_.lights.size()); ++l)
+        for (int i = slice; i < n; i += slices) jobs.push_back(l * n + i);
+    std::vector<std::vector<Cone>> light_cones;  // the specular objects as seen from each light now
+    for (const Light& l : scene_.lights) light_cones.push_back(cones(l.center()));
+    std::vector<char> specular(jobs.size(), 0);
+    pool_.parallel_for(jobs.size(), [&](size_t j) {
+        bool hit = false;
+        const int light = jobs[j] / n;
+        photons_[size_t(jobs[j])] = trace_photon(light, jobs[j] % n, light_cones[size_t(light)], hit);
+        specular[j] = hit;
+    }, 64);
+    CausticStats stats;
+    stats.traced = int(jobs.size());
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        stats.hit_specular += specular[j];
+        stats.stored += photons_[size_t(jobs[j])].power != glm::vec3(0.0f) ? 1 : 0;
+    }
+    return stats;
+}
+
+CausticStats CausticTracer::frame() {
+    ++frame_;
+    const int slices = scene_.settings.caustics.frames;
+    return trace_slice(int((frame_ - 1) % uint32_t(slices)), slices);
+}
+
+CausticStats CausticTracer::trace_all() {
+    ++frame_;
+    return trace_slice(0, 1);
+}
+
+}  // namespace ag::cpu

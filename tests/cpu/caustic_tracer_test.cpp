@@ -1,0 +1,154 @@
+// Caustic photons (Larsen ch. 12): a ball lens focuses, a moving lens leaves a bounded trail.
+#include "cpu/caustic_tracer.h"
+
+#include <algorithm>
+
+#include <gtest/gtest.h>
+
+#include "test_scenes.h"
+
+namespace ag::cpu {
+
+namespace {
+
+// A glass ball (radius 1, IOR 1.5) at the origin under a distant point light, and a receiving
+// plane `depth` below the ball's centre.
+Scene ball_lens(float depth) {
+    Scene s;
+    s.path = "ball_lens";
+    Object ball;
+    ball.name = "ball";
+    ball.mesh = make_sphere(1.0f, 5);
+    ball.material.type = MaterialType::glass;
+    ball.material.ior = 1.5f;
+    ball.dynamic = true;
+    s.objects.push_back(ball);
+    Object plane;
+    plane.name = "plane";
+    plane.mesh = make_quad(20.0f, 20.0f);
+    plane.transform.translation = {0.0f, -depth, 0.0f};
+    s.objects.push_back(plane);
+    Light l;
+    l.name = "sun";
+    l.position = {0.0f, 2000.0f, 0.0f};
+    l.intensity = glm::vec3(1e6f);
+    s.lights.push_back(l);
+    s.settings.caustics.photons = 20000;
+    s.settings.lightmap.texel_size = 2.0f;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
+struct Spot {
+    glm::vec2 centre{0.0f};
+    float r50 = 0.0f;     // radius holding half the caustic's power
+    double peak = 0.0;    // power within 0.03 of the axis
+};
+
+Spot measure(const std::vector<CausticPhoton>& photons) {
+    std::vector<std::pair<float, float>> radial;  // (radius, power)
+    glm::dvec2 centre(0.0);
+    double total = 0.0, peak = 0.0;
+    for (const CausticPhoton& p : photons) {
+        if (p.power == glm::vec3(0.0f)) continue;
+        const float r = std::hypot(p.position.x, p.position.z);
+        radial.emplace_back(r, p.power.x);
+        centre += double(p.power.x) * glm::dvec2(p.position.x, p.position.z);
+        total += p.power.x;
+        if (r < 0.03f) peak += p.power.x;
+    }
+    std::sort(radial.begin(), radial.end());
+    Spot s;
+    s.centre = glm::vec2(centre / std::max(total, 1e-30));
+    double acc = 0.0;
+    for (const auto& [r, w] : radial)
+        if ((acc += w) >= 0.5 * total) {
+            s.r50 = r;
+            break;
+        }
+    s.peak = peak;
+    return s;
+}
+
+}  // namespace
+
+TEST(CausticTracer, BallLensFocusesNearTheParaxialFocus) {
+    const float n = 1.5f, r = 1.0f, f = n * r / (2.0f * (n - 1.0f));  // 1.5 R from the centre
+    ThreadPool pool(2);
+    Spot spots[3];
+    const float depths[3] = {0.5f * f, f, 1.5f * f};
+    for (int i = 0; i < 3; ++i) {
+        const Scene scene = ball_lens(depths[i]);
+        CausticTracer tracer(scene, pool);
+        const CausticStats st = tracer.trace_all();
+        EXPECT_GE(st.hit_specular, st.traced * 999 / 1000);  // aimed at the ball (its bound is a bit larger)
+        EXPECT_GT(st.stored, st.traced / 2);
+        spots[i] = measure(tracer.photons());
+        EXPECT_LT(glm::length(spots[i].centre), 0.02f) << "centred below the ball, depth " << depths[i];
+        std::printf("depth %.2f: r50 %.4f, power within 0.03 of the axis %.3g\n", double(depths[i]),
+                    double(spots[i].r50), spots[i].peak);
+    }
+    EXPECT_LT(spots[1].r50, spots[0].r50);
+    EXPECT_LT(spots[1].r50, spots[2].r50);
+    EXPECT_GT(spots[1].peak, spots[0].peak);
+    EXPECT_GT(spots[1].peak, spots[2].peak);
+}
+
+TEST(CausticTracer, OnlySpecularPathsAreStoredAndPowerIsConserved) {
+    const Scene scene = ball_lens(1.5f);
+    ThreadPool pool(2);
+    CausticTracer tracer(scene, pool);
+    tracer.trace_all();
+    // All stored photons lie on the plane and face up; total power ≤ the flux into the cone.
+    double total = 0.0;
+    for (const CausticPhoton& p : tracer.photons()) {
+        if (p.power == glm::vec3(0.0f)) continue;
+        EXPECT_NEAR(p.position.y, -1.5f, 1e-3f);
+        EXPECT_GT(p.normal.y, 0.99f);
+        total += p.power.x;
+    }
+    const double d = 2000.0, cone = 2.0 * 3.14159265358979 * (1.0 - std::sqrt(1.0 - 1.0 / (d * d)));
+    EXPECT_LE(total, 1e6 * cone * 1.0001);
+    EXPECT_GT(total, 0.8 * 1e6 * cone);  // glass passes most light (Fresnel losses ~ 10%)
+}
+
+TEST(CausticTracer, MovingTheLensLeavesAtMostAnNFrameTrail) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    CausticTracer tracer(scene, pool);
+    const int frames = scene.settings.caustics.frames;
+    for (int f = 0; f < frames; ++f) tracer.frame();
+    const int sphere = scene.find_object("sphere");
+    ASSERT_GE(sphere, 0);
+    translate_object(scene, sphere, {-40.0f, 0.0f, 30.0f});
+    const uint32_t moved_at = tracer.frame_index();
+    tracer.frame();
+    bool old_left = false;
+    for (const CausticPhoton& p : tracer.photons())
+        if (p.power != glm::vec3(0.0f) && p.frame <= moved_at) old_left = true;
+    EXPECT_TRUE(old_left);  // a trail while the slices catch up
+    for (int f = 1; f < frames; ++f) tracer.frame();
+    int stored = 0;
+    for (const CausticPhoton& p : tracer.photons()) {
+        if (p.power == glm::vec3(0.0f)) continue;
+        ++stored;
+        EXPECT_GT(p.frame, moved_at) << "a photon from before the move survived " << frames << " frames";
+    }
+    EXPECT_GT(stored, 100);
+}
+
+TEST(CausticTracer, IndependentOfThreadCount) {
+    const Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool one(1), three(3);
+    CausticTracer a(scene, one), b(scene, three);
+    a.trace_all();
+    b.trace_all();
+    ASSERT_EQ(a.photons().size(), b.photons().size());
+    for (size_t i = 0; i < a.photons().size(); ++i) {
+        EXPECT_EQ(a.photons()[i].position, b.photons()[i].position);
+        EXPECT_EQ(a.photons()[i].power, b.photons()[i].power);
+    }
+}
+
+}  // namespace ag::cpu
