@@ -1,0 +1,490 @@
+// CPU final gather (Larsen ch. 11) against analytic form factors, atlas sampling without bleeding
+// across charts, back-face repair, colour bleeding in the Cornell box, thread-count independence.
+#include "cpu/cpu_gather.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <memory>
+#include <numeric>
+#include <random>
+
+#include "cpu/aim.h"
+#include "cpu/photon_simulation.h"
+#include "shared/lightmap_sample.h"
+#include "test_scenes.h"
+
+namespace ag::cpu {
+
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+size_t atlas_index(const LightmapAtlas& atlas, const TexelRecord& t) {
+    return size_t(t.y) * size_t(atlas.width) + size_t(t.x);
+}
+
+std::vector<glm::vec3> atlas_values(const Scene& scene) {
+    return std::vector<glm::vec3>(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                  glm::vec3(0.0f));
+}
+
+std::vector<int> all_texels(const Scene& scene) {
+    std::vector<int> ids(scene.atlas.texels.size());
+    std::iota(ids.begin(), ids.end(), 0);
+    return ids;
+}
+
+glm::vec3 world_position(const Scene& scene, const TexelRecord& t) {
+    return scene.objects[size_t(t.object)].transform.apply_point(t.position);
+}
+
+Object quad_object(const std::string& name, float size, const glm::vec3& translation,
+                   const glm::quat& rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) {
+    Object o;
+    o.name = name;
+    o.mesh = make_quad(size, size);
+    o.transform.translation = translation;
+    o.transform.rotation = rotation;
+    return o;
+}
+
+const glm::quat kFacingDown = glm::angleAxis(float(kPi), glm::vec3(1.0f, 0.0f, 0.0f));
+
+Scene finish(Scene s, float texel_size) {
+    s.settings.lightmap.texel_size = texel_size;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
+// Cosine-weighted fraction of the hemisphere of a point covered by a parallel rectangle at
+// distance 1 with one corner straight above the point and sides X, Y (signed; the function is
+// odd in each), the classic differential-area-to-rectangle form factor.
+double corner_form_factor(double x, double y) {
+    const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
+    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * kPi);
+}
+
+// Form factor of a point at (px, pz) to the square [-a, a]² at height h above it.
+double square_form_factor(double px, double pz, double a, double h) {
+    const double x0 = (-a - px) / h, x1 = (a - px) / h, y0 = (-a - pz) / h, y1 = (a - pz) / h;
+    return corner_form_factor(x1, y1) - corner_form_factor(x0, y1) - corner_form_factor(x1, y0) +
+           corner_form_factor(x0, y0);
+}
+
+// Photons traced and AIMs built for a scene file, ready to gather.
+struct Simulated {
+    Scene scene;
+    ThreadPool pool{2};
+    std::unique_ptr<PhotonSimulation> sim;
+    std::unique_ptr<Aim> aim;
+
+    explicit Simulated(const std::string& file) : scene(load_scene(test::scene_path(file))) {
+        sim = std::make_unique<PhotonSimulation>(scene, pool);
+        sim->trace_all();
+        aim = std::make_unique<Aim>(scene, pool);
+        aim->rebuild_all(sim->maps());
+    }
+};
+
+// Texels of a quad of side `receiver` at the origin under a parallel square of half-width a at
+// height 1 whose AIM is uniformly `radiance`: per texel, the gathered iim and the analytic L · F.
+struct FacingResult {
+    std::vector<glm::vec3> got;
+    std::vector<double> form_factor;
+    uint64_t rays_cast = 0, rays_counted = 0;
+    bool all_valid = true;
+};
+
+FacingResult gather_under_square(float receiver, float a, float texel_size, int rays_per_texel,
+                                 glm::vec3 radiance) {
+    Scene s;
+    s.path = "facing squares";
+    s.objects.push_back(quad_object("receiver", receiver, glm::vec3(0.0f)));
+    s.objects.push_back(quad_object("emitter", 2.0f * a, glm::vec3(0.0f, 1.0f, 0.0f), kFacingDown));
+    s.settings.gather.cpu_rays = rays_per_texel;
+    const Scene scene = finish(s, texel_size);
+    std::vector<glm::vec3> aim = atlas_values(scene), iim = atlas_values(scene);
+    std::vector<int> receivers;
+    for (int r = 0; r < int(scene.atlas.texels.size()); ++r) {
+        const TexelRecord& t = scene.atlas.texels[size_t(r)];
+        if (t.object == 1)
+            aim[atlas_index(scene.atlas, t)] = radiance;
+        else
+            receivers.push_back(r);
+    }
+    ThreadPool pool(2);
+    RayTracer rays(scene);
+    CpuGather gather(scene, rays, pool);
+    gather.gather(receivers, aim, iim);
+    FacingResult out;
+    for (int r : receivers) {
+        const TexelRecord& t = scene.atlas.texels[size_t(r)];
+        const glm::vec3 p = world_position(scene, t);
+        out.got.push_back(iim[atlas_index(scene.atlas, t)]);
+        out.form_factor.push_back(square_form_factor(p.x, p.z, a, 1.0));
+        out.all_valid = out.all_valid && gather.valid()[size_t(r)];
+    }
+    out.rays_cast = rays.rays_cast();
+    out.rays_counted = gather.last_stats().rays;
+    return out;
+}
+
+}  // namespace
+
+TEST(LightmapSample, UvAtCornersIsTheCornerUv) {
+    const Scene scene = load_scene(test::scene_path("cornell.json"));
+    const LightmapAtlas& atlas = scene.atlas;
+    for (const Chart& chart : atlas.charts)
+        for (int t : chart.triangles) {
+            const glm::vec2* c = &atlas.corner_uvs[size_t(chart.object)][3 * size_t(t)];
+            EXPECT_EQ(lightmap_uv(atlas, chart.object, t, {0.0f, 0.0f}), c[0]);
+            EXPECT_EQ(lightmap_uv(atlas, chart.object, t, {1.0f, 0.0f}), c[1]);
+            EXPECT_EQ(lightmap_uv(atlas, chart.object, t, {0.0f, 1.0f}), c[2]);
+        }
+}
+
+// Constant values per chart come back unchanged anywhere on the chart's triangles, corners and
+// edges included, with gutters and with charts packed edge to edge (gutter 0), where only the
+// chart test keeps a neighbour's texels out.
+TEST(LightmapSample, ConstantPerChartValuesDoNotBleed) {
+    for (int gutter : {1, 0}) {
+        Scene scene = load_scene(test::scene_path("cornell.json"));
+        scene.settings.lightmap.gutter = gutter;
+        make_surfaces_and_atlas(scene);
+        const LightmapAtlas& atlas = scene.atlas;
+        auto chart_value = [](int c) { return glm::vec3(float(c + 1), 100.0f - float(c), 7.0f); };
+        std::vector<glm::vec3> values = atlas_values(scene);
+        for (const TexelRecord& t : atlas.texels)
+            values[atlas_index(atlas, t)] = chart_value(t.chart);
+
+        std::mt19937 rng(5);
+        std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+        int samples = 0;
+        for (int c = 0; c < int(atlas.charts.size()); ++c) {
+            const Chart& chart = atlas.charts[size_t(c)];
+            for (int t : chart.triangles) {
+                ASSERT_EQ(triangle_chart(atlas, chart.object, t), c);
+                std::vector<glm::vec2> bary = {{0, 0},
+                                               {1, 0},
+                                               {0, 1},
+                                               {0.5f, 0},
+                                               {0, 0.5f},
+                                               {0.5f, 0.5f},
+                                               {1.0f / 3, 1.0f / 3}};
+                for (int k = 0; k < 20; ++k) {
+                    const float u = uniform(rng), v = uniform(rng);
+                    bary.push_back(u + v > 1.0f ? glm::vec2(1.0f - u, 1.0f - v) : glm::vec2(u, v));
+                }
+                for (glm::vec2 b : bary) {
+                    const glm::vec3 got = sample_lightmap(atlas, values, chart.object, t, b);
+                    const glm::vec3 want = chart_value(c);
+                    for (int i = 0; i < 3; ++i)
+                        ASSERT_NEAR(got[i], want[i], 1e-5f * want[i])
+                            << "gutter " << gutter << ", chart " << c << ", triangle " << t;
+                    ++samples;
+                }
+            }
+        }
+        EXPECT_GT(samples, 500);
+        // Glass has no charts: nothing to read.
+        const int sphere = scene.find_object("sphere");
+        ASSERT_GE(sphere, 0);
+        EXPECT_EQ(triangle_chart(atlas, sphere, 0), -1);
+        EXPECT_EQ(sample_lightmap(atlas, values, sphere, 0, {0.2f, 0.3f}), glm::vec3(0.0f));
+    }
+}
+
+// Bilinear interpolation reproduces a function linear in the atlas coordinates wherever the
+// four surrounding texels exist: between two texel centres it is linear.
+TEST(LightmapSample, BilinearReproducesLinearValues) {
+    Scene s;
+    s.path = "quad";
+    s.objects.push_back(quad_object("quad", 2.0f, glm::vec3(0.0f)));
+    const Scene scene = finish(s, 0.1f);
+    const LightmapAtlas& atlas = scene.atlas;
+    auto linear = [](glm::vec2 uv) {
+        return glm::vec3(1.0f + 0.5f * uv.x - 0.25f * uv.y, uv.x, uv.y);
+    };
+    std::vector<glm::vec3> values = atlas_values(scene);
+    for (const TexelRecord& t : atlas.texels)
+        values[atlas_index(atlas, t)] = linear({float(t.x) + 0.5f, float(t.y) + 0.5f});
+
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> uniform(0.0f, 1.0f);
+    int interior = 0;
+    for (int k = 0; k < 2000; ++k) {
+        const int t = k % 2;
+        const float u = uniform(rng), v = uniform(rng);
+        const glm::vec2 b = u + v > 1.0f ? glm::vec2(1.0f - u, 1.0f - v) : glm::vec2(u, v);
+        const glm::vec2 uv = lightmap_uv(atlas, 0, t, b);
+        const int x0 = int(std::floor(uv.x - 0.5f)), y0 = int(std::floor(uv.y - 0.5f));
+        bool all = true;
+        for (int dy = 0; dy < 2; ++dy)
+            for (int dx = 0; dx < 2; ++dx) all = all && atlas.texel_at(x0 + dx, y0 + dy) >= 0;
+        if (!all) continue;
+        const glm::vec3 got = sample_lightmap(atlas, values, 0, t, b), want = linear(uv);
+        for (int i = 0; i < 3; ++i) ASSERT_NEAR(got[i], want[i], 1e-4f) << uv.x << ", " << uv.y;
+        ++interior;
+    }
+    EXPECT_GT(interior, 1500);
+}
+
+// Invalid texels take the mean of their valid 8-neighbours, islands fill layer by layer, a chart
+// without valid texels becomes 0, other charts are untouched, and the targeted form writes
+// only its targets.
+TEST(LightmapRepair, FillsFromValidNeighboursOfTheSameChart) {
+    Scene s;
+    s.path = "two quads";
+    s.objects.push_back(quad_object("a", 2.0f, glm::vec3(0.0f)));
+    s.objects.push_back(quad_object("b", 1.0f, glm::vec3(0.0f, 1.0f, 0.0f), kFacingDown));
+    const Scene scene = finish(s, 0.2f);
+    const LightmapAtlas& atlas = scene.atlas;
+    ASSERT_EQ(atlas.charts.size(), 2u);
+    const int big = atlas.charts[0].width >= atlas.charts[1].width ? 0 : 1;
+    const Chart& chart = atlas.charts[size_t(big)];
+    ASSERT_GE(chart.width, 8);
+
+    std::vector<glm::vec3> values = atlas_values(scene);
+    std::vector<char> valid(atlas.texels.size(), 1);
+    const int cx = chart.x + chart.width / 2, cy = chart.y + chart.height / 2;
+    for (size_t r = 0; r < atlas.texels.size(); ++r) {
+        const TexelRecord& t = atlas.texels[r];
+        values[atlas_index(atlas, t)] = glm::vec3(float(t.x), float(t.y), 1.0f);
+        // A 5×5 island in the big chart; the whole small chart.
+        const bool island = t.chart == big && std::abs(t.x - cx) <= 2 && std::abs(t.y - cy) <= 2;
+        if (island || t.chart != big) {
+            valid[r] = 0;
+            values[atlas_index(atlas, t)] = glm::vec3(999.0f);
+        }
+    }
+    const std::vector<glm::vec3> before = values;
+
+    // Targeted: only the island's centre is written, yet it is filled through the ring.
+    const int centre = atlas.texel_at(cx, cy);
+    std::vector<glm::vec3> targeted = values;
+    repair_invalid_texels(atlas, targeted, valid, std::vector<int>{centre});
+    for (size_t i = 0; i < values.size(); ++i) {
+        if (i == size_t(cy) * size_t(atlas.width) + size_t(cx)) continue;
+        EXPECT_EQ(targeted[i], values[i]);
+    }
+
+    repair_invalid_texels(atlas, values, valid);
+    for (size_t r = 0; r < atlas.texels.size(); ++r) {
+        const TexelRecord& t = atlas.texels[r];
+        const glm::vec3 got = values[atlas_index(atlas, t)];
+        if (valid[r]) {
+            EXPECT_EQ(got, before[atlas_index(atlas, t)]);
+        } else if (t.chart != big) {
+            EXPECT_EQ(got, glm::vec3(0.0f));
+        } else if (std::max(std::abs(t.x - cx), std::abs(t.y - cy)) == 2) {
+            // Outer ring of the island: the mean of its valid neighbours.
+            glm::vec3 sum(0.0f);
+            int n = 0;
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const int nr = atlas.texel_at(t.x + dx, t.y + dy);
+                    if ((dx || dy) && nr >= 0 && valid[size_t(nr)]) {
+                        sum += before[atlas_index(atlas, atlas.texels[size_t(nr)])];
+                        ++n;
+                    }
+                }
+            ASSERT_GT(n, 0);
+            for (int i = 0; i < 3; ++i) EXPECT_NEAR(got[i], sum[i] / float(n), 1e-4f);
+        } else {
+            // Inner texels: means of means of the valid texels around the island.
+            EXPECT_GE(got.x, float(cx - 3));
+            EXPECT_LE(got.x, float(cx + 3));
+            EXPECT_GE(got.y, float(cy - 3));
+            EXPECT_LE(got.y, float(cy + 3));
+            EXPECT_NEAR(got.z, 1.0f, 1e-5f);
+        }
+    }
+    EXPECT_EQ(targeted[size_t(cy) * size_t(atlas.width) + size_t(cx)],
+              values[size_t(cy) * size_t(atlas.width) + size_t(cx)]);
+}
+
+// A point under a parallel square of uniform radiance L gathers L · F, F the form factor of the
+// square (a = 2: F = 0.83 at the centre); F → 1 as the square grows (Larsen's hemi-plane
+// coverage, DESIGN.md). Scrambled QMC is unbiased: at 256 rays the error averages out over
+// texels and stays near N^(-3/4) per texel; at 1024 rays every texel is within 1%.
+TEST(CpuGather, FacingSquareMatchesFormFactor) {
+    const glm::vec3 radiance(2.0f, 1.0f, 0.5f);
+    for (int rays : {256, 1024}) {
+        const FacingResult r = gather_under_square(0.5f, 2.0f, 0.1f, rays, radiance);
+        ASSERT_GE(r.got.size(), 25u);
+        EXPECT_TRUE(r.all_valid);
+        EXPECT_EQ(r.rays_counted, uint64_t(rays) * r.got.size());
+        EXPECT_EQ(r.rays_cast, r.rays_counted);
+        double mean = 0.0, squares = 0.0, worst = 0.0;
+        for (size_t i = 0; i < r.got.size(); ++i) {
+            for (int c = 1; c < 3; ++c)
+                EXPECT_FLOAT_EQ(r.got[i][c] / radiance[c], r.got[i].x / radiance.x);
+            const double error = r.got[i].x / (radiance.x * r.form_factor[i]) - 1.0;
+            mean += error;
+            squares += error * error;
+            worst = std::max(worst, std::abs(error));
+            if (rays == 1024) {
+                EXPECT_LT(std::abs(error), 0.01) << "texel " << i;
+            }
+        }
+        mean /= double(r.got.size());
+        const double rms = std::sqrt(squares / double(r.got.size()));
+        std::printf(
+            "%d rays, %zu texels, F %.4f..%.4f: mean error %+.4f, rms %.4f, worst %.4f\n", rays,
+            r.got.size(), *std::min_element(r.form_factor.begin(), r.form_factor.end()),
+            *std::max_element(r.form_factor.begin(), r.form_factor.end()), mean, rms, worst);
+        EXPECT_LT(std::abs(mean), 0.003);
+        EXPECT_LT(rms, rays == 256 ? 0.012 : 0.005);
+    }
+    // A plane much larger than its distance: nearly the whole hemisphere, iim → L.
+    const FacingResult big = gather_under_square(0.1f, 20.0f, 0.25f, 256, radiance);
+    ASSERT_EQ(big.got.size(), 1u);
+    EXPECT_GT(big.form_factor[0], 0.997);
+    EXPECT_NEAR(big.got[0].x, radiance.x * big.form_factor[0], 0.01 * radiance.x);
+    EXPECT_GT(big.got[0].x, 0.98f * radiance.x);
+}
+
+// A floor that passes through a closed cube: the texels inside see only the cube's back faces,
+// are marked invalid, and take their values from the valid floor texels around them instead of
+// going dark or reporting the cube's (outside) radiance.
+TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
+    Scene s;
+    s.path = "floor through a cube";
+    s.objects.push_back(quad_object("floor", 4.0f, glm::vec3(0.0f)));
+    s.objects.push_back(quad_object("ceiling", 4.0f, glm::vec3(0.0f, 2.0f, 0.0f), kFacingDown));
+    Object cube;
+    cube.name = "cube";
+    cube.mesh = make_box(glm::vec3(1.5f));
+    cube.transform.translation = glm::vec3(0.5f, -0.4f, 0.5f);  // x, z in [-0.25, 1.25]
+    s.objects.push_back(cube);
+    const Scene scene = finish(s, 0.25f);
+    const float cube_radiance = 50.0f;
+
+    std::vector<glm::vec3> aim = atlas_values(scene), iim = atlas_values(scene);
+    std::vector<int> floor;
+    for (int r = 0; r < int(scene.atlas.texels.size()); ++r) {
+        const TexelRecord& t = scene.atlas.texels[size_t(r)];
+        if (t.object == 0) floor.push_back(r);
+        aim[atlas_index(scene.atlas, t)] = glm::vec3(t.object == 1   ? 1.0f
+                                                     : t.object == 2 ? cube_radiance
+                                                                     : 0.0f);
+    }
+    ThreadPool pool(2);
+    RayTracer rays(scene);
+    CpuGather gather(scene, rays, pool);
+    gather.gather(floor, aim, iim);
+
+    const LightmapAtlas& atlas = scene.atlas;
+    auto value = [&](int r) { return iim[atlas_index(atlas, atlas.texels[size_t(r)])].x; };
+    float valid_min = 1e30f, valid_max = 0.0f;
+    for (int r : floor) {
+        if (!gather.valid()[size_t(r)]) continue;
+        valid_min = std::min(valid_min, value(r));
+        valid_max = std::max(valid_max, value(r));
+    }
+    EXPECT_GT(valid_min, 0.0f);
+    int inside = 0, outside = 0, invalid = 0, ring = 0;
+    for (int r : floor) {
+        const TexelRecord& t = atlas.texels[size_t(r)];
+        const glm::vec3 p = world_position(scene, t);
+        const float d = std::max(std::abs(p.x - 0.5f), std::abs(p.z - 0.5f));
+        if (d > 0.76f) {
+            EXPECT_TRUE(gather.valid()[size_t(r)]) << p.x << ", " << p.z;
+            ++outside;
+        } else if (d < 0.74f) {
+            EXPECT_FALSE(gather.valid()[size_t(r)]) << p.x << ", " << p.z;
+            ++inside;
+        }
+        if (gather.valid()[size_t(r)]) continue;
+        ++invalid;
+        const float got = value(r);
+        EXPECT_GE(got, valid_min) << p.x << ", " << p.z;
+        EXPECT_LE(got, valid_max) << p.x << ", " << p.z;
+        EXPECT_LT(got, 0.8f * cube_radiance) << p.x << ", " << p.z;
+        // Next to valid texels: exactly their mean.
+        float sum = 0.0f;
+        int n = 0;
+        for (int dy = -1; dy <= 1; ++dy)
+            for (int dx = -1; dx <= 1; ++dx) {
+                const int nr = atlas.texel_at(t.x + dx, t.y + dy);
+                if ((dx || dy) && nr >= 0 && gather.valid()[size_t(nr)]) sum += value(nr), ++n;
+            }
+        if (n > 0) {
+            EXPECT_NEAR(got, sum / float(n), 1e-5f * got) << p.x << ", " << p.z;
+            ++ring;
+        }
+    }
+    EXPECT_GE(inside, 16);
+    EXPECT_GE(ring, 8);
+    EXPECT_GT(invalid, ring);  // some only reachable through other invalid texels
+    EXPECT_GE(outside, 100);
+    EXPECT_EQ(gather.last_stats().invalid, invalid);
+}
+
+// End to end in the Cornell box: every floor texel receives indirect light, and the walls'
+// colours bleed: near the red wall (x = 555) the floor and back wall are redder than near the
+// green wall (x = 0).
+TEST(CpuGather, CornellColourBleeding) {
+    Simulated s("cornell.json");
+    const Scene& scene = s.scene;
+    ASSERT_EQ(scene.objects[size_t(scene.find_object("left_wall"))].material.name, "red");
+    ASSERT_EQ(scene.objects[size_t(scene.find_object("right_wall"))].material.name, "green");
+    std::vector<glm::vec3> iim = atlas_values(scene);
+    CpuGather gather(scene, s.sim->rays(), s.pool);
+    gather.gather(all_texels(scene), s.aim->radiance(), iim);
+    EXPECT_GT(gather.last_stats().invalid, 0);  // the floor under the cube
+
+    auto nearest = [&](const std::string& object, glm::vec3 target) {
+        const int o = scene.find_object(object);
+        int best = -1;
+        float best_d = 1e30f;
+        for (int r = 0; r < int(scene.atlas.texels.size()); ++r) {
+            const TexelRecord& t = scene.atlas.texels[size_t(r)];
+            if (t.object != o) continue;
+            const float d = glm::length(world_position(scene, t) - target);
+            if (d < best_d) best_d = d, best = r;
+        }
+        return iim[atlas_index(scene.atlas, scene.atlas.texels[size_t(best)])];
+    };
+    const int floor = scene.find_object("floor");
+    for (const TexelRecord& t : scene.atlas.texels) {
+        if (t.object != floor) continue;
+        for (int i = 0; i < 3; ++i) EXPECT_GT(iim[atlas_index(scene.atlas, t)][i], 0.0f);
+    }
+    for (const char* object : {"floor", "back_wall"}) {
+        const float y = std::string(object) == "floor" ? 0.0f : 277.5f;
+        const float z = std::string(object) == "floor" ? 277.5f : 555.0f;
+        const glm::vec3 red = nearest(object, {555.0f, y, z}),
+                        green = nearest(object, {0.0f, y, z});
+        std::printf("%s: near red wall %.4g %.4g %.4g, near green wall %.4g %.4g %.4g\n", object,
+                    red.x, red.y, red.z, green.x, green.y, green.z);
+        EXPECT_GT(red.x / red.y, green.x / green.y) << object;
+        EXPECT_GT(red.x / red.y, 1.1f * green.x / green.y) << object;
+    }
+}
+
+TEST(CpuGather, SameResultForAnyThreadCount) {
+    Simulated s("cornell.json");
+    const Scene& scene = s.scene;
+    std::vector<glm::vec3> one = atlas_values(scene), three = atlas_values(scene);
+    ThreadPool pool1(1), pool3(3);
+    CpuGather gather1(scene, s.sim->rays(), pool1), gather3(scene, s.sim->rays(), pool3);
+    gather1.gather(all_texels(scene), s.aim->radiance(), one);
+    gather3.gather(all_texels(scene), s.aim->radiance(), three);
+    ASSERT_EQ(one.size(), three.size());
+    for (size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], three[i]) << "atlas texel " << i;
+    EXPECT_EQ(gather1.valid(), gather3.valid());
+    // Batches: gathering in pieces gives the same as all at once (repairs read earlier batches).
+    std::vector<glm::vec3> pieces = atlas_values(scene);
+    CpuGather gather2(scene, s.sim->rays(), s.pool);
+    std::vector<int> ids = all_texels(scene), valid_first, invalid_then;
+    for (int r : ids) (gather1.valid()[size_t(r)] ? valid_first : invalid_then).push_back(r);
+    gather2.gather(valid_first, s.aim->radiance(), pieces);
+    gather2.gather(invalid_then, s.aim->radiance(), pieces);
+    for (size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], pieces[i]) << "atlas texel " << i;
+}
+
+}  // namespace ag::cpu
