@@ -16,6 +16,8 @@ Pipeline::Pipeline(Scene& scene, int width, int height, int threads) : scene_(sc
     meshes_ = std::make_unique<gpu::SceneMeshes>(scene_);
     gatherer_ = std::make_unique<gpu::HemiPlaneGather>(scene_, *meshes_);
     renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);
+    caustic_tracer_ = std::make_unique<cpu::CausticTracer>(scene_, pool_);
+    caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
     aim_texture_ = std::make_unique<gpu::LightmapTexture>(scene_.atlas);
     iim_texture_ = std::make_unique<gpu::LightmapTexture>(scene_.atlas);
     const size_t n = size_t(scene_.atlas.width) * size_t(scene_.atlas.height);
@@ -132,8 +134,11 @@ PipelineStats Pipeline::frame() {
         cpu::PhotonFrameStats st = photons_->frame();
         const Clock::time_point t1 = Clock::now();
         st.aim_texels_rebuilt = aim_->update(photons_->maps(), &st.aim_surfaces_rebuilt);
+        const Clock::time_point t2 = Clock::now();
+        caustic_stats_ = caustic_tracer_->frame();
         photon_cpu_ms_ = std::chrono::duration<double, std::milli>(t1 - t0).count();
-        aim_cpu_ms_ = ms_since(t1);
+        aim_cpu_ms_ = std::chrono::duration<double, std::milli>(t2 - t1).count();
+        caustic_cpu_ms_ = ms_since(t2);
         return st;
     });
     // GL: last frame's AIM texels, then gathers and the frame.
@@ -145,7 +150,9 @@ PipelineStats Pipeline::frame() {
     stats.gather_ms = ms_since(t);
     t = Clock::now();
     blend(stats);
-    renderer_->render(iim_texture_->id());
+    caustics_->render(caustic_positions_, caustic_powers_);
+    stats.caustic_tiles_filtered = caustics_->tiles_filtered();
+    renderer_->render(iim_texture_->id(), caustics_->texture());
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
     // Hand-over: wait for the CPU side, stage its AIM texels for the next frame's upload.
@@ -154,6 +161,15 @@ PipelineStats Pipeline::frame() {
     stats.wait_ms = ms_since(t);
     stats.photon_ms = photon_cpu_ms_;
     stats.aim_ms = aim_cpu_ms_;
+    stats.caustic_ms = caustic_cpu_ms_;
+    stats.caustics = caustic_stats_;
+    caustic_positions_.clear();
+    caustic_powers_.clear();
+    for (const cpu::CausticPhoton& p : caustic_tracer_->photons())
+        if (p.power != glm::vec3(0.0f)) {
+            caustic_positions_.push_back(p.position);
+            caustic_powers_.push_back(p.power);
+        }
     aim_dirty_ = aim_->take_dirty_texels();
     for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     schedule_from_deltas();

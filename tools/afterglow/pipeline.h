@@ -11,7 +11,9 @@
 #include <vector>
 
 #include "cpu/aim.h"
+#include "cpu/caustic_tracer.h"
 #include "cpu/photon_simulation.h"
+#include "gpu/caustics_renderer.h"
 #include "gpu/frame_renderer.h"
 #include "gpu/hemi_plane_gather.h"
 #include "gpu/lightmap_texture.h"
@@ -24,12 +26,14 @@ namespace ag::cli {
 struct PipelineStats {
     uint64_t frame = 0;
     cpu::PhotonFrameStats photons;
+    cpu::CausticStats caustics;
+    int caustic_tiles_filtered = 0;
     int iim_texels_gathered = 0;
     int iim_texels_pending = 0;
     int iim_texels_invalid = 0;  // back-face texels repaired from neighbours
     // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
     // thread; wait_ms is what the GL thread then waited for them.
-    double photon_ms = 0, aim_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0, frame_ms = 0;
+    double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0, frame_ms = 0;
 };
 
 class Pipeline {
@@ -58,6 +62,10 @@ private:
     ThreadPool pool_;
     std::unique_ptr<cpu::PhotonSimulation> photons_;
     std::unique_ptr<cpu::Aim> aim_;
+    std::unique_ptr<cpu::CausticTracer> caustic_tracer_;
+    std::unique_ptr<gpu::CausticsRenderer> caustics_;
+    std::vector<glm::vec3> caustic_positions_, caustic_powers_;  // staged at the hand-over
+    cpu::CausticStats caustic_stats_;
     std::unique_ptr<gpu::SceneMeshes> meshes_;
     std::unique_ptr<gpu::HemiPlaneGather> gatherer_;
     std::unique_ptr<gpu::FrameRenderer> renderer_;
@@ -80,7 +88,7 @@ private:
     size_t sweep_ = 0;
     bool has_stale() const;
     uint64_t frame_ = 0;
-    double photon_cpu_ms_ = 0, aim_cpu_ms_ = 0;  // written by the worker, read after get()
+    double photon_cpu_ms_ = 0, aim_cpu_ms_ = 0, caustic_cpu_ms_ = 0;  // written by the worker, read after get()
 };
 
 }  // namespace ag::cli

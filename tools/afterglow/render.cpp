@@ -100,15 +100,18 @@ int run_render(const Args& args) {
         }
     std::fprintf(stderr,
                  "afterglow render: %d frames of %dx%d in %.1f ms (%.1f fps) on %s [%s]\n"
-                 "last frame: %.2f ms (gather %.2f, draw %.2f, waited %.2f for photons %.2f + AIM %.2f on workers); "
+                 "last frame: %.2f ms (gather %.2f, draw %.2f, waited %.2f for photons %.2f + AIM %.2f + caustics %.2f on "
+                 "workers); "
                  "photons verified %d, groups invalidated %d, retraced %d, queued %d; AIM texels %d; IIM texels "
-                 "gathered %d, pending %d, repaired %d\n",
+                 "gathered %d, pending %d, repaired %d; caustic photons traced %d (%d reached a specular object, %d "
+                 "stored), tiles filtered %d\n",
                  frames, width, height, total_ms, 1000.0 * frames / std::max(1e-9, total_ms),
                  context->renderer().c_str(), gpu::kGlBackendNames[size_t(context->backend())], last.frame_ms,
-                 last.gather_ms, last.draw_ms, last.wait_ms, last.photon_ms, last.aim_ms,
+                 last.gather_ms, last.draw_ms, last.wait_ms, last.photon_ms, last.aim_ms, last.caustic_ms,
                  last.photons.photons_verified, last.photons.groups_invalidated, last.photons.photons_retraced,
                  last.photons.groups_queued, last.photons.aim_texels_rebuilt, last.iim_texels_gathered,
-                 last.iim_texels_pending, last.iim_texels_invalid);
+                 last.iim_texels_pending, last.iim_texels_invalid, last.caustics.traced, last.caustics.hit_specular,
+                 last.caustics.stored, last.caustic_tiles_filtered);
     std::cerr << "afterglow render: wrote " << out << " and " << with_suffix(out, "", ".png") << "\n";
     return 0;
 }

@@ -1,0 +1,317 @@
+#include "gpu/caustics_renderer.h"
+
+#include <chrono>
+#include <cmath>
+
+#include "shared/camera.h"
+
+namespace ag::gpu {
+
+namespace {
+
+const char* kGeometryVertex = R"(
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 normal;
+uniform mat4 model, view_projection;
+out vec3 v_world;
+out vec3 v_normal;
+void main() {
+    vec4 world = model * vec4(position, 1.0);
+    v_world = world.xyz;
+    v_normal = mat3(model) * normal;
+    gl_Position = view_projection * world;
+}
+)";
+
+// Position, albedo and the world area the pixel covers there (eq. 12.2, with the pixel's footprint
+// growing as 1/cos of the angle between the surface normal and the view direction).
+const char* kGeometryFragment = R"(
+in vec3 v_world;
+in vec3 v_normal;
+uniform vec3 eye;
+uniform vec3 albedo;
+uniform float pixel_at_unit_distance;  // 2 tan(fov_y / 2) / height
+layout(location = 0) out vec4 out_position;
+layout(location = 1) out vec4 out_surface;
+void main() {
+    vec3 to_eye = eye - v_world;
+    float d = length(to_eye);
+    float cos_n = abs(dot(normalize(v_normal), to_eye / d));
+    float side = d * pixel_at_unit_distance;
+    out_position = vec4(v_world, 1.0);
+    out_surface = vec4(albedo, side * side / max(cos_n, 0.05));
+}
+)";
+
+const char* kSplatVertex = R"(
+layout(location = 0) in vec3 position;
+layout(location = 1) in vec3 power;
+uniform mat4 view_projection;
+uniform vec3 eye;
+uniform float pull;  // towards the eye, a fraction of the distance: wins the depth test on its surface
+out vec3 v_power;
+void main() {
+    v_power = power;
+    vec3 p = position + pull * (eye - position);
+    gl_Position = view_projection * vec4(p, 1.0);
+}
+)";
+const char* kSplatFragment = R"(
+in vec3 v_power;
+out vec4 color;
+void main() { color = vec4(v_power, 1.0); }
+)";
+
+const char* kFullScreenVertex = R"(
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)";
+const char* kQueryFragment = R"(
+out vec4 color;
+void main() { color = vec4(0.0); }
+)";
+
+// Eq. 12.1 with s = 1/Σw, then E = c / A_pixel and L = ρ/π · E.
+const char* kFilterFragment = R"(
+uniform sampler2D splat;
+uniform sampler2D surface;
+uniform int k;
+uniform ivec2 size;
+out vec4 color;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    vec4 s = texelFetch(surface, p, 0);
+    if (s.a <= 0.0) { color = vec4(0.0); return; }
+    vec3 sum = vec3(0.0);
+    float weights = 0.0;
+    for (int j = -k; j <= k; ++j)
+        for (int i = -k; i <= k; ++i) {
+            float w = sqrt(1.0 + 2.0 * float(k * k) - float(i * i + j * j));
+            weights += w;
+            ivec2 q = p + ivec2(i, j);
+            if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
+            sum += w * texelFetch(splat, q, 0).rgb;
+        }
+    vec3 irradiance = sum / (weights * s.a);
+    color = vec4(s.rgb / 3.14159265358979 * irradiance, 1.0);
+}
+)";
+
+double elapsed_ms(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+Framebuffer framebuffer_with(const std::vector<GLuint>& colors, GLuint depth_stencil) {
+    Framebuffer f = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, f.get());
+    for (size_t i = 0; i < colors.size(); ++i)
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, colors[i], 0);
+    if (depth_stencil)
+        gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil);
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("caustics: framebuffer incomplete");
+    return f;
+}
+
+}  // namespace
+
+CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
+    : scene_(scene), meshes_(meshes), width_(width), height_(height) {
+    tile_ = scene.settings.caustics.tile_size;
+    tiles_x_ = (width + tile_ - 1) / tile_;
+    tiles_y_ = (height + tile_ - 1) / tile_;
+    geometry_ = Program("caustics geometry", kGeometryVertex, kGeometryFragment);
+    splat_ = Program("caustics splat", kSplatVertex, kSplatFragment);
+    query_ = Program("caustics tile query", kFullScreenVertex, kQueryFragment);
+    filter_ = Program("caustics filter", kFullScreenVertex, kFilterFragment);
+    position_ = make_float_texture(width, height);
+    surface_ = make_float_texture(width, height);
+    splat_texture_ = make_float_texture(width, height);
+    result_ = make_float_texture(width, height);
+    depth_stencil_ = make_renderbuffer();
+    gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height);
+    geometry_fbo_ = framebuffer_with({position_.get(), surface_.get()}, depth_stencil_.get());
+    splat_fbo_ = framebuffer_with({splat_texture_.get()}, depth_stencil_.get());
+    result_fbo_ = framebuffer_with({result_.get()}, 0);
+    photon_vbo_ = make_buffer();
+    photon_vao_ = make_vertex_array();
+    gl::BindVertexArray(photon_vao_.get());
+    gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
+    gl::EnableVertexAttribArray(0);
+    gl::VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
+    gl::EnableVertexAttribArray(1);
+    gl::VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+    empty_vao_ = make_vertex_array();
+    gl::BindVertexArray(0);
+    queries_.resize(size_t(tiles_x_) * size_t(tiles_y_));
+    gl::GenQueries(GLsizei(queries_.size()), queries_.data());
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("CausticsRenderer");
+}
+
+CausticsRenderer::~CausticsRenderer() {
+    if (!queries_.empty()) gl::DeleteQueries(GLsizei(queries_.size()), queries_.data());
+}
+
+void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& powers, bool cull) {
+    Camera camera = scene_.camera;
+    camera.width = width_;
+    camera.height = height_;
+    Bounds bounds;
+    for (const Object& o : scene_.objects)
+        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
+    const float diagonal = bounds.empty() ? 1.0f : glm::length(bounds.extent());
+    const float far_plane = glm::length(camera.eye - bounds.center()) + 2.0f * diagonal;
+    const glm::mat4 vp = projection_matrix(camera, 1e-3f * diagonal, far_plane) * view_matrix(camera);
+
+    // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas.
+    gl::BindFramebuffer(GL_FRAMEBUFFER, geometry_fbo_.get());
+    const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    gl::DrawBuffers(2, two);
+    gl::Viewport(0, 0, width_, height_);
+    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::DepthMask(GL_TRUE);
+    gl::StencilMask(0xFF);
+    gl::ClearColor(0, 0, 0, 0);
+    gl::ClearDepth(1.0);
+    gl::ClearStencil(0);
+    gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthFunc(GL_LESS);
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
+    gl::Disable(GL_CULL_FACE);
+    geometry_.use();
+    geometry_.set("view_projection", vp);
+    geometry_.set("eye", camera.eye);
+    geometry_.set("pixel_at_unit_distance", 2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
+    for (size_t o = 0; o < scene_.objects.size(); ++o) {
+        const Object& obj = scene_.objects[o];
+        geometry_.set("model", model_matrix(obj));
+        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? obj.material.albedo : glm::vec3(0.0f));
+        meshes_.draw(o);
+    }
+
+    // 2. Photons as points, additive float RGB, each marking the stencil.
+    std::vector<float> data;
+    data.reserve(positions.size() * 6);
+    for (size_t i = 0; i < positions.size(); ++i)
+        data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x, powers[i].y, powers[i].z});
+    gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
+    const GLenum one = GL_COLOR_ATTACHMENT0;
+    gl::DrawBuffers(1, &one);
+    gl::Clear(GL_COLOR_BUFFER_BIT);
+    gl::DepthMask(GL_FALSE);
+    gl::DepthFunc(GL_LEQUAL);
+    gl::Enable(GL_BLEND);
+    gl::BlendFunc(GL_ONE, GL_ONE);
+    gl::Enable(GL_STENCIL_TEST);
+    gl::StencilFunc(GL_ALWAYS, 1, 0xFF);
+    gl::StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
+    if (!data.empty()) {
+        splat_.use();
+        splat_.set("view_projection", vp);
+        splat_.set("eye", camera.eye);
+        splat_.set("pull", 2e-4f);
+        gl::BindVertexArray(photon_vao_.get());
+        gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
+        gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_STREAM_DRAW);
+        gl::DrawArrays(GL_POINTS, 0, GLsizei(positions.size()));
+    }
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_DEPTH_TEST);
+
+    // 3. One occlusion query per tile: does any pixel of it hold a photon?
+    gl::Finish();
+    auto t = std::chrono::steady_clock::now();
+    std::vector<char> keep(queries_.size(), cull ? 0 : 1);
+    if (cull) {
+        gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+        gl::StencilFunc(GL_EQUAL, 1, 0xFF);
+        gl::StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+        query_.use();
+        gl::BindVertexArray(empty_vao_.get());
+        for (int ty = 0; ty < tiles_y_; ++ty)
+            for (int tx = 0; tx < tiles_x_; ++tx) {
+                gl::Viewport(tx * tile_, ty * tile_, tile_, tile_);
+                gl::BeginQuery(GL_ANY_SAMPLES_PASSED, queries_[size_t(ty * tiles_x_ + tx)]);
+                gl::DrawArrays(GL_TRIANGLES, 0, 3);
+                gl::EndQuery(GL_ANY_SAMPLES_PASSED);
+            }
+        gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        // A photon reaches k ≤ tile pixels: filter its tile and the 8 around it.
+        for (int ty = 0; ty < tiles_y_; ++ty)
+            for (int tx = 0; tx < tiles_x_; ++tx) {
+                GLuint any = 0;
+                gl::GetQueryObjectuiv(queries_[size_t(ty * tiles_x_ + tx)], GL_QUERY_RESULT, &any);
+                if (!any) continue;
+                for (int dy = -1; dy <= 1; ++dy)
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const int x = tx + dx, y = ty + dy;
+                        if (x >= 0 && y >= 0 && x < tiles_x_ && y < tiles_y_) keep[size_t(y * tiles_x_ + x)] = 1;
+                    }
+            }
+    }
+    gl::Disable(GL_STENCIL_TEST);
+    query_ms_ = elapsed_ms(t);
+
+    // 4. The filter, on the kept tiles only.
+    t = std::chrono::steady_clock::now();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, result_fbo_.get());
+    gl::DrawBuffers(1, &one);
+    gl::Viewport(0, 0, width_, height_);
+    gl::Clear(GL_COLOR_BUFFER_BIT);
+    filter_.use();
+    filter_.set("splat", 0);
+    filter_.set("surface", 1);
+    filter_.set("k", scene_.settings.caustics.kernel_k);
+    gl::Uniform2i(filter_.location("size"), width_, height_);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
+    gl::ActiveTexture(GL_TEXTURE1);
+    gl::BindTexture(GL_TEXTURE_2D, surface_.get());
+    gl::BindVertexArray(empty_vao_.get());
+    tiles_filtered_ = 0;
+    for (int ty = 0; ty < tiles_y_; ++ty)
+        for (int tx = 0; tx < tiles_x_; ++tx) {
+            if (!keep[size_t(ty * tiles_x_ + tx)]) continue;
+            ++tiles_filtered_;
+            gl::Viewport(tx * tile_, ty * tile_, tile_, tile_);
+            gl::DrawArrays(GL_TRIANGLES, 0, 3);
+        }
+    gl::Finish();
+    filter_ms_ = elapsed_ms(t);
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+    gl::BindVertexArray(0);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthMask(GL_TRUE);
+    gl::DepthFunc(GL_LESS);
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    check_gl("CausticsRenderer::render");
+}
+
+std::vector<glm::vec3> CausticsRenderer::read_radiance() const {
+    const std::vector<float> rgba = read_rgba(result_fbo_.get(), GL_COLOR_ATTACHMENT0, 0, 0, width_, height_);
+    std::vector<glm::vec3> out(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x) {
+            const float* p = &rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4];
+            out[size_t(y) * size_t(width_) + size_t(x)] = {p[0], p[1], p[2]};
+        }
+    return out;
+}
+
+std::vector<float> CausticsRenderer::read_pixel_area() const {
+    const std::vector<float> rgba = read_rgba(geometry_fbo_.get(), GL_COLOR_ATTACHMENT1, 0, 0, width_, height_);
+    std::vector<float> out(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x) out[size_t(y) * size_t(width_) + size_t(x)] = rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4 + 3];
+    return out;
+}
+
+}  // namespace ag::gpu

@@ -1,0 +1,56 @@
+// Screen-space caustics (Larsen ch. 12): draw the scene's depth, splat the caustic photons
+// additively as points with their RGB power in float (no 8-bit limit on colour or count), mark them
+// in the stencil buffer, find the screen tiles that hold photons with one occlusion query each,
+// and filter only those tiles with eq. 12.1, c = s·Σ t(x+i, y+j)·√(1 + 2k² − (i² + j²)), divided by
+// the world area of the pixel (eq. 12.2) so the caustic keeps its brightness under zoom and tilt.
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "gpu/gl_objects.h"
+#include "gpu/scene_meshes.h"
+#include "shared/scene.h"
+
+namespace ag::gpu {
+
+class CausticsRenderer {
+public:
+    CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height);
+    ~CausticsRenderer();
+    CausticsRenderer(const CausticsRenderer&) = delete;
+    CausticsRenderer& operator=(const CausticsRenderer&) = delete;
+
+    // Renders L_caustics for the scene's camera (resized to width × height) from photons
+    // (world positions and flux in W). `cull` filters only tiles that hold photons (and their
+    // neighbours); without it every tile is filtered (same image).
+    void render(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& powers, bool cull = true);
+
+    GLuint texture() const { return result_.get(); }  // caustic radiance, screen-sized RGBA32F
+    int tiles_total() const { return tiles_x_ * tiles_y_; }
+    int tiles_filtered() const { return tiles_filtered_; }
+    // Times of the last render's passes (ms, after glFinish): the filter alone and the queries.
+    double filter_ms() const { return filter_ms_; }
+    double query_ms() const { return query_ms_; }
+
+    // For tests: caustic radiance and each pixel's world area (0 where no surface), rows top-first.
+    std::vector<glm::vec3> read_radiance() const;
+    std::vector<float> read_pixel_area() const;
+
+private:
+    const Scene& scene_;
+    const SceneMeshes& meshes_;
+    int width_, height_, tiles_x_, tiles_y_, tile_;
+    Program geometry_, splat_, query_, filter_;
+    Texture position_, surface_, splat_texture_, result_;
+    Renderbuffer depth_stencil_;
+    Framebuffer geometry_fbo_, splat_fbo_, result_fbo_;
+    Buffer photon_vbo_;
+    VertexArray photon_vao_, empty_vao_;
+    std::vector<GLuint> queries_;
+    int tiles_filtered_ = 0;
+    double filter_ms_ = 0.0, query_ms_ = 0.0;
+};
+
+}  // namespace ag::gpu
