@@ -2,12 +2,13 @@
 
 #include <algorithm>
 
+#include "shared/lightmap_sample.h"
+
 namespace ag::cli {
 
 namespace {
 using Clock = std::chrono::steady_clock;
 double ms_since(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
-constexpr float kInvalidBackFraction = 0.1f;  // a texel that sees more back faces is inside geometry
 }  // namespace
 
 Pipeline::Pipeline(Scene& scene, int width, int height, int threads) : scene_(scene), pool_(threads) {
@@ -28,6 +29,12 @@ Pipeline::Pipeline(Scene& scene, int width, int height, int threads) : scene_(sc
     blend_start_.assign(n, -1);
     is_pending_.assign(scene_.atlas.texels.size(), 1);
     texel_generation_.assign(scene_.atlas.texels.size(), -1);
+    iim_raw_.assign(n, glm::vec3(0.0f));
+    texel_valid_.assign(scene_.atlas.texels.size(), 0);
+    gather_rays_ = std::make_unique<cpu::RayTracer>(scene_);
+    cpu_gather_ = std::make_unique<cpu::CpuGather>(scene_, *gather_rays_, gather_pool_);
+    backend_ = scene_.settings.gather.backend;
+    if (backend_ == GatherBackend::automatic) choose_backend();
     for (int t = 0; t < int(scene_.atlas.texels.size()); ++t) pending_.push_back(t);
 }
 
@@ -77,36 +84,62 @@ void Pipeline::gather(PipelineStats& stats) {
     }
     if (batch.empty()) return;
     for (int t : batch) texel_generation_[size_t(t)] = aim_generation_;
-    const std::vector<gpu::GatherResult> results = gatherer_->gather(batch, aim_texture_->id());
+    gather_batch(batch, backend_);
     const int w = scene_.atlas.width;
-    std::vector<char> invalid(batch.size(), 0);
-    for (size_t k = 0; k < batch.size(); ++k) {
-        const TexelRecord& t = scene_.atlas.texels[size_t(batch[k])];
+    for (int r : batch) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
         const size_t a = size_t(t.y) * size_t(w) + size_t(t.x);
-        glm::vec3 value = results[k].iim;
-        if (results[k].back_fraction > kInvalidBackFraction) {
-            // Behind or inside geometry: take the chart's valid neighbours instead of leaking.
-            invalid[k] = 1;
-            ++stats.iim_texels_invalid;
-            glm::vec3 sum(0.0f);
-            int count = 0;
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const int nx = t.x + dx, ny = t.y + dy;
-                    if (nx < 0 || ny < 0 || nx >= w || ny >= scene_.atlas.height || (dx == 0 && dy == 0)) continue;
-                    const int r = scene_.atlas.texel_at(nx, ny);
-                    if (r < 0 || scene_.atlas.texels[size_t(r)].chart != t.chart) continue;
-                    sum += iim_to_[size_t(ny) * size_t(w) + size_t(nx)];
-                    ++count;
-                }
-            value = count > 0 ? sum / float(count) : glm::vec3(0.0f);
-        }
+        stats.iim_texels_invalid += texel_valid_[size_t(r)] ? 0 : 1;
         iim_from_[a] = iim_shown_[a];
-        iim_to_[a] = value;
+        iim_to_[a] = iim_raw_[a];
         if (blend_start_[a] < 0) blending_.push_back(int(a));
         blend_start_[a] = int(frame_);
     }
     stats.iim_texels_gathered = int(batch.size());
+}
+
+void Pipeline::gather_batch(const std::vector<int>& batch, GatherBackend backend) {
+    if (backend == GatherBackend::cpu) {
+        gather_rays_->update(scene_);
+        cpu_gather_->gather(batch, staged_aim_, iim_raw_);  // repairs its invalid texels itself
+        for (int r : batch) texel_valid_[size_t(r)] = cpu_gather_->valid()[size_t(r)];
+        return;
+    }
+    const std::vector<gpu::GatherResult> results = gatherer_->gather(batch, aim_texture_->id());
+    const int w = scene_.atlas.width;
+    std::vector<int> invalid;
+    for (size_t k = 0; k < batch.size(); ++k) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(batch[k])];
+        iim_raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[k].iim;
+        // Behind or inside geometry: take the chart's valid neighbours instead of leaking.
+        const bool valid = results[k].back_fraction <= kBackFaceInvalidFraction;
+        texel_valid_[size_t(batch[k])] = valid;
+        if (!valid) invalid.push_back(batch[k]);
+    }
+    if (!invalid.empty()) repair_invalid_texels(scene_.atlas, iim_raw_, texel_valid_, invalid);
+}
+
+void Pipeline::choose_backend() {
+    // A short measurement on up to 32 texels, each backend warmed up once.
+    std::vector<int> sample;
+    for (size_t t = 0; t < scene_.atlas.texels.size() && sample.size() < 32; ++t) sample.push_back(int(t));
+    if (sample.empty()) {
+        backend_ = GatherBackend::gl;
+        return;
+    }
+    auto time_us = [&](GatherBackend b) {
+        gather_batch(sample, b);
+        gpu::gl::Finish();
+        const Clock::time_point t = Clock::now();
+        gather_batch(sample, b);
+        gpu::gl::Finish();
+        return 1000.0 * ms_since(t) / double(sample.size());
+    };
+    gl_us_ = time_us(GatherBackend::gl);
+    cpu_us_ = time_us(GatherBackend::cpu);
+    backend_ = cpu_us_ < gl_us_ ? GatherBackend::cpu : GatherBackend::gl;
+    std::fill(texel_valid_.begin(), texel_valid_.end(), 0);
+    std::fill(iim_raw_.begin(), iim_raw_.end(), glm::vec3(0.0f));
 }
 
 void Pipeline::blend(PipelineStats&) {

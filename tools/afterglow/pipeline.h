@@ -12,6 +12,7 @@
 
 #include "cpu/aim.h"
 #include "cpu/caustic_tracer.h"
+#include "cpu/cpu_gather.h"
 #include "cpu/photon_simulation.h"
 #include "gpu/caustics_renderer.h"
 #include "gpu/frame_renderer.h"
@@ -38,7 +39,9 @@ struct PipelineStats {
 
 class Pipeline {
 public:
-    // A GL context must be current. `width`×`height` is the frame size.
+    // A GL context must be current. `width`×`height` is the frame size. The gather backend comes
+    // from scene.settings.gather.backend; `automatic` measures both on a few texels and keeps the
+    // faster.
     Pipeline(Scene& scene, int width, int height, int threads);
     ~Pipeline();
 
@@ -52,10 +55,16 @@ public:
     GLuint iim_texture() const { return iim_texture_->id(); }
     GLuint aim_texture() const { return aim_texture_->id(); }
     bool converged() const;  // nothing queued, pending or blending
+    GatherBackend gather_backend() const { return backend_; }
+    // Per-texel gather cost measured when choosing the backend (µs; 0 if not measured).
+    double gl_gather_us() const { return gl_us_; }
+    double cpu_gather_us() const { return cpu_us_; }
 
 private:
     void schedule_from_deltas();
     void gather(PipelineStats& stats);
+    void gather_batch(const std::vector<int>& batch, GatherBackend backend);
+    void choose_backend();
     void blend(PipelineStats& stats);
 
     Scene& scene_;
@@ -68,6 +77,13 @@ private:
     cpu::CausticStats caustic_stats_;
     std::unique_ptr<gpu::SceneMeshes> meshes_;
     std::unique_ptr<gpu::HemiPlaneGather> gatherer_;
+    ThreadPool gather_pool_{1};  // the CPU gather runs beside the photon work, on its own worker
+    std::unique_ptr<cpu::RayTracer> gather_rays_;
+    std::unique_ptr<cpu::CpuGather> cpu_gather_;
+    GatherBackend backend_ = GatherBackend::gl;
+    double gl_us_ = 0.0, cpu_us_ = 0.0;
+    std::vector<glm::vec3> iim_raw_;     // latest gathered (and repaired) values, atlas-sized
+    std::vector<char> texel_valid_;      // per record: last gather saw few enough back faces
     std::unique_ptr<gpu::FrameRenderer> renderer_;
     std::unique_ptr<gpu::LightmapTexture> aim_texture_, iim_texture_;
     std::future<cpu::PhotonFrameStats> photon_work_;

@@ -24,7 +24,8 @@ const Command kRenderCommand{
         {"size", "", "WxH", "image size (default: the scene camera's resolution)"},
         {"aov", "", "", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"},
         {"gl", "", "BACKEND", "osmesa (default), egl, auto (EGL on a GPU, else OSMesa)"},
-        {"gather", "", "BACKEND", "gl (default) | cpu | auto: the IIM final-gather backend"},
+        {"gather", "", "BACKEND", "gl | cpu | auto (measure both, keep the faster): the IIM gather backend "
+                                  "(default: the scene's settings.gather.backend)"},
         {"exposure", "", "EV", "PNG exposure in stops (default 0: radiance 1 is white)"},
         {"threads", "", "N", "worker threads for photon work (default: settings.threads)"},
         {"quiet", "q", "", "no progress bar"},
@@ -65,18 +66,27 @@ int run_render(const Args& args) {
         throw CliError(std::string("afterglow render: --gl: ") + e.what());
     }
     if (backend == gpu::GlBackend::window) throw CliError("afterglow render: --gl window is for `afterglow view`");
-    const std::string gather = args.get("gather", "gl");
-    if (gather != "gl" && gather != "cpu" && gather != "auto")
-        throw CliError("afterglow render: --gather expects gl, cpu or auto, got '" + gather + "'");
+    const std::string gather = args.get("gather", "");
     const float exposure = float(args.get_double("exposure", 0.0));
 
     Scene scene = load_scene(args.positionals()[0]);
     int width = scene.camera.width, height = scene.camera.height;
     if (args.has("size")) parse_size(args.get("size"), width, height);
     const int threads = args.get_int("threads", scene.settings.threads, 0, 1024);
+    if (!gather.empty()) {
+        size_t i = 0;
+        while (i < kGatherBackendNames.size() && gather != kGatherBackendNames[i]) ++i;
+        if (i == kGatherBackendNames.size())
+            throw CliError("afterglow render: --gather expects gl, cpu or auto, got '" + gather + "'");
+        scene.settings.gather.backend = GatherBackend(i);
+    }
 
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(scene, width, height, threads);
+    if (scene.settings.gather.backend == GatherBackend::automatic)
+        std::fprintf(stderr, "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
+                     kGatherBackendNames[size_t(pipeline.gather_backend())], pipeline.gl_gather_us(),
+                     pipeline.cpu_gather_us());
     Progress progress("render", frames, !args.has("quiet"));
     PipelineStats last;
     double total_ms = 0.0;
