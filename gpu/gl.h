@@ -25,6 +25,7 @@
     X(PFNGLCLEARSTENCILPROC, ClearStencil)                                                       \
     X(PFNGLCLEARBUFFERFVPROC, ClearBufferfv)                                                     \
     X(PFNGLDEPTHFUNCPROC, DepthFunc)                                                             \
+    X(PFNGLCLIPCONTROLPROC, ClipControl)                                                         \
     X(PFNGLDEPTHMASKPROC, DepthMask)                                                             \
     X(PFNGLCOLORMASKPROC, ColorMask)                                                             \
     X(PFNGLSTENCILFUNCPROC, StencilFunc)                                                         \

@@ -136,14 +136,18 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     for (const Object& o : scene_.objects)
         for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
     const float diagonal = glm::length(bounds.extent());
-    const float near_plane = 1e-4f * diagonal, far_plane = 4.0f * diagonal;
+    // A gather at the edge of a wall sees the adjacent wall at distances far below the texel
+    // size, so the near plane must be tiny: reversed-Z with a float depth buffer keeps the
+    // precision (depth 1 at the near plane, 0 at the far one).
+    const float near_plane = 1e-7f * diagonal, far_plane = 4.0f * diagonal;
     const float offset = 2e-5f * diagonal;  // leave the surface, stay inside thin gaps
 
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &draw);
     gl::Enable(GL_DEPTH_TEST);
-    gl::DepthFunc(GL_LESS);
+    gl::DepthFunc(GL_GREATER);
+    gl::ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
     gl::Disable(GL_CULL_FACE);
     gl::Disable(GL_BLEND);
     gl::Disable(GL_STENCIL_TEST);
@@ -152,8 +156,11 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.set("weights", 1);
     program_.set("resolution", resolution_);
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
-    const glm::mat4 projection = glm::frustum(-a * near_plane, a * near_plane, -a * near_plane, a * near_plane,
-                                              near_plane, far_plane);
+    glm::mat4 reverse(1.0f);
+    reverse[2][2] = -1.0f;
+    reverse[3][2] = 1.0f;  // z' = w − z
+    const glm::mat4 projection =
+        reverse * glm::frustumRH_ZO(-a * near_plane, a * near_plane, -a * near_plane, a * near_plane, near_plane, far_plane);
 
     for (size_t first = 0; first < texels.size(); first += size_t(per_pass)) {
         const size_t count = std::min(texels.size() - first, size_t(per_pass));
@@ -164,7 +171,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         gl::BindTexture(GL_TEXTURE_2D, weights_.get());
         gl::Viewport(0, 0, size, size);
         gl::ClearColor(0, 0, 0, 0);
-        gl::ClearDepth(1.0);
+        gl::ClearDepth(0.0);
         gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         for (size_t k = 0; k < count; ++k) {
             const TexelRecord& t = scene_.atlas.texels[size_t(texels[first + k])];
@@ -204,6 +211,9 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     }
     gl::BindTexture(GL_TEXTURE_2D, 0);
     gl::ActiveTexture(GL_TEXTURE0);
+    gl::ClipControl(GL_LOWER_LEFT, GL_NEGATIVE_ONE_TO_ONE);
+    gl::DepthFunc(GL_LESS);
+    gl::ClearDepth(1.0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("HemiPlaneGather::gather");
     return out;

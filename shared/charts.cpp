@@ -676,7 +676,12 @@ void make_chart_texels(const Mesh& mesh, const TriangleInfo& info, const Chart& 
             if (!(coverage[i] > kMinCoverage)) continue;
             const int t = best_triangle[i];
             glm::dvec3 weights = best_weights[i];
-            if (best_distance[i] > 0.0) weights = (1.0 - kSnapNudge) * weights + kSnapNudge / 3.0;
+            // Centres outside the chart, or exactly on an edge (a half-covered texel along a
+            // chart border), move inside: a gather from the junction of two walls would see the
+            // other wall edge-on (GL) or at zero distance (rays).
+            const double smallest = std::min({weights.x, weights.y, weights.z});
+            if (best_distance[i] > 0.0 || smallest < kSnapNudge / 3.0)
+                weights = (1.0 - kSnapNudge) * weights + kSnapNudge / 3.0;
             const glm::uvec3 tri = mesh.triangles[size_t(t)];
             const glm::dvec3 p = weights.x * glm::dvec3(mesh.positions[tri.x]) +
                                  weights.y * glm::dvec3(mesh.positions[tri.y]) +
