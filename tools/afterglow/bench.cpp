@@ -3,8 +3,16 @@
 #include <cstdio>
 #include <random>
 
+#include "cpu/aim.h"
+#include "cpu/cpu_gather.h"
 #include "cpu/knn.h"
 #include "cpu/photon_simulation.h"
+#include "gpu/gl_context.h"
+#include "gpu/hemi_plane_gather.h"
+#include "gpu/lightmap_texture.h"
+#include "gpu/scene_meshes.h"
+#include "shared/scene_edit.h"
+#include "tools/afterglow/pipeline.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
 
@@ -12,17 +20,23 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn [SCENE] [options]",
+    "photons|knn|gather|frame [SCENE...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
-    "14.1 (300–2,000 photons; build and 100-nearest lookup).",
+    "14.1 (300–2,000 photons; build and 100-nearest lookup). 'gather SCENE...': Larsen Table 14.2, "
+    "ms per gathered texel for plane sizes 8/16/32, GL batched and unbatched against CPU rays. "
+    "'frame SCENE': frames per second of the whole pipeline, static and with the first dynamic "
+    "object moving every frame.",
     {
         {"repeat", "", "N", "repetitions, best time kept (default 5)"},
         {"queries", "", "N", "kNN queries per measurement (default 2000)"},
+        {"gl", "", "BACKEND", "GL context for gather/frame: osmesa (default), egl, auto"},
+        {"frames", "", "N", "frames per measurement for 'frame' (default 100)"},
+        {"size", "", "N", "square frame size for 'frame' (default 512)"},
     },
     1,
-    2,
+    8,
 };
 
 namespace {
@@ -135,6 +149,106 @@ int bench_knn(int repeat, int queries) {
     return 0;
 }
 
+std::unique_ptr<gpu::GlContext> bench_context(const Args& args) {
+    auto context = gpu::make_gl_context(gpu::parse_gl_backend(args.get("gl", "osmesa")));
+    std::printf("GL: %s (%s, backend %s)\n", context->renderer().c_str(), context->version().c_str(),
+                gpu::kGlBackendNames[size_t(context->backend())]);
+    return context;
+}
+
+// Larsen Table 14.2: one final gather's cost against scene size and plane resolution.
+int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args& args) {
+    auto context = bench_context(args);
+    std::printf("%-26s %9s %6s %14s %14s %14s %14s\n", "scene", "polygons", "plane", "GL batched", "GL unbatched",
+                "CPU R² rays", "CPU 256 rays");
+    for (const std::string& path : scenes) {
+        Scene scene = load_scene(path);
+        ThreadPool pool(1);
+        cpu::PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        cpu::Aim aim(scene, pool);
+        aim.rebuild_all(sim.maps());
+        gpu::SceneMeshes meshes(scene);
+        gpu::LightmapTexture aim_texture(scene.atlas);
+        aim_texture.update_all(aim.radiance());
+        std::vector<int> texels;
+        for (int t = 0; t < int(scene.atlas.texels.size()) && t < 256; ++t) texels.push_back(t);
+        std::vector<glm::vec3> iim(aim.radiance().size());
+        for (int r : {8, 16, 32}) {
+            scene.settings.gather.plane_resolution = r;
+            gpu::HemiPlaneGather batched(scene, meshes, 256), single(scene, meshes, 1);
+            single.set_max_per_pass(1);
+            auto time_ms = [&](auto&& fn) {
+                fn();  // warm-up
+                double best = 1e30;
+                for (int k = 0; k < repeat; ++k) {
+                    const Clock::time_point t = Clock::now();
+                    fn();
+                    gpu::gl::Finish();
+                    best = std::min(best, seconds_since(t));
+                }
+                return 1e3 * best / double(texels.size());
+            };
+            const double gl_batched = time_ms([&] { batched.gather(texels, aim_texture.id()); });
+            const double gl_single = time_ms([&] { single.gather(texels, aim_texture.id()); });
+            scene.settings.gather.cpu_rays = r * r;
+            cpu::CpuGather cpu_r(scene, sim.rays(), pool);
+            const double cpu_rr = time_ms([&] { cpu_r.gather(texels, aim.radiance(), iim); });
+            scene.settings.gather.cpu_rays = 256;
+            cpu::CpuGather cpu_256(scene, sim.rays(), pool);
+            const double cpu_256_ms = time_ms([&] { cpu_256.gather(texels, aim.radiance(), iim); });
+            std::printf("%-26s %9zu %3dx%-3d %11.3f ms %11.3f ms %11.3f ms %11.3f ms\n", path.c_str(),
+                        scene.triangle_count(), r, r, gl_batched, gl_single, cpu_rr, cpu_256_ms);
+        }
+    }
+    std::printf("(ms per gathered texel, best of %d; CPU on one thread)\n", repeat);
+    return 0;
+}
+
+// Frames per second of the whole pipeline (photons on workers, AIMs, gathers, caustics, frame).
+int bench_frame(const std::string& path, int repeat, const Args& args) {
+    auto context = bench_context(args);
+    const int frames = args.get_int("frames", 100, 1, 100000), size = args.get_int("size", 512, 16, 8192);
+    Scene scene = load_scene(path);
+    Pipeline pipeline(scene, size, size, scene.settings.threads);
+    for (int f = 0; f < 60 && !pipeline.converged(); ++f) pipeline.frame();  // settle first
+    int mover = -1;
+    for (int o = 0; o < int(scene.objects.size()) && mover < 0; ++o)
+        if (scene.objects[size_t(o)].dynamic && scene.objects[size_t(o)].material.type == MaterialType::diffuse) mover = o;
+    for (int moving = 0; moving < 2; ++moving) {
+        if (moving && mover < 0) break;
+        double best = 1e30;
+        PipelineStats sum;
+        for (int r = 0; r < repeat; ++r) {
+            const Clock::time_point t = Clock::now();
+            PipelineStats acc;
+            for (int f = 0; f < frames; ++f) {
+                if (moving) {
+                    pipeline.sync();  // edits happen between frames
+                    translate_object(scene, mover, {f % 40 < 20 ? 2.0f : -2.0f, 0.0f, 0.0f});
+                }
+                const PipelineStats s = pipeline.frame();
+                acc.photon_ms += s.photon_ms, acc.aim_ms += s.aim_ms, acc.caustic_ms += s.caustic_ms;
+                acc.gather_ms += s.gather_ms, acc.draw_ms += s.draw_ms, acc.wait_ms += s.wait_ms;
+                acc.photons.groups_invalidated += s.photons.groups_invalidated;
+                acc.photons.photons_retraced += s.photons.photons_retraced;
+                acc.iim_texels_gathered += s.iim_texels_gathered;
+            }
+            const double secs = seconds_since(t);
+            if (secs < best) best = secs, sum = acc;
+        }
+        const double n = frames;
+        std::printf("%s, %dx%d, %s: %.1f fps (%.2f ms/frame); per frame: draw %.2f, gather %.2f, waited %.2f ms on "
+                    "the GL thread; photons %.2f, AIM %.2f, caustics %.2f ms on workers; %.1f groups invalidated, "
+                    "%.0f photons retraced, %.1f IIM texels gathered; gather backend %s\n",
+                    path.c_str(), size, size, moving ? "cube moving every frame" : "static", n / best, 1e3 * best / n,
+                    sum.draw_ms / n, sum.gather_ms / n, sum.wait_ms / n, sum.photon_ms / n, sum.aim_ms / n,
+                    sum.caustic_ms / n, sum.photons.groups_invalidated / n, sum.photons.photons_retraced / n,
+                    sum.iim_texels_gathered / n, kGatherBackendNames[size_t(pipeline.gather_backend())]);
+    }
+    return 0;
+}
+
 }  // namespace
 
 int run_bench(const Args& args) {
@@ -145,7 +259,13 @@ int run_bench(const Args& args) {
         return bench_photons(args.positionals()[1], repeat);
     }
     if (what == "knn") return bench_knn(repeat, args.get_int("queries", 2000, 1, 100000000));
-    throw CliError("afterglow bench: unknown benchmark '" + what + "' (expected photons or knn)");
+    if (what == "gather") {
+        std::vector<std::string> scenes(args.positionals().begin() + 1, args.positionals().end());
+        if (scenes.empty()) scenes = {"scenes/cornell_34.json", "scenes/bumpy_13k.json", "scenes/bumpy_133k.json"};
+        return bench_gather(scenes, repeat, args);
+    }
+    if (what == "frame") return bench_frame(args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat, args);
+    throw CliError("afterglow bench: unknown benchmark '" + what + "' (expected photons, knn, gather or frame)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);
