@@ -2,9 +2,12 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
 
 #include "gpu/gl_context.h"
 #include "shared/image.h"
+#include "shared/input_error.h"
+#include "shared/script.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/pipeline.h"
@@ -28,6 +31,7 @@ const Command kRenderCommand{
                                   "(default: the scene's settings.gather.backend)"},
         {"exposure", "", "EV", "PNG exposure in stops (default 0: radiance 1 is white)"},
         {"threads", "", "N", "worker threads for photon work (default: settings.threads)"},
+        {"script", "", "S.lua", "scene-edit script (default: the scene's \"script\"); frame time = frame / 30 s"},
         {"quiet", "q", "", "no progress bar"},
     },
     1,
@@ -81,6 +85,10 @@ int run_render(const Args& args) {
         scene.settings.gather.backend = GatherBackend(i);
     }
 
+    std::optional<Script> script;
+    const std::string script_path = args.get("script", scene.script);
+    if (!script_path.empty()) script.emplace(script_path);  // a syntax error stops here (exit 1)
+
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(scene, width, height, threads);
     if (scene.settings.gather.backend == GatherBackend::automatic)
@@ -90,7 +98,14 @@ int run_render(const Args& args) {
     Progress progress("render", frames, !args.has("quiet"));
     PipelineStats last;
     double total_ms = 0.0;
+    if (script && !script->on_start(scene)) warn(*script->last_error());
+    int script_errors = 0;
     for (int f = 0; f < frames; ++f) {
+        // Edits happen between frames: the photon work of the last frame is finished first.
+        pipeline.sync();
+        if (script && !script->on_frame(scene, f, f / 30.0)) {
+            if (++script_errors <= 5) warn(*script->last_error() + " (edit skipped, rendering goes on)");
+        }
         last = pipeline.frame();
         total_ms += last.frame_ms;
         progress.update(f + 1);
