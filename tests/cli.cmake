@@ -26,3 +26,12 @@ ag_cli_test(info_bumpy_133k 0 "triangles +(12[5-9][0-9][0-9][0-9]|13[0-9][0-9][0
 add_test(NAME cli.export_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/export_test.sh ${AG_BIN}
          scenes/cornell.json WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.export_cornell PROPERTIES LABELS unit)
+
+# Rendering through OSMesa (label gl): a tiny render writes its images; bad flags are exit 2.
+add_test(NAME cli.render_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/render_test.sh ${AG_BIN}
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.render_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+ag_cli_test(render_bad_gl 2 "--gl: unknown GL backend 'vulkan'" render scenes/cornell.json -o x.exr --gl vulkan)
+ag_cli_test(render_bad_size 2 "--size expects WxH" render scenes/cornell.json -o x.exr --size 12by5)
+ag_cli_test(render_needs_exr 2 "ending in .exr" render scenes/cornell.json -o x.png)
+ag_cli_test(render_bad_gather 2 "--gather expects gl, cpu or auto" render scenes/cornell.json -o x.exr --gather gpu)
