@@ -12,10 +12,7 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene
     tracer_ = std::make_unique<PhotonTracer>(scene_, *rays_);
     const int groups = scene_.settings.photons.groups;
     maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups);
-    Bounds bounds;
-    for (const Object& o : scene_.objects)
-        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
-    tolerance_ = scene_.settings.photons.path_tolerance * (bounds.empty() ? 1.0f : glm::length(bounds.extent()));
+    tolerance_ = scene_.settings.photons.path_tolerance * scene_.diagonal();
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());
     invalidations_.assign(scene_.lights.size(), 0);

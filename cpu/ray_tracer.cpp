@@ -103,11 +103,7 @@ struct RayTracer::Impl {
 RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     impl_->device.reset(rtcNewDevice(nullptr));
     if (!impl_->device) throw std::runtime_error("cannot create an Embree device");
-    Bounds bounds;
-    for (const Object& o : scene.objects)
-        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
-    const float diagonal = bounds.empty() ? 1.0f : glm::length(bounds.extent());
-    epsilon_ = 1e-5f * diagonal;
+    epsilon_ = 1e-5f * scene.diagonal();
 
     impl_->object_scenes.resize(scene.objects.size());
     for (size_t i = 0; i < scene.objects.size(); ++i) {

@@ -160,30 +160,13 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
     Camera camera = scene_.camera;
     camera.width = width_;
     camera.height = height_;
-    Bounds bounds;
-    for (const Object& o : scene_.objects)
-        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
-    const float diagonal = bounds.empty() ? 1.0f : glm::length(bounds.extent());
+    const Bounds bounds = scene_.world_bounds();
+    const float diagonal = scene_.diagonal();
     const float far_plane = glm::length(camera.eye - bounds.center()) + 2.0f * diagonal;
     const glm::mat4 vp = projection_matrix(camera, 1e-3f * diagonal, far_plane) * view_matrix(camera);
 
     // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas.
-    gl::BindFramebuffer(GL_FRAMEBUFFER, geometry_fbo_.get());
-    const GLenum two[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
-    gl::DrawBuffers(2, two);
-    gl::Viewport(0, 0, width_, height_);
-    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    gl::DepthMask(GL_TRUE);
-    gl::StencilMask(0xFF);
-    gl::ClearColor(0, 0, 0, 0);
-    gl::ClearDepth(1.0);
-    gl::ClearStencil(0);
-    gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
-    gl::Enable(GL_DEPTH_TEST);
-    gl::DepthFunc(GL_LESS);
-    gl::Disable(GL_BLEND);
-    gl::Disable(GL_STENCIL_TEST);
-    gl::Disable(GL_CULL_FACE);
+    begin_scene_pass(geometry_fbo_.get(), 2, width_, height_, glm::vec4(0.0f));
     geometry_.use();
     geometry_.set("view_projection", vp);
     geometry_.set("eye", camera.eye);

@@ -167,12 +167,6 @@ void main() {
 }
 )";
 
-float scene_diagonal(const Scene& scene) {
-    Bounds b;
-    for (const Object& o : scene.objects)
-        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
-    return b.empty() ? 1.0f : glm::length(b.extent());
-}
 
 }  // namespace
 
@@ -253,7 +247,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::BindRenderbuffer(GL_RENDERBUFFER, cube_depth_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, cube, cube);
     cube_fbo_ = make_framebuffer();
-    near_ = 1e-3f * scene_diagonal(scene);
+    near_ = 1e-3f * scene.diagonal();
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("FrameRenderer");
 }
@@ -271,7 +265,7 @@ void FrameRenderer::set_light_uniforms(const Program& p, const std::vector<Light
 
 void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>& lights) {
     const int size = scene_.settings.specular.cube_map_size;
-    const float far_plane = 4.0f * scene_diagonal(scene_);
+    const float far_plane = 4.0f * scene_.diagonal();
     // Face order +X −X +Y −Y +Z −Z with the GL cube-map conventions for up vectors.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     const glm::vec3 ups[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
@@ -338,22 +332,8 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
         glm::infinitePerspective(glm::radians(camera.fov_y), float(width_) / float(height_), near_);
     const glm::mat4 view_projection = projection * view_matrix(camera);
 
-    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
-    gl::DrawBuffers(4, all);
-    gl::Viewport(0, 0, width_, height_);
-    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-    gl::DepthMask(GL_TRUE);
-    gl::StencilMask(0xFF);
-    gl::ClearColor(0, 0, 0, 1);
-    gl::ClearDepth(1.0);
-    gl::ClearStencil(0);
-    gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
-    gl::Enable(GL_DEPTH_TEST);
-    gl::DepthFunc(GL_LESS);
-    gl::Disable(GL_BLEND);
-    gl::Disable(GL_STENCIL_TEST);
-    gl::Disable(GL_CULL_FACE);
+    begin_scene_pass(fbo_.get(), 4, width_, height_, glm::vec4(0, 0, 0, 1));
 
     // 1. G-buffer: depth, emission, indirect, specular, caustics.
     gbuffer_.use();

@@ -86,6 +86,25 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
     return t;
 }
 
+void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height, const glm::vec4& clear) {
+    gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    gl::DrawBuffers(buffers, all);
+    gl::Viewport(0, 0, width, height);
+    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::DepthMask(GL_TRUE);
+    gl::StencilMask(0xFF);
+    gl::ClearColor(clear.r, clear.g, clear.b, clear.a);
+    gl::ClearDepth(1.0);
+    gl::ClearStencil(0);
+    gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT | GL_STENCIL_BUFFER_BIT);
+    gl::Enable(GL_DEPTH_TEST);
+    gl::DepthFunc(GL_LESS);
+    gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
+    gl::Disable(GL_CULL_FACE);
+}
+
 std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height) {
     std::vector<float> out(size_t(width) * size_t(height) * 4);
     gl::BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);

@@ -82,6 +82,11 @@ private:
 // RGBA32F texture of w × h (nearest filtering, clamped); `mip` allocates a full mip chain.
 Texture make_float_texture(int width, int height, bool mip = false, const float* rgba = nullptr);
 
+// Starts a scene pass into `framebuffer`: color attachments 0..buffers-1 drawn, full viewport,
+// every mask on, colour/depth/stencil cleared (to `clear`, 1, 0), depth test LESS, no blending,
+// stencil test or culling.
+void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height, const glm::vec4& clear);
+
 // Reads an RGBA32F framebuffer attachment back (rows bottom-up, as GL stores them).
 std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height);
 

@@ -132,10 +132,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     const int size = tiles_x_ * resolution_;
     const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
     const float a = scene_.settings.gather.plane_half_width;
-    Bounds bounds;
-    for (const Object& o : scene_.objects)
-        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
-    const float diagonal = glm::length(bounds.extent());
+    const float diagonal = scene_.diagonal();
     // A gather at the edge of a wall sees the adjacent wall at distances far below the texel
     // size, so the near plane must be tiny: reversed-Z with a float depth buffer keeps the
     // precision (depth 1 at the near plane, 0 at the far one).

@@ -42,6 +42,18 @@ int Scene::find_light(const std::string& light_name) const {
     return -1;
 }
 
+Bounds Scene::world_bounds() const {
+    Bounds b;
+    for (const Object& o : objects)
+        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b;
+}
+
+float Scene::diagonal() const {
+    const Bounds b = world_bounds();
+    return b.empty() ? 1.0f : glm::length(b.extent());
+}
+
 size_t Scene::triangle_count() const {
     size_t n = 0;
     for (const Object& o : objects) n += o.mesh.triangles.size();

@@ -131,6 +131,10 @@ struct Scene {
     std::vector<SceneChange> changes;
 
     int find_object(const std::string& object_name) const;  // -1 if absent
+    // World-space bounds of every object as placed now, and their diagonal (1 if empty): the
+    // scale for offsets, tolerances and search radii.
+    Bounds world_bounds() const;
+    float diagonal() const;
     int find_light(const std::string& light_name) const;    // -1 if absent
     size_t triangle_count() const;
 };

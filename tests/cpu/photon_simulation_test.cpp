@@ -62,12 +62,6 @@ void expect_identical_maps(const PhotonMaps& a, const PhotonMaps& b) {
     }
 }
 
-float scene_diagonal(const Scene& s) {
-    Bounds b;
-    for (const Object& o : s.objects)
-        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
-    return glm::length(b.extent());
-}
 
 // Applies one random edit of the kinds the issue lists.
 void random_edit(Scene& scene, std::mt19937& rng) {
@@ -78,7 +72,7 @@ void random_edit(Scene& scene, std::mt19937& rng) {
     std::vector<int> diffuse;
     for (int i = 0; i < int(scene.objects.size()); ++i)
         if (scene.objects[size_t(i)].material.type == MaterialType::diffuse) diffuse.push_back(i);
-    const float step = 0.08f * scene_diagonal(scene);
+    const float step = 0.08f * scene.diagonal();
     switch (rng() % 6) {
         case 0:
         case 1:
@@ -142,7 +136,7 @@ void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edi
 
     PhotonSimulation fresh(scene, pool);
     fresh.trace_all();
-    expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene_diagonal(scene),
+    expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene.diagonal(),
                      scene_file + " seed " + std::to_string(seed));
 }
 
