@@ -9,6 +9,8 @@ namespace {
 
 constexpr float kPi = 3.14159265358979f;
 constexpr int kQmcBounces = 16;
+// Per photon: the 2D emission point, then Halton dimensions 1.. (quad position, two bounces).
+constexpr int kTabulated = 1 + 2 + 3 * 2 + 1;
 
 // Orthonormal basis around unit n (Duff et al. 2017).
 void basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
@@ -81,10 +83,28 @@ void PhotonTracer::refresh() {
     // Halton dimensions for emission and the first bounces; deeper bounces (rare after Russian
     // roulette, and their stratification no longer matters) use hashed numbers.
     dimensions_ = 3 + 3 * std::min(max_bounces_, kQmcBounces);
-    if (halton_.size() != scene_.lights.size() || (!halton_.empty() && halton_[0].dimensions() != dimensions_)) {
+    const size_t table_size = size_t(groups_) * size_t(per_group_) * kTabulated;
+    if (halton_.size() != scene_.lights.size() || (!halton_.empty() && halton_[0].dimensions() != dimensions_) ||
+        (!tables_.empty() && tables_[0].size() != table_size)) {
         halton_.clear();
-        for (size_t l = 0; l < scene_.lights.size(); ++l)
+        tables_.clear();
+        for (size_t l = 0; l < scene_.lights.size(); ++l) {
             halton_.emplace_back(dimensions_, hash_u32(scene_.settings.seed * 7919u + uint32_t(l)) | 1u);
+            // Every photon is re-traced again and again with the same numbers: tabulate the
+            // emission point and the first bounces' numbers once (a light's photons are fixed).
+            const Halton& h = halton_.back();
+            std::vector<float> table(table_size);
+            for (int g = 0; g < groups_; ++g)
+                for (int i = 0; i < per_group_; ++i) {
+                    const uint64_t k = uint64_t(g) * uint64_t(per_group_) + uint64_t(i);
+                    float* row = &table[k * kTabulated];
+                    const glm::vec2 point = hilbert_point((double(g) + h.sample(uint64_t(i), 0)) / double(groups_));
+                    row[0] = point.x;
+                    row[1] = point.y;
+                    for (int d = 1; d + 1 < kTabulated && d < dimensions_; ++d) row[d + 1] = float(h.sample(k, d));
+                }
+            tables_.push_back(std::move(table));
+        }
     }
 }
 
@@ -95,6 +115,7 @@ glm::vec3 PhotonTracer::photon_power(int light) const {
 }
 
 float PhotonTracer::sample(int light, uint64_t k, int dim) const {
+    if (dim + 1 < kTabulated && dim < dimensions_) return tables_[size_t(light)][k * kTabulated + size_t(dim) + 1];
     if (dim < dimensions_) return float(halton_[size_t(light)].sample(k, dim));
     const uint32_t h = hash_u32(hash_u32(uint32_t(k) ^ hash_u32(uint32_t(k >> 32) + 0x9e3779b9u)) +
                                 uint32_t(dim) * 0x85ebca6bu + scene_.settings.seed + uint32_t(light) * 0xc2b2ae35u);
@@ -103,11 +124,11 @@ float PhotonTracer::sample(int light, uint64_t k, int dim) const {
 
 void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
     const Light& l = scene_.lights[size_t(light)];
-    const Halton& h = halton_[size_t(light)];
     const uint64_t k = uint64_t(group) * uint64_t(per_group_) + uint64_t(index);
     // Group g owns stratum [g/G, (g+1)/G) of the Hilbert parameter; photon i takes the i-th
     // point of a 1D QMC sequence inside it, so a group's photons leave in similar directions.
-    const glm::vec2 s = hilbert_point((double(group) + h.sample(uint64_t(index), 0)) / double(groups_));
+    const float* row = &tables_[size_t(light)][k * kTabulated];
+    const glm::vec2 s(row[0], row[1]);
 
     Ray ray;
     if (l.type == LightType::point) {

@@ -52,6 +52,7 @@ private:
     const RayTracer& rays_;
     int groups_, per_group_, max_bounces_, dimensions_;
     std::vector<Halton> halton_;  // per light, scrambled with the scene seed and the light index
+    std::vector<std::vector<float>> tables_;  // per light: tabulated numbers of every photon
 };
 
 }  // namespace ag::cpu
