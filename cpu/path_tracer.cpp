@@ -1,0 +1,91 @@
+#include "cpu/path_tracer.h"
+
+#include <algorithm>
+
+#include "shared/camera.h"
+
+namespace ag::cpu {
+
+namespace {
+
+// Sample dimensions: 2 for the pixel position, then per vertex: diffuse direction (2), glass
+// Fresnel choice, Russian roulette, quad-light lattice rotation (2). The first kQmcVertices
+// vertices use Halton numbers, deeper ones hashed numbers.
+constexpr int kPixelDims = 2, kVertexDims = 6, kQmcVertices = 5;
+constexpr int kRouletteDepth = 3;  // vertices before Russian roulette starts
+
+}  // namespace
+
+PathTracer::PathTracer(const Scene& scene, const RayTracer& rays, const ReferenceSettings& settings)
+    : scene_(scene),
+      rays_(rays),
+      max_depth_(std::max(1, settings.max_depth)),
+      seed_(settings.seed),
+      halton_(kPixelDims + kVertexDims * kQmcVertices, hash_u32(settings.seed) | 1u) {}
+
+ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
+    const Camera& camera = scene_.camera;
+    const Sampler s(halton_, pixel_key(seed_, x, y), index);
+    Ray ray{camera.eye, camera_ray_direction(camera, float(x) + s.get(0), float(y) + s.get(1))};
+    const float eps = rays_.epsilon();
+
+    ComponentRadiance out;
+    glm::vec3 throughput(1.0f);
+    bool specular_pixel = false;   // the camera ray met a mirror or glass first
+    bool diffuse_seen = false;     // some diffuse vertex on the path so far
+    bool diffuse_after_x = false;  // a diffuse vertex after the first one, x
+    bool after_specular = false;   // the ray leaves a specular vertex
+    for (int depth = 0; depth < max_depth_; ++depth) {
+        const int dim = kPixelDims + kVertexDims * depth;
+        const RayHit hit = rays_.intersect(ray);
+
+        // Quad lights are not geometry: a ray finds one only to complete L S+ D ... paths that
+        // next-event estimation cannot sample (it stops at specular vertices). Lights stay
+        // invisible to the camera and to purely specular chains from it, as in the GPU frame.
+        if (after_specular && diffuse_seen) {
+            const glm::vec3 le = quad_light_radiance(scene_, ray, hit.hit ? hit.t : 1e30f);
+            const Component c = specular_pixel    ? Component::specular
+                                : diffuse_after_x ? Component::indirect
+                                                  : Component::caustics;
+            out[c] += throughput * le;
+        }
+        if (!hit.hit) break;
+
+        const Material& m = scene_.objects[size_t(hit.object)].material;
+        if (depth == 0) specular_pixel = m.type != MaterialType::diffuse;
+        const Component here = specular_pixel ? Component::specular
+                               : depth == 0   ? Component::direct
+                                              : Component::indirect;
+        const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
+        if (front) out[here] += throughput * m.emission;
+
+        if (m.type == MaterialType::diffuse) {
+            // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the
+            // photon tracer), so it is black.
+            if (!front) break;
+            out[here] += throughput * m.albedo / 3.14159265358979f *
+                         direct_irradiance(scene_, rays_, hit.position, hit.normal, 1,
+                                           s.get(dim + 4), s.get(dim + 5));
+            if (depth > 0) diffuse_after_x = true;
+            diffuse_seen = true;
+            after_specular = false;
+            // Cosine sampling makes BRDF · cos / pdf = ρ.
+            throughput *= m.albedo;
+            ray = {hit.position + eps * hit.normal,
+                   cosine_direction(hit.normal, s.get(dim), s.get(dim + 1))};
+        } else {
+            ray = specular_bounce(m, hit, ray.direction, s.get(dim + 2), eps);
+            after_specular = true;
+        }
+
+        if (depth + 1 >= kRouletteDepth) {
+            // Survive in proportion to the throughput (capped below 1 so mirror loops end).
+            const float p = std::min(0.95f, std::max({throughput.x, throughput.y, throughput.z}));
+            if (!(p > 0.0f) || s.get(dim + 3) >= p) break;
+            throughput /= p;
+        }
+    }
+    return out;
+}
+
+}  // namespace ag::cpu

@@ -1,0 +1,327 @@
+#include "cpu/reference.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <climits>
+#include <cmath>
+#include <memory>
+#include <mutex>
+#include <stdexcept>
+
+#include "cpu/path_tracer.h"
+#include "cpu/photon_mapper.h"
+
+namespace ag::cpu {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+constexpr float kOneBelowOne = 0x1.fffffep-1f;
+constexpr int kTileSize = 16;
+
+// Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t.
+float fresnel(float cos_i, float eta, float& cos_t) {
+    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
+    if (sin2_t >= 1.0f) {
+        cos_t = 0.0f;
+        return 1.0f;  // total internal reflection
+    }
+    cos_t = std::sqrt(1.0f - sin2_t);
+    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    return 0.5f * (rs * rs + rp * rp);
+}
+
+float to_unit(uint64_t h) { return float(h >> 40) * (1.0f / 16777216.0f); }
+
+}  // namespace
+
+// Orthonormal basis around unit n (Duff et al. 2017).
+void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
+    const float sign = std::copysign(1.0f, n.z);
+    const float a = -1.0f / (sign + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
+    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
+}
+
+glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u) {
+    const float a = 2.0f * u.x - 1.0f, b = 2.0f * u.y - 1.0f;
+    if (a == 0.0f && b == 0.0f) return {0.0f, 0.0f, 1.0f};
+    float r, phi;
+    if (std::abs(a) > std::abs(b)) {
+        r = a;
+        phi = 0.25f * kPi * (b / a);
+    } else {
+        r = b;
+        phi = 0.5f * kPi - 0.25f * kPi * (a / b);
+    }
+    const float x = r * std::cos(phi), y = r * std::sin(phi);
+    return {x, y, std::sqrt(std::max(0.0f, 1.0f - x * x - y * y))};
+}
+
+glm::vec2 cosine_hemisphere_to_square(const glm::vec3& d) {
+    const float r = std::sqrt(d.x * d.x + d.y * d.y);
+    if (r == 0.0f) return {0.5f, 0.5f};
+    float phi = std::atan2(d.y, d.x);  // (−π, π], folded to [−π/4, 7π/4)
+    if (phi < -0.25f * kPi) phi += 2.0f * kPi;
+    float a, b;
+    if (phi < 0.25f * kPi) {
+        a = r;
+        b = phi * (4.0f / kPi) * a;
+    } else if (phi < 0.75f * kPi) {
+        b = r;
+        a = (0.5f * kPi - phi) * (4.0f / kPi) * b;
+    } else if (phi < 1.25f * kPi) {
+        a = -r;
+        b = (phi - kPi) * (4.0f / kPi) * a;
+    } else {
+        b = -r;
+        a = (1.5f * kPi - phi) * (4.0f / kPi) * b;
+    }
+    return glm::clamp(0.5f * glm::vec2(a + 1.0f, b + 1.0f), glm::vec2(0.0f),
+                      glm::vec2(kOneBelowOne));
+}
+
+uint64_t mix64(uint64_t x) {
+    x += 0x9e3779b97f4a7c15ull;
+    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
+    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
+    return x ^ (x >> 31);
+}
+
+float hashed_uniform(uint64_t a, uint64_t b) { return to_unit(mix64(mix64(a) ^ b)); }
+
+uint64_t pixel_key(uint32_t seed, int x, int y) {
+    return mix64(mix64(seed) ^ ((uint64_t(uint32_t(y)) << 32) | uint64_t(uint32_t(x))));
+}
+
+float Sampler::get(int dim) const {
+    const uint64_t h = mix64(key_ ^ mix64(uint64_t(dim) + 0x632be59bd9b4e019ull));
+    if (dim < halton_.dimensions()) {
+        // Cranley–Patterson rotation: every pixel gets its own shifted copy of the sequence.
+        double u = halton_.sample(index_, dim) + double(h >> 11) * 0x1.0p-53;
+        if (u >= 1.0) u -= 1.0;
+        return std::min(float(u), kOneBelowOne);
+    }
+    return to_unit(mix64(h ^ mix64(index_)));
+}
+
+glm::vec3 cosine_direction(const glm::vec3& n, float u1, float u2) {
+    glm::vec3 t, b;
+    orthonormal_basis(n, t, b);
+    const float phi = 2.0f * kPi * u1, r = std::sqrt(u2);
+    const float z = std::sqrt(std::max(0.0f, 1.0f - u2));
+    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * n);
+}
+
+glm::vec3 sphere_direction(float u1, float u2) {
+    const float z = 1.0f - 2.0f * u1, phi = 2.0f * kPi * u2;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return {r * std::cos(phi), r * std::sin(phi), z};
+}
+
+glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2) {
+    glm::vec3 t, b;
+    orthonormal_basis(axis, t, b);
+    const float z = 1.0f - u1 * (1.0f - cos_max), phi = 2.0f * kPi * u2;
+    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * axis);
+}
+
+Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
+                    float u, float epsilon) {
+    const glm::vec3 d = glm::normalize(direction);
+    const bool front = glm::dot(d, hit.normal) < 0.0f;
+    const glm::vec3 facing = front ? hit.normal : -hit.normal;  // towards the incoming side
+    Ray out;
+    if (material.type == MaterialType::glass) {
+        const float eta = front ? 1.0f / material.ior : material.ior;
+        const float cos_i = -glm::dot(d, facing);
+        float cos_t = 0.0f;
+        if (u >= fresnel(cos_i, eta, cos_t)) {
+            out.origin = hit.position - epsilon * facing;
+            out.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
+            return out;
+        }
+    }
+    out.origin = hit.position + epsilon * facing;
+    out.direction = glm::reflect(d, facing);
+    return out;
+}
+
+glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
+                            const glm::vec3& n, int quad_samples, float u1, float u2) {
+    const glm::vec3 origin = p + rays.epsilon() * n;
+    glm::vec3 e(0.0f);
+    for (size_t l = 0; l < scene.lights.size(); ++l) {
+        const Light& light = scene.lights[l];
+        if (!light.enabled) continue;
+        if (light.type == LightType::point) {
+            const glm::vec3 to = light.position - origin;
+            const float d2 = glm::dot(to, to), d = std::sqrt(d2);
+            const float cos_x = glm::dot(n, to) / d;
+            if (!(cos_x > 0.0f)) continue;
+            if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
+            e += light.intensity * cos_x / d2;
+            continue;
+        }
+        // Quad light: E = L ∫ cos_x cos_l / d² dA, estimated by a rotated rank-1 lattice (its
+        // own rotation per light so that two quads do not share shadow-ray patterns).
+        const glm::vec3 e1 = light.corners[1] - light.corners[0];
+        const glm::vec3 e3 = light.corners[3] - light.corners[0];
+        const glm::vec3 nl = light.quad_normal();
+        const float area = light.quad_area();
+        const float r1 = u1 + hashed_uniform(l, 1), r2 = u2 + hashed_uniform(l, 2);
+        glm::vec3 sum(0.0f);
+        for (int j = 0; j < quad_samples; ++j) {
+            const float a = std::fmod((float(j) + 0.5f) / float(quad_samples) + r1, 1.0f);
+            const float b = std::fmod(float(j) * 0.6180339887f + r2, 1.0f);
+            const glm::vec3 to = light.corners[0] + a * e1 + b * e3 - origin;
+            const float d2 = glm::dot(to, to), d = std::sqrt(d2);
+            const float cos_x = glm::dot(n, to) / d, cos_l = -glm::dot(nl, to) / d;
+            if (!(cos_x > 0.0f) || !(cos_l > 0.0f)) continue;
+            if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
+            sum += glm::vec3(cos_x * cos_l / d2);
+        }
+        e += light.radiance * sum * (area / float(quad_samples));
+    }
+    return e;
+}
+
+glm::vec3 quad_light_radiance(const Scene& scene, const Ray& ray, float tmax) {
+    glm::vec3 radiance(0.0f);
+    float nearest = tmax;
+    for (const Light& light : scene.lights) {
+        if (!light.enabled || light.type != LightType::quad) continue;
+        const glm::vec3 e1 = light.corners[1] - light.corners[0];
+        const glm::vec3 e3 = light.corners[3] - light.corners[0];
+        const glm::vec3 cross = glm::cross(e1, e3);
+        const float facing = glm::dot(ray.direction, cross);
+        if (!(facing < 0.0f)) continue;  // parallel, or meeting the dark back
+        const float t = glm::dot(light.corners[0] - ray.origin, cross) / facing;
+        if (!(t > ray.tmin) || !(t < nearest)) continue;
+        const glm::vec3 q = ray.origin + t * ray.direction - light.corners[0];
+        const float inv = 1.0f / glm::dot(cross, cross);
+        const float a = glm::dot(glm::cross(q, e3), cross) * inv;
+        const float b = glm::dot(glm::cross(e1, q), cross) * inv;
+        if (a < 0.0f || a > 1.0f || b < 0.0f || b > 1.0f) continue;
+        nearest = t;
+        radiance = light.radiance;
+    }
+    return radiance;
+}
+
+float scene_diagonal(const Scene& scene) {
+    Bounds bounds;
+    for (const Object& o : scene.objects)
+        for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
+    return bounds.empty() ? 1.0f : std::max(1e-6f, glm::length(bounds.extent()));
+}
+
+ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& settings,
+                                 ThreadPool& pool, const ReferenceProgressFn& progress) {
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point start = Clock::now();
+    const auto elapsed = [&] {
+        return std::chrono::duration<double>(Clock::now() - start).count();
+    };
+    const int width = scene.camera.width, height = scene.camera.height;
+    if (width <= 0 || height <= 0)
+        throw std::invalid_argument("reference: camera resolution must be positive");
+
+    // Progress goes out from whichever worker passes by, at most five times a second.
+    std::mutex progress_mutex;
+    double last_report = -1.0;
+    const auto report = [&](ReferenceProgress p, bool force) {
+        if (!progress) return;
+        const std::lock_guard<std::mutex> lock(progress_mutex);
+        p.elapsed = elapsed();
+        if (!force && p.elapsed - last_report < 0.2) return;
+        last_report = p.elapsed;
+        progress(p);
+    };
+
+    ReferenceResult result;
+    const RayTracer rays(scene);
+    std::unique_ptr<PathTracer> path_tracer;
+    std::unique_ptr<PhotonMapper> photon_mapper;
+    if (settings.method == ReferenceMethod::path_tracing) {
+        path_tracer = std::make_unique<PathTracer>(scene, rays, settings);
+    } else {
+        photon_mapper = std::make_unique<PhotonMapper>(scene, rays, settings, pool, [&](double f) {
+            report({"photons", f, 0, 0.0, -1.0}, false);
+        });
+        result.photon_seconds = elapsed();
+        result.global_photons = photon_mapper->global_size();
+        result.caustic_photons = photon_mapper->caustic_size();
+    }
+    const auto sample = [&](int x, int y, uint64_t index) {
+        return path_tracer ? path_tracer->sample(x, y, index) : photon_mapper->sample(x, y, index);
+    };
+
+    const size_t pixels = size_t(width) * size_t(height);
+    const int tiles_x = (width + kTileSize - 1) / kTileSize;
+    const int tiles_y = (height + kTileSize - 1) / kTileSize;
+    const size_t tiles = size_t(tiles_x) * size_t(tiles_y);
+    const double time_limit = settings.time_limit > 0.0 ? settings.time_limit : 0.0;
+    const int spp_limit = settings.spp > 0 ? settings.spp : (time_limit > 0.0 ? INT_MAX : 1);
+    std::vector<std::array<glm::dvec3, kComponentCount>> sum(pixels);
+    std::vector<ComponentRadiance> pass(pixels);
+    const double render_start = elapsed();
+
+    int done = 0;
+    while (done < spp_limit) {
+        if (done > 0 && time_limit > 0.0 && elapsed() >= time_limit) break;
+        std::atomic<bool> interrupted{false};
+        std::atomic<size_t> tiles_done{0};
+        pool.parallel_for(tiles, [&](size_t tile) {
+            if (interrupted.load(std::memory_order_relaxed)) return;
+            const int x0 = int(tile % size_t(tiles_x)) * kTileSize;
+            const int y0 = int(tile / size_t(tiles_x)) * kTileSize;
+            for (int y = y0; y < std::min(height, y0 + kTileSize); ++y)
+                for (int x = x0; x < std::min(width, x0 + kTileSize); ++x)
+                    pass[size_t(y) * size_t(width) + size_t(x)] = sample(x, y, uint64_t(done));
+            const double now = elapsed();
+            if (done > 0 && time_limit > 0.0 && now >= time_limit) interrupted = true;
+            const double passes = done + double(++tiles_done) / double(tiles);
+            const double per_pass = (now - render_start) / passes;
+            ReferenceProgress p{"render", 0.0, done, 0.0, -1.0};
+            if (settings.spp > 0) {
+                p.fraction = passes / spp_limit;
+                p.eta = (spp_limit - passes) * per_pass;
+            }
+            if (time_limit > 0.0) {
+                p.fraction = std::max(p.fraction, now / time_limit);
+                const double left = std::max(0.0, time_limit - now);
+                p.eta = p.eta < 0.0 ? left : std::min(p.eta, left);
+            }
+            report(p, false);
+        });
+        if (interrupted) break;
+        for (size_t i = 0; i < pixels; ++i)
+            for (int c = 0; c < kComponentCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
+        ++done;
+    }
+
+    result.spp = done;
+    result.full = Image(width, height);
+    for (Image& image : result.components) image = Image(width, height);
+    const double scale = 1.0 / double(std::max(done, 1));
+    for (size_t i = 0; i < pixels; ++i) {
+        const int x = int(i % size_t(width)), y = int(i / size_t(width));
+        glm::vec3 full(0.0f);
+        for (int c = 0; c < kComponentCount; ++c) {
+            const glm::vec3 v = glm::vec3(sum[i][size_t(c)] * scale);
+            result.components[size_t(c)].set_rgb(x, y, v);
+            full += v;
+        }
+        result.full.set_rgb(x, y, full);
+    }
+    result.seconds = elapsed();
+    report({"render", 1.0, done, 0.0, 0.0}, true);
+    return result;
+}
+
+}  // namespace ag::cpu

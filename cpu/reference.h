@@ -1,0 +1,135 @@
+// Reference renderers for the GPU frame (Larsen ch. 4, Fig. 14.3 and 14.5): a path tracer and
+// traditional photon mapping, both split into the frame's components (eq. 13.2, docs/reference.md)
+// and both progressive, multi-threaded and deterministic. Also the sampling pieces they share.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <glm/glm.hpp>
+#include <string>
+
+#include "cpu/ray_tracer.h"
+#include "shared/image.h"
+#include "shared/parallel.h"
+#include "shared/qmc.h"
+#include "shared/scene.h"
+
+namespace ag::cpu {
+
+enum class ReferenceMethod { path_tracing, photon_mapping };
+inline constexpr std::array kReferenceMethodNames = {"pt", "pm"};
+
+// The components of the frame (Larsen eq. 13.2), defined at the first diffuse point x seen from
+// the camera: direct (x's emission and the lights' direct light), caustics (lights → S+ → x),
+// indirect (everything else arriving at x), specular (whole pixels whose camera ray meets a
+// mirror or glass first). They add up to the full image.
+enum class Component { direct, indirect, caustics, specular };
+inline constexpr int kComponentCount = 4;
+inline constexpr std::array kComponentNames = {"direct", "indirect", "caustics", "specular"};
+
+// Radiance of one camera sample, by component.
+struct ComponentRadiance {
+    std::array<glm::vec3, kComponentCount> value{};
+
+    glm::vec3& operator[](Component c) { return value[size_t(c)]; }
+    const glm::vec3& operator[](Component c) const { return value[size_t(c)]; }
+    glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
+};
+
+struct ReferenceSettings {
+    ReferenceMethod method = ReferenceMethod::path_tracing;
+    int spp = 0;              // stop after this many samples per pixel; 0 = no sample limit
+    double time_limit = 0.0;  // stop after this many seconds (photon maps included); 0 = none.
+                              // At least one pass always completes; with neither, one pass.
+    uint32_t seed = 1;        // scrambles every sequence; same seed, same image
+    int max_depth = 256;      // path length cap (Russian roulette ends paths long before)
+
+    // Photon mapping only.
+    int photons = 1000000;          // global map: photons emitted from all lights together
+    int caustic_photons = 1000000;  // caustic map: photons aimed at mirror and glass objects
+    int knn = 100;                  // nearest photons per global-map density estimate
+    int caustic_knn = 50;           // nearest photons per caustic estimate
+    float caustic_radius = 0.0f;    // caustic search radius cap; 0 = 1% of the scene diagonal
+    int gather_rays = 64;           // final-gather rays per camera sample (× spp per pixel)
+    int area_light_samples = 16;    // shadow rays per quad light per camera sample
+};
+
+// What a progress display needs; reported from worker threads, at most a few times a second.
+struct ReferenceProgress {
+    std::string stage;      // "photons" or "render"
+    double fraction = 0.0;  // of the stage (render: of the sample budget, or of the time limit)
+    int passes_done = 0;
+    double elapsed = 0.0;  // seconds since the start
+    double eta = -1.0;     // seconds to go; < 0 = unknown
+};
+using ReferenceProgressFn = std::function<void(const ReferenceProgress&)>;
+
+struct ReferenceResult {
+    Image full;                                      // = sum of the components
+    std::array<Image, kComponentCount> components;   // indexed by Component
+    int spp = 0;                                     // completed passes (one sample each)
+    double seconds = 0.0;                            // wall clock, photon maps included
+    double photon_seconds = 0.0;                     // photon tracing and map building (pm)
+    size_t global_photons = 0, caustic_photons = 0;  // stored photons (pm)
+};
+
+// Renders scene.camera at its resolution. Samples are QMC points seeded per pixel and sample
+// index, so the image does not depend on the thread count; a time limit only decides how many
+// whole passes are kept (an interrupted pass is dropped).
+ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& settings,
+                                 ThreadPool& pool, const ReferenceProgressFn& progress = {});
+
+// --- Sampling pieces shared by the path tracer, the photon mapper and their photon tracing ---
+
+// Number `dim` of sample `index` of a sequence: a scrambled Halton point with a Cranley–Patterson
+// rotation drawn from `key` (one key per pixel or light), hashed numbers past the Halton's
+// dimensions. A pure function of (halton, key, index, dim).
+class Sampler {
+public:
+    Sampler(const Halton& halton, uint64_t key, uint64_t index)
+        : halton_(halton), key_(key), index_(index) {}
+    float get(int dim) const;
+    uint64_t key() const { return key_; }
+    uint64_t index() const { return index_; }
+
+private:
+    const Halton& halton_;
+    uint64_t key_, index_;
+};
+
+uint64_t mix64(uint64_t x);                       // SplitMix64 finaliser
+float hashed_uniform(uint64_t a, uint64_t b);     // [0, 1) from two words
+uint64_t pixel_key(uint32_t seed, int x, int y);  // a pixel's Sampler key
+
+glm::vec3 cosine_direction(const glm::vec3& n, float u1, float u2);
+// Shirley–Chiu concentric map between the unit square and the cosine-weighted hemisphere about
+// +z (area-preserving, so uniform squares give cosine-weighted directions, and compact regions of
+// the hemisphere stay compact in the square: what lets a histogram guide final-gather rays).
+glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u);
+glm::vec2 cosine_hemisphere_to_square(const glm::vec3& d);  // d.z ≥ 0; inverse of the above
+void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b);
+glm::vec3 sphere_direction(float u1, float u2);
+// Uniform in the cone of directions within angle acos(cos_max) of the unit `axis`.
+glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2);
+
+// A mirror reflects; glass reflects with the Fresnel probability (u < F) and refracts otherwise.
+// Neither absorbs (albedo is unused), as in the photon tracer. Returns the continuing ray.
+Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
+                    float u, float epsilon);
+
+// Irradiance E at the front side (p, n) straight from the scene's enabled lights: point lights
+// with a hard shadow (I cos / d²), quad lights by `quad_samples` shadow rays on a rotated 2D
+// lattice (rotation u1, u2). The reflected radiance is albedo/π · E.
+glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
+                            const glm::vec3& n, int quad_samples, float u1, float u2);
+
+// Radiance of the nearest quad light whose front the ray meets before `tmax`, or zero. Lights are
+// not geometry: only the path tracer asks, for rays that left a specular vertex (caustics).
+glm::vec3 quad_light_radiance(const Scene& scene, const Ray& ray, float tmax);
+
+// Diagonal of the world bounding box of all objects (1 for an empty scene): the scale of search
+// radii.
+float scene_diagonal(const Scene& scene);
+
+}  // namespace ag::cpu

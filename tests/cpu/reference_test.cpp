@@ -1,0 +1,352 @@
+// Reference renderers (docs/reference.md): known answers first (furnace, analytic direct light and
+// mirror caustics), then path tracing against photon mapping on the Cornell scene.
+#include "cpu/reference.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <functional>
+#include <glm/gtc/quaternion.hpp>
+
+#include "shared/camera.h"
+#include "shared/metrics.h"
+#include "test_scenes.h"
+
+namespace ag::cpu {
+
+namespace {
+
+constexpr float kPi = 3.14159265358979f;
+
+glm::vec3 image_mean(const Image& image) {
+    glm::dvec3 sum(0.0);
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) sum += glm::dvec3(image.rgb(x, y));
+    return glm::vec3(sum / double(image.width * image.height));
+}
+
+Camera looking_at(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov,
+                  int size) {
+    Camera c;
+    c.eye = eye;
+    c.target = target;
+    c.up = up;
+    c.fov_y = fov;
+    c.width = c.height = size;
+    return c;
+}
+
+// A closed cube of side 2 around the origin, faces inwards, albedo ρ, emitting Le everywhere, no
+// lights, seen from its centre: every ray sees Le + ρ Le + ρ² Le + ... = Le / (1 − ρ).
+Scene furnace(float albedo, float emission) {
+    Scene s;
+    s.path = "furnace";
+    Object box;
+    box.name = "box";
+    box.mesh = make_box(glm::vec3(2.0f));
+    for (glm::uvec3& t : box.mesh.triangles) std::swap(t.y, t.z);  // inward
+    box.material.albedo = glm::vec3(albedo);
+    box.material.emission = glm::vec3(emission);
+    s.objects.push_back(box);
+    s.camera = looking_at({0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, {0.0f, 1.0f, 0.0f}, 90.0f, 16);
+    return s;
+}
+
+Object quad_object(const std::string& name, float size, float height, bool facing_down,
+                   MaterialType type, float albedo) {
+    Object o;
+    o.name = name;
+    o.mesh = make_quad(size, size);
+    o.material.type = type;
+    o.material.albedo = glm::vec3(albedo);
+    o.transform.translation = {0.0f, height, 0.0f};
+    if (facing_down) o.transform.rotation = glm::angleAxis(kPi, glm::vec3(1.0f, 0.0f, 0.0f));
+    return o;
+}
+
+// A square quad light of side `side` centred at (0, height, 0), emitting downwards.
+Light quad_light(float side, float height, float radiance) {
+    Light l;
+    l.name = "panel";
+    l.type = LightType::quad;
+    const float h = 0.5f * side;
+    // edge01 × edge03 = (side, 0, 0) × (0, 0, side) points down (−y).
+    l.corners = {glm::vec3(-h, height, -h), glm::vec3(h, height, -h), glm::vec3(h, height, h),
+                 glm::vec3(-h, height, h)};
+    l.radiance = glm::vec3(radiance);
+    return l;
+}
+
+// Irradiance under the centre of a parallel square emitter of radiance L, half-side s, at distance
+// h: four corner rectangles, each E = L · A/√(1+A²) · atan(A/√(1+A²)) with A = s/h.
+float square_irradiance(float radiance, float half_side, float distance) {
+    const double a = half_side / distance, q = std::sqrt(1.0 + a * a);
+    return float(4.0 * radiance * 0.5 * 2.0 * (a / q) * std::atan(a / q));
+}
+
+ReferenceResult render(const Scene& scene, ReferenceSettings settings, int threads = 2) {
+    ThreadPool pool(threads);
+    return render_reference(scene, settings, pool);
+}
+
+ReferenceSettings pt(int spp) {
+    ReferenceSettings s;
+    s.method = ReferenceMethod::path_tracing;
+    s.spp = spp;
+    return s;
+}
+
+ReferenceSettings pm(int spp, int photons, int gather_rays) {
+    ReferenceSettings s;
+    s.method = ReferenceMethod::photon_mapping;
+    s.spp = spp;
+    s.photons = photons;
+    s.caustic_photons = photons / 4;
+    s.gather_rays = gather_rays;
+    return s;
+}
+
+// relMSE of two images after averaging `block` × `block` pixel blocks.
+double block_rel_mse(const Image& test, const Image& reference, int block) {
+    Image a(test.width / block, test.height / block), b(a.width, a.height);
+    for (int y = 0; y < a.height * block; ++y)
+        for (int x = 0; x < a.width * block; ++x) {
+            const float w = 1.0f / float(block * block);
+            a.set_rgb(x / block, y / block, a.rgb(x / block, y / block) + w * test.rgb(x, y));
+            b.set_rgb(x / block, y / block, b.rgb(x / block, y / block) + w * reference.rgb(x, y));
+        }
+    return compare_images(a, b).rel_mse;
+}
+
+// The box-filtered mean over pixel (x, y) of f(point where the ray meets the plane y = plane_y),
+// by 8 × 8 subsamples: what a converged render's pixel holds.
+float pixel_mean(const Camera& camera, int x, int y, float plane_y,
+                 const std::function<float(const glm::vec3&)>& f) {
+    double sum = 0.0;
+    for (int j = 0; j < 8; ++j)
+        for (int i = 0; i < 8; ++i) {
+            const glm::vec3 d = camera_ray_direction(camera, float(x) + (float(i) + 0.5f) / 8.0f,
+                                                     float(y) + (float(j) + 0.5f) / 8.0f);
+            sum += f(camera.eye + d * ((plane_y - camera.eye.y) / d.y));
+        }
+    return float(sum / 64.0);
+}
+
+// ρ/π · I cosθ / d² at p on a plane with unit normal n, from a point light at `light`.
+float point_lit_radiance(const glm::vec3& p, const glm::vec3& n, const glm::vec3& light,
+                         float intensity, float albedo) {
+    const glm::vec3 to = light - p;
+    const float d2 = glm::dot(to, to);
+    return albedo / kPi * intensity * std::abs(glm::dot(n, to)) / std::sqrt(d2) / d2;
+}
+
+bool slow_tests() {
+    const char* v = std::getenv("AG_SLOW");
+    return v && std::string(v) == "1";
+}
+
+}  // namespace
+
+TEST(Reference, ConcentricMapRoundTrips) {
+    for (float u = 0.01f; u < 1.0f; u += 0.0731f)
+        for (float v = 0.01f; v < 1.0f; v += 0.0617f) {
+            const glm::vec3 d = square_to_cosine_hemisphere({u, v});
+            EXPECT_NEAR(glm::length(d), 1.0f, 1e-5f);
+            const glm::vec2 back = cosine_hemisphere_to_square(d);
+            EXPECT_NEAR(back.x, u, 1e-4f);
+            EXPECT_NEAR(back.y, v, 1e-4f);
+        }
+}
+
+TEST(Reference, FurnacePathTracerGivesLeOverOneMinusAlbedo) {
+    const float albedo = 0.5f, le = 1.0f;
+    const ReferenceResult r = render(furnace(albedo, le), pt(256));
+    const glm::vec3 full = image_mean(r.full);
+    const glm::vec3 direct = image_mean(r.components[size_t(Component::direct)]);
+    const glm::vec3 indirect = image_mean(r.components[size_t(Component::indirect)]);
+    for (int c = 0; c < 3; ++c) {
+        EXPECT_NEAR(full[c], le / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
+        EXPECT_NEAR(direct[c], le, 1e-5f);  // x's own emission
+        EXPECT_NEAR(indirect[c], le * albedo / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
+    }
+    EXPECT_EQ(image_mean(r.components[size_t(Component::caustics)]), glm::vec3(0.0f));
+    EXPECT_EQ(image_mean(r.components[size_t(Component::specular)]), glm::vec3(0.0f));
+    EXPECT_EQ(r.spp, 256);
+}
+
+// Direct light in the renderer's units: a plane of albedo ρ at distance h under a point light of
+// intensity I has radiance ρ/π · I cosθ / d² (d, θ from the light to the pixel's point).
+TEST(Reference, PointLightDirectMatchesAnalytic) {
+    const float height = 2.0f, intensity = 10.0f, albedo = 0.6f;
+    Scene scene = test::plane_under_light(20.0f, height, intensity, albedo);
+    const int size = 9;
+    scene.camera =
+        looking_at({0.0f, 4.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 30.0f, size);
+    const auto lit = [&](const glm::vec3& p) {
+        return point_lit_radiance(p, {0.0f, 1.0f, 0.0f}, {0.0f, height, 0.0f}, intensity, albedo);
+    };
+    for (const ReferenceSettings& settings : {pt(64), pm(64, 20000, 1)}) {
+        const ReferenceResult r = render(scene, settings);
+        const Image& direct = r.components[size_t(Component::direct)];
+        for (int y = 0; y < size; ++y)
+            for (int x = 0; x < size; ++x) {
+                const float expected = pixel_mean(scene.camera, x, y, 0.0f, lit);
+                EXPECT_NEAR(direct.rgb(x, y).g, expected, 0.01f * expected) << x << ", " << y;
+            }
+    }
+}
+
+TEST(Reference, QuadLightDirectMatchesAnalytic) {
+    const float height = 1.0f, side = 1.0f, radiance = 3.0f, albedo = 0.5f;
+    Scene scene;
+    scene.objects.push_back(
+        quad_object("floor", 40.0f, 0.0f, false, MaterialType::diffuse, albedo));
+    scene.lights.push_back(quad_light(side, height, radiance));
+    // Close above the floor's centre, below the light (lights are invisible to camera rays).
+    scene.camera = looking_at({0.0f, 0.5f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 4.0f, 5);
+    const float expected = albedo / kPi * square_irradiance(radiance, 0.5f * side, height);
+    for (const ReferenceSettings& settings : {pt(256), pm(16, 20000, 16)}) {
+        const ReferenceResult r = render(scene, settings);
+        EXPECT_NEAR(image_mean(r.components[size_t(Component::direct)]).r, expected,
+                    0.01f * expected);
+    }
+}
+
+// Mirror caustics. A mirror floor at y = 0 under a light at height 1 and a diffuse ceiling at
+// height 2: the ceiling sees the light's mirror image at distance 3, which is all its caustic.
+Scene mirror_room(const Light& light) {
+    Scene scene;
+    scene.objects.push_back(quad_object("mirror", 40.0f, 0.0f, false, MaterialType::mirror, 1.0f));
+    scene.objects.push_back(quad_object("ceiling", 40.0f, 2.0f, true, MaterialType::diffuse, 0.5f));
+    scene.lights.push_back(light);
+    scene.camera = looking_at({0.0f, 1.5f, 0.0f}, {0.0f, 2.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 10.0f, 9);
+    return scene;
+}
+
+TEST(Reference, PointLightCausticsComeFromPhotonMappingOnly) {
+    const float intensity = 5.0f;
+    Light lamp;
+    lamp.name = "lamp";
+    lamp.position = {0.0f, 1.0f, 0.0f};
+    lamp.intensity = glm::vec3(intensity);
+    Scene scene = mirror_room(lamp);
+    scene.camera.fov_y = 60.0f;  // a wide patch of ceiling: many independent density estimates
+    const glm::vec3 down(0.0f, -1.0f, 0.0f);
+    float expected_direct = 0.0f, expected_caustic = 0.0f;
+    for (int y = 0; y < scene.camera.height; ++y)
+        for (int x = 0; x < scene.camera.width; ++x) {
+            expected_direct += pixel_mean(scene.camera, x, y, 2.0f, [&](const glm::vec3& p) {
+                return point_lit_radiance(p, down, lamp.position, intensity, 0.5f);
+            });
+            expected_caustic += pixel_mean(scene.camera, x, y, 2.0f, [&](const glm::vec3& p) {
+                return point_lit_radiance(p, down, -lamp.position, intensity,
+                                          0.5f);  // mirror image
+            });
+        }
+    expected_direct /= float(scene.camera.width * scene.camera.height);
+    expected_caustic /= float(scene.camera.width * scene.camera.height);
+
+    const ReferenceResult path = render(scene, pt(16));
+    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
+    EXPECT_NEAR(image_mean(path.components[size_t(Component::direct)]).r, expected_direct,
+                0.01f * expected_direct);
+
+    ReferenceSettings settings = pm(4, 2000, 1);
+    settings.caustic_photons = 1600000;
+    settings.caustic_knn = 200;
+    const ReferenceResult photons = render(scene, settings);
+    EXPECT_NEAR(image_mean(photons.components[size_t(Component::direct)]).r, expected_direct,
+                0.01f * expected_direct);
+    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected_caustic,
+                0.03f * expected_caustic);
+}
+
+// A quad light facing the mirror lights the ceiling only through it: the path tracer finds the
+// light after the mirror bounce, the photon mapper by caustic photons; both match the analytic
+// irradiance of the mirror image of the quad.
+TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
+    const float radiance = 2.0f, side = 1.0f;
+    const Scene scene = mirror_room(quad_light(side, 1.0f, radiance));
+    const float expected = 0.5f / kPi * square_irradiance(radiance, 0.5f * side, 3.0f);
+
+    const ReferenceResult path = render(scene, pt(1024));
+    EXPECT_NEAR(image_mean(path.components[size_t(Component::caustics)]).r, expected,
+                0.03f * expected);
+    EXPECT_EQ(image_mean(path.components[size_t(Component::direct)]),
+              glm::vec3(0.0f));  // faces away
+
+    // One density estimate covers the small patch the camera sees: k = 2000 photons, ~2% noise.
+    ReferenceSettings settings = pm(1, 2000, 1);
+    settings.caustic_photons = 1600000;
+    settings.caustic_knn = 2000;
+    const ReferenceResult photons = render(scene, settings);
+    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected,
+                0.05f * expected);
+}
+
+TEST(Reference, ComponentsSumToFullAndResultIgnoresThreadCount) {
+    const Scene scene = load_scene(test::scene_path("cornell.json"));
+    Scene small = scene;
+    small.camera.width = small.camera.height = 16;
+    for (const ReferenceSettings& settings : {pt(4), pm(1, 20000, 8)}) {
+        const ReferenceResult a = render(small, settings, 1);
+        const ReferenceResult b = render(small, settings, 3);
+        EXPECT_EQ(a.full.pixels, b.full.pixels);
+        for (int c = 0; c < kComponentCount; ++c)
+            EXPECT_EQ(a.components[size_t(c)].pixels, b.components[size_t(c)].pixels)
+                << kComponentNames[size_t(c)];
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 16; ++x) {
+                glm::vec3 sum(0.0f);
+                for (const Image& component : a.components) sum += component.rgb(x, y);
+                EXPECT_EQ(sum, a.full.rgb(x, y));
+            }
+    }
+}
+
+TEST(Reference, TimeLimitKeepsWholePasses) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.camera.width = scene.camera.height = 8;
+    ReferenceSettings settings = pt(0);
+    settings.time_limit = 0.2;
+    const ReferenceResult r = render(scene, settings);
+    EXPECT_GE(r.spp, 1);
+    // The kept passes are exactly what a fixed sample count gives.
+    const ReferenceResult fixed = render(scene, pt(r.spp));
+    EXPECT_EQ(r.full.pixels, fixed.full.pixels);
+}
+
+// Larsen Fig. 14.5 compares indirect light with a ray-traced final gather; here the path tracer
+// and photon mapping must agree on the Cornell scene's indirect component: relMSE < 0.01 per
+// pixel, and < 0.005 on 2 × 2 block averages (noise shrinks there, bias does not). The photon
+// mapper also carries light that passed the glass sphere (L S+ D ... x), which the path tracer
+// cannot sample from a point light: about 2% more indirect light, well within both bounds.
+// Default: 32 × 32 (about 10 s); AG_SLOW=1: 48 × 48 and 8× the samples (docs/reference.md).
+TEST(Reference, CornellIndirectPathTracingAgreesWithPhotonMapping) {
+    const bool slow = slow_tests();
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.camera.width = scene.camera.height = slow ? 48 : 32;
+    const ReferenceResult path = render(scene, pt(slow ? 32768 : 4096));
+    const ReferenceResult photons = render(scene, pm(slow ? 128 : 32, slow ? 1000000 : 300000, 64));
+    const Image& a = photons.components[size_t(Component::indirect)];
+    const Image& b = path.components[size_t(Component::indirect)];
+    const double pixel_rel_mse = compare_images(a, b).rel_mse, block = block_rel_mse(a, b, 2);
+    std::printf(
+        "Cornell indirect, %dx%d: relMSE(pm, pt) = %.5f per pixel, %.5f on 2x2 blocks (pt %d spp "
+        "%.1f s, "
+        "pm %d spp %.1f s)\n",
+        scene.camera.width, scene.camera.height, pixel_rel_mse, block, path.spp, path.seconds,
+        photons.spp, photons.seconds);
+    EXPECT_LT(pixel_rel_mse, 0.01);
+    EXPECT_LT(block, 0.005);
+    // No bias beyond the light through the glass: mean indirect within 4%.
+    const glm::vec3 ma = image_mean(a), mb = image_mean(b);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(ma[c], mb[c], 0.04f * mb[c]);
+    // Photon mapping's caustic component is the light focused by the sphere; the path tracer has
+    // none.
+    EXPECT_GT(image_mean(photons.components[size_t(Component::caustics)]).r, 0.0f);
+    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
+}
+
+}  // namespace ag::cpu
