@@ -1,0 +1,7 @@
+# Convergence over time (label convergence): selective against brute force on the Cornell scene.
+add_test(NAME convergence.cornell_move_cube
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/convergence_test.sh $<TARGET_FILE:afterglow>
+                 ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.cornell_move_cube PROPERTIES LABELS convergence SKIP_RETURN_CODE 77
+                     TIMEOUT 600)
