@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "cpu/sampling.h"
 #include "shared/qmc.h"
 
 namespace ag::cpu {
@@ -12,21 +13,7 @@ namespace {
 constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxSpecularBounces = 12;
 
-glm::vec3 any_perpendicular(const glm::vec3& n) {
-    return glm::normalize(std::abs(n.x) > 0.5f ? glm::cross(n, glm::vec3(0, 1, 0)) : glm::cross(n, glm::vec3(1, 0, 0)));
-}
 
-float fresnel(float cos_i, float eta, float& cos_t) {
-    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
-    if (sin2_t >= 1.0f) {
-        cos_t = 0.0f;
-        return 1.0f;
-    }
-    cos_t = std::sqrt(1.0f - sin2_t);
-    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5f * (rs * rs + rp * rp);
-}
 
 }  // namespace
 
@@ -92,7 +79,8 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     const double x = halton.sample(k, 1) * cone->one_minus_cos;
     const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
     const float phi = 2.0f * kPi * float(halton.sample(k, 2));
-    const glm::vec3 u = any_perpendicular(axis), v = glm::cross(axis, u);
+    glm::vec3 u, v;
+    orthonormal_basis(axis, u, v);
     ray.direction = glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));
     if (l.type == LightType::point) {
         power = l.intensity * total / float(n);  // the flux into all cones, shared by n photons
@@ -118,23 +106,10 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
         }
         if (bounce == 0) hit_specular = true;
         specular_seen = true;
-        const glm::vec3 d = glm::normalize(ray.direction);
-        if (m.type == MaterialType::mirror) {
-            ray.origin = hit.position + eps * facing;
-            ray.direction = glm::reflect(d, facing);
-            continue;
-        }
-        const float eta = front ? 1.0f / m.ior : m.ior;
-        const float cos_i = -glm::dot(d, facing);
-        float cos_out = 0.0f;
-        const float f = fresnel(cos_i, eta, cos_out);
-        if (float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1))) < f) {
-            ray.origin = hit.position + eps * facing;
-            ray.direction = glm::reflect(d, facing);
-        } else {
-            ray.origin = hit.position - eps * facing;
-            ray.direction = glm::normalize(eta * d + (eta * cos_i - cos_out) * facing);
-        }
+        const float fresnel_u = m.type == MaterialType::glass
+                            ? float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1)))
+                            : 0.0f;
+        ray = specular_bounce(m, hit, ray.direction, fresnel_u, eps);
     }
     return {};
 }

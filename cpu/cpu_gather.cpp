@@ -1,5 +1,7 @@
 #include "cpu/cpu_gather.h"
 
+#include "cpu/sampling.h"
+
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -13,14 +15,6 @@ namespace {
 
 constexpr float kQuarterPi = 0.785398163397448f;
 
-// Orthonormal basis around unit n (Duff et al. 2017).
-void basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float c = n.x * n.y * a;
-    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
-    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
-}
 
 // Shirley–Chiu concentric map of the unit square onto the unit disc. Lifted to the hemisphere
 // (z = √(1 - r²)) it gives cosine-weighted directions, and unlike the polar map it keeps the
@@ -65,7 +59,7 @@ CpuGather::TexelResult CpuGather::gather_texel(int record,
     const glm::vec3 n = glm::normalize(transform.apply_vector(texel.normal));
     const glm::vec3 origin = transform.apply_point(texel.position) + rays_.epsilon() * n;
     glm::vec3 t, b;
-    basis(n, t, b);
+    orthonormal_basis(n, t, b);
     const glm::vec2 shift = texel_shift(scene_.settings.seed, record);
 
     glm::vec3 sum(0.0f);

@@ -1,5 +1,7 @@
 #include "cpu/photon_tracer.h"
 
+#include "cpu/sampling.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -7,47 +9,9 @@ namespace ag::cpu {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
 constexpr int kQmcBounces = 16;
 // Per photon: the 2D emission point, then Halton dimensions 1.. (quad position, two bounces).
 constexpr int kTabulated = 1 + 2 + 3 * 2 + 1;
-
-// Orthonormal basis around unit n (Duff et al. 2017).
-void basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float c = n.x * n.y * a;
-    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
-    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
-}
-
-// Cosine-weighted direction about n (Larsen ch. 6.3: φ = arccos √r2, θ = 2π r1).
-glm::vec3 cosine_direction(const glm::vec3& n, float r1, float r2) {
-    glm::vec3 t, b;
-    basis(n, t, b);
-    const float phi = 2.0f * kPi * r1, r = std::sqrt(r2);
-    const float z = std::sqrt(std::max(0.0f, 1.0f - r2));
-    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * n);
-}
-
-glm::vec3 sphere_direction(float r1, float r2) {
-    const float z = 1.0f - 2.0f * r1, phi = 2.0f * kPi * r2;
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return {r * std::cos(phi), r * std::sin(phi), z};
-}
-
-// Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t.
-float fresnel(float cos_i, float eta, float& cos_t) {
-    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
-    if (sin2_t >= 1.0f) {
-        cos_t = 0.0f;
-        return 1.0f;  // total internal reflection
-    }
-    cos_t = std::sqrt(1.0f - sin2_t);
-    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5f * (rs * rs + rp * rp);
-}
 
 }  // namespace
 
@@ -174,24 +138,10 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
             power *= m.albedo / p;
             ray.origin = hit.position + eps * facing;
             ray.direction = cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));
-        } else if (m.type == MaterialType::mirror) {
+        } else {  // mirror or glass: reflect, or refract by Fresnel, without storing
             out.push_back(v);
-            ray.origin = hit.position + eps * facing;
-            ray.direction = glm::reflect(ray.direction, facing);
-        } else {  // glass: Fresnel decides reflection or refraction
-            out.push_back(v);
-            const float eta = front ? 1.0f / m.ior : m.ior;
-            const glm::vec3 d = glm::normalize(ray.direction);
-            const float cos_i = -glm::dot(d, facing);
-            float cos_t = 0.0f;
-            const float f = fresnel(cos_i, eta, cos_t);
-            if (sample(light, k, dim) < f) {
-                ray.origin = hit.position + eps * facing;
-                ray.direction = glm::reflect(d, facing);
-            } else {
-                ray.origin = hit.position - eps * facing;
-                ray.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
-            }
+            const float u = m.type == MaterialType::glass ? sample(light, k, dim) : 0.0f;
+            ray = specular_bounce(m, hit, ray.direction, u, eps);
         }
     }
 }

@@ -20,31 +20,11 @@ constexpr float kPi = 3.14159265358979f;
 constexpr float kOneBelowOne = 0x1.fffffep-1f;
 constexpr int kTileSize = 16;
 
-// Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t.
-float fresnel(float cos_i, float eta, float& cos_t) {
-    const float sin2_t = eta * eta * std::max(0.0f, 1.0f - cos_i * cos_i);
-    if (sin2_t >= 1.0f) {
-        cos_t = 0.0f;
-        return 1.0f;  // total internal reflection
-    }
-    cos_t = std::sqrt(1.0f - sin2_t);
-    const float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    const float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    return 0.5f * (rs * rs + rp * rp);
-}
 
 float to_unit(uint64_t h) { return float(h >> 40) * (1.0f / 16777216.0f); }
 
 }  // namespace
 
-// Orthonormal basis around unit n (Duff et al. 2017).
-void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
-    const float sign = std::copysign(1.0f, n.z);
-    const float a = -1.0f / (sign + n.z);
-    const float c = n.x * n.y * a;
-    t = glm::vec3(1.0f + sign * n.x * n.x * a, sign * c, -sign * n.x);
-    b = glm::vec3(c, sign + n.y * n.y * a, -n.y);
-}
 
 glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u) {
     const float a = 2.0f * u.x - 1.0f, b = 2.0f * u.y - 1.0f;
@@ -108,48 +88,9 @@ float Sampler::get(int dim) const {
     return to_unit(mix64(h ^ mix64(index_)));
 }
 
-glm::vec3 cosine_direction(const glm::vec3& n, float u1, float u2) {
-    glm::vec3 t, b;
-    orthonormal_basis(n, t, b);
-    const float phi = 2.0f * kPi * u1, r = std::sqrt(u2);
-    const float z = std::sqrt(std::max(0.0f, 1.0f - u2));
-    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * n);
-}
 
-glm::vec3 sphere_direction(float u1, float u2) {
-    const float z = 1.0f - 2.0f * u1, phi = 2.0f * kPi * u2;
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return {r * std::cos(phi), r * std::sin(phi), z};
-}
 
-glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2) {
-    glm::vec3 t, b;
-    orthonormal_basis(axis, t, b);
-    const float z = 1.0f - u1 * (1.0f - cos_max), phi = 2.0f * kPi * u2;
-    const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-    return glm::normalize(r * std::cos(phi) * t + r * std::sin(phi) * b + z * axis);
-}
 
-Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
-                    float u, float epsilon) {
-    const glm::vec3 d = glm::normalize(direction);
-    const bool front = glm::dot(d, hit.normal) < 0.0f;
-    const glm::vec3 facing = front ? hit.normal : -hit.normal;  // towards the incoming side
-    Ray out;
-    if (material.type == MaterialType::glass) {
-        const float eta = front ? 1.0f / material.ior : material.ior;
-        const float cos_i = -glm::dot(d, facing);
-        float cos_t = 0.0f;
-        if (u >= fresnel(cos_i, eta, cos_t)) {
-            out.origin = hit.position - epsilon * facing;
-            out.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
-            return out;
-        }
-    }
-    out.origin = hit.position + epsilon * facing;
-    out.direction = glm::reflect(d, facing);
-    return out;
-}
 
 glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
                             const glm::vec3& n, int quad_samples, float u1, float u2) {

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "cpu/ray_tracer.h"
+#include "cpu/sampling.h"
 #include "shared/image.h"
 #include "shared/parallel.h"
 #include "shared/qmc.h"
@@ -102,21 +103,12 @@ uint64_t mix64(uint64_t x);                       // SplitMix64 finaliser
 float hashed_uniform(uint64_t a, uint64_t b);     // [0, 1) from two words
 uint64_t pixel_key(uint32_t seed, int x, int y);  // a pixel's Sampler key
 
-glm::vec3 cosine_direction(const glm::vec3& n, float u1, float u2);
 // Shirley–Chiu concentric map between the unit square and the cosine-weighted hemisphere about
 // +z (area-preserving, so uniform squares give cosine-weighted directions, and compact regions of
 // the hemisphere stay compact in the square: what lets a histogram guide final-gather rays).
 glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u);
 glm::vec2 cosine_hemisphere_to_square(const glm::vec3& d);  // d.z ≥ 0; inverse of the above
-void orthonormal_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b);
-glm::vec3 sphere_direction(float u1, float u2);
-// Uniform in the cone of directions within angle acos(cos_max) of the unit `axis`.
-glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2);
 
-// A mirror reflects; glass reflects with the Fresnel probability (u < F) and refracts otherwise.
-// Neither absorbs (albedo is unused), as in the photon tracer. Returns the continuing ray.
-Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
-                    float u, float epsilon);
 
 // Irradiance E at the front side (p, n) straight from the scene's enabled lights: point lights
 // with a hard shadow (I cos / d²), quad lights by `quad_samples` shadow rays on a rotated 2D
