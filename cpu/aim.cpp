@@ -49,6 +49,18 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         e[i] = glm::vec3(sum / (kPi * r2));
     }, 16);
 
+    // Near a surface's edges the kNN disc reaches past the surface and the estimate falls (to
+    // about ½ on an edge, ¼ in a corner); with a few texels per wall most texels sit there.
+    // Scale the surface's estimates so that their integral, Σ E·area, equals the flux its photon
+    // hits actually carry: the AIM keeps the kNN shape and conserves energy per surface.
+    glm::dvec3 estimated(0.0);
+    for (size_t i = 0; i < texels.size(); ++i)
+        estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(texels[i])].area);
+    for (int c = 0; c < 3; ++c) {
+        const double scale = estimated[c] > 0.0 ? s.flux[c] / estimated[c] : 0.0;
+        for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
+    }
+
     for (size_t i = 0; i < texels.size(); ++i) {
         const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
         const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
