@@ -79,11 +79,21 @@ uniform sampler2D splat;
 uniform sampler2D surface;
 uniform int k;
 uniform ivec2 size;
+uniform int block_level;  // mip level whose texels are 8×8-pixel blocks of the splats
 out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(surface, p, 0);
     if (s.a <= 0.0) { color = vec4(0.0); return; }
+    // Photons are sparse: if no 8×8 block the kernel touches holds one (their mean count, in
+    // alpha, is 0), the result is exactly 0 and the 49 fetches are skipped.
+    if (block_level > 0) {
+        ivec2 lo = max(p - ivec2(k), ivec2(0)) >> 3, hi = min(p + ivec2(k), size - 1) >> 3;
+        float any = 0.0;
+        for (int by = lo.y; by <= hi.y; ++by)
+            for (int bx = lo.x; bx <= hi.x; ++bx) any += texelFetch(splat, ivec2(bx, by), block_level).a;
+        if (any <= 0.0) { color = vec4(0.0); return; }
+    }
     vec3 sum = vec3(0.0);
     float weights = 0.0;
     for (int j = -k; j <= k; ++j)
@@ -128,7 +138,7 @@ CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes
     filter_ = Program("caustics filter", kFullScreenVertex, kFilterFragment);
     position_ = make_float_texture(width, height);
     surface_ = make_float_texture(width, height);
-    splat_texture_ = make_float_texture(width, height);
+    splat_texture_ = make_float_texture(width, height, true);
     result_ = make_float_texture(width, height);
     depth_stencil_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
@@ -241,8 +251,13 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
     gl::Disable(GL_STENCIL_TEST);
     query_ms_ = elapsed_ms(t);
 
-    // 4. The filter, on the kept tiles only.
+    // 4. The filter, on the kept tiles only. The splats' mip level 3 tells which 8×8 blocks hold
+    //    photons (Mesa regenerates stale levels while the texture is attached: unbind first).
     t = std::chrono::steady_clock::now();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
+    gl::GenerateMipmap(GL_TEXTURE_2D);
     gl::BindFramebuffer(GL_FRAMEBUFFER, result_fbo_.get());
     gl::DrawBuffers(1, &one);
     gl::Viewport(0, 0, width_, height_);
@@ -251,6 +266,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
     filter_.set("splat", 0);
     filter_.set("surface", 1);
     filter_.set("k", scene_.settings.caustics.kernel_k);
+    // Level 3 is an exact 8×8 box only when both sides divide by 8.
+    filter_.set("block_level", width_ % 8 == 0 && height_ % 8 == 0 ? 3 : 0);
     gl::Uniform2i(filter_.location("size"), width_, height_);
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
