@@ -1,5 +1,7 @@
 #include "gpu/hemi_plane_gather.h"
 
+#include "gpu/lightmap_texture.h"
+
 #include <algorithm>
 #include <cmath>
 
@@ -15,19 +17,25 @@ const char* kVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
 layout(location = 2) in vec2 uv;
+layout(location = 3) in float chart;
 uniform mat4 model, view_projection;
 out vec2 v_uv;
+flat out float v_chart;
 void main() {
     v_uv = uv;
+    v_chart = chart;
     gl_Position = view_projection * model * vec4(position, 1.0);
 }
 )";
 
 // rgb: weight × AIM radiance; alpha: weight if the pixel shows a back face (texel behind or
 // inside geometry), so after the reduction alpha is the share of such pixels.
-const char* kFragment = R"(
+const std::string kFragment = std::string(kChartLightmapGlsl) + R"(
 in vec2 v_uv;
+flat in float v_chart;
 uniform sampler2D aim;
+uniform sampler2D charts;
+uniform int use_charts;
 uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int resolution;
@@ -37,7 +45,8 @@ void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
     if (!gl_FrontFacing) { color = vec4(0.0, 0.0, 0.0, w); return; }
-    vec3 radiance = specular != 0 ? vec3(0.0) : texture(aim, v_uv).rgb;
+    vec3 radiance = specular != 0 ? vec3(0.0) : (use_charts != 0 ? chart_lightmap(aim, charts, v_uv, v_chart)
+                                                    : texture(aim, v_uv).rgb);
     color = vec4(w * radiance, 0.0);
 }
 )";
@@ -127,7 +136,8 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     check_gl("HemiPlaneGather");
 }
 
-std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture) {
+std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture,
+                                                  GLuint chart_texture) {
     std::vector<GatherResult> out(texels.size());
     const int size = tiles_x_ * resolution_;
     const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
@@ -151,6 +161,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.use();
     program_.set("aim", 0);
     program_.set("weights", 1);
+    program_.set("charts", 2);
+    program_.set("use_charts", chart_texture ? 1 : 0);
     program_.set("resolution", resolution_);
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
@@ -166,6 +178,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         gl::BindTexture(GL_TEXTURE_2D, aim_texture);
         gl::ActiveTexture(GL_TEXTURE1);
         gl::BindTexture(GL_TEXTURE_2D, weights_.get());
+        gl::ActiveTexture(GL_TEXTURE2);
+        gl::BindTexture(GL_TEXTURE_2D, chart_texture);
         gl::Viewport(0, 0, size, size);
         gl::ClearColor(0, 0, 0, 0);
         gl::ClearDepth(0.0);
@@ -192,7 +206,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         // Mesa 22.3 (llvmpipe) regenerates stale levels if the texture is still attached to the
         // bound framebuffer: unbind it first.
         gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
-        gl::ActiveTexture(GL_TEXTURE2);
+        gl::ActiveTexture(GL_TEXTURE3);
         gl::BindTexture(GL_TEXTURE_2D, color_.get());
         gl::GenerateMipmap(GL_TEXTURE_2D);
         std::vector<float> means(size_t(tiles_x_) * size_t(tiles_x_) * 4);

@@ -36,8 +36,11 @@ public:
     HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256);
 
     // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
-    // (atlas-sized RGBA32F, linear filtering). Results in the same order.
-    std::vector<GatherResult> gather(const std::vector<int>& texels, GLuint aim_texture);
+    // (atlas-sized RGBA32F). With `chart_texture` (LightmapTexture::charts()) the AIM is read
+    // chart-aware, exactly like the CPU gather; without it, by plain bilinear filtering of the
+    // dilated atlas. Results in the same order.
+    std::vector<GatherResult> gather(const std::vector<int>& texels, GLuint aim_texture,
+                                     GLuint chart_texture = 0);
 
     int resolution() const { return resolution_; }
     int tiles_per_pass() const { return tiles_x_ * tiles_x_; }

@@ -4,6 +4,7 @@
 
 namespace ag::gpu {
 
+
 LightmapTexture::LightmapTexture(const LightmapAtlas& atlas) : atlas_(atlas) {
     const int w = std::max(1, atlas.width), h = std::max(1, atlas.height);
     rgba_.assign(size_t(w) * size_t(h) * 4, 0.0f);
@@ -11,6 +12,9 @@ LightmapTexture::LightmapTexture(const LightmapAtlas& atlas) : atlas_(atlas) {
     texture_ = make_float_texture(w, h, false, rgba_.data());
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    std::vector<float> charts(size_t(w) * size_t(h) * 4, -1.0f);
+    for (const TexelRecord& t : atlas.texels) charts[(size_t(t.y) * size_t(w) + size_t(t.x)) * 4] = float(t.chart);
+    charts_ = make_float_texture(w, h, false, charts.data());
     gutter_of_.resize(size_t(w) * size_t(h));
     sources_of_.resize(size_t(w) * size_t(h));
     if (atlas.texel_index.empty()) return;

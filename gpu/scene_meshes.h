@@ -12,7 +12,8 @@
 
 namespace ag::gpu {
 
-// Vertex layout: location 0 position (vec3), 1 normal (vec3), 2 lightmap uv (vec2, [0,1]).
+// Vertex layout: location 0 position (vec3), 1 normal (vec3), 2 lightmap uv (vec2, [0,1]),
+// 3 the triangle's chart id (float; −1 without a lightmap), for chart-aware lightmap lookups.
 class SceneMeshes {
 public:
     explicit SceneMeshes(const Scene& scene);
