@@ -197,8 +197,8 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
                 }
                 return 1e3 * best / double(texels.size());
             };
-            const double gl_batched = time_ms([&] { batched.gather(texels, aim_texture.id()); });
-            const double gl_single = time_ms([&] { single.gather(texels, aim_texture.id()); });
+            const double gl_batched = time_ms([&] { batched.gather(texels, aim_texture.id(), aim_texture.charts()); });
+            const double gl_single = time_ms([&] { single.gather(texels, aim_texture.id(), aim_texture.charts()); });
             scene.settings.gather.cpu_rays = r * r;
             cpu::CpuGather cpu_r(scene, sim.rays(), pool);
             const double cpu_rr = time_ms([&] { cpu_r.gather(texels, aim.radiance(), iim); });
