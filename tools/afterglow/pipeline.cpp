@@ -67,6 +67,7 @@ void Pipeline::schedule_from_deltas() {
 }
 
 void Pipeline::gather(PipelineStats& stats) {
+    last_gathered_.clear();
     std::vector<int> batch;
     while (!pending_.empty() && int(batch.size()) < scene_.settings.gather.texels_per_frame) {
         batch.push_back(pending_.front());
@@ -96,6 +97,7 @@ void Pipeline::gather(PipelineStats& stats) {
         blend_start_[a] = int(frame_);
     }
     stats.iim_texels_gathered = int(batch.size());
+    last_gathered_ = batch;
 }
 
 void Pipeline::gather_batch(const std::vector<int>& batch, GatherBackend backend) {

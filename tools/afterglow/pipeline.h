@@ -59,6 +59,18 @@ public:
     // Per-texel gather cost measured when choosing the backend (µs; 0 if not measured).
     double gl_gather_us() const { return gl_us_; }
     double cpu_gather_us() const { return cpu_us_; }
+    // Switches the IIM gather backend (gl or cpu; `automatic` is only measured at construction)
+    // from the next frame on.
+    void set_gather_backend(GatherBackend backend) {
+        if (backend != GatherBackend::automatic) backend_ = backend;
+    }
+
+    // For the viewer's diagnostic views and statistics; read them between frames (after frame()
+    // returns no photon work is in flight).
+    const cpu::PhotonSimulation& photons() const { return *photons_; }
+    const gpu::SceneMeshes& meshes() const { return *meshes_; }
+    const std::vector<char>& texel_pending() const { return is_pending_; }  // per texel record
+    const std::vector<int>& last_gathered() const { return last_gathered_; }  // records, last frame
 
 private:
     void schedule_from_deltas();
@@ -93,6 +105,7 @@ private:
     // IIM: texels waiting for a gather (FIFO, each once), and the blend from old to new values.
     std::deque<int> pending_;          // texel record indices
     std::vector<char> is_pending_;
+    std::vector<int> last_gathered_;   // texel records gathered in the last frame
     std::vector<glm::vec3> iim_from_, iim_to_, iim_shown_;  // atlas-sized
     std::vector<int> blend_start_;     // per atlas texel: frame the new value arrived, −1 = done
     std::vector<int> blending_;        // atlas texels currently blending
