@@ -107,7 +107,7 @@ void Pipeline::gather_batch(const std::vector<int>& batch, GatherBackend backend
         for (int r : batch) texel_valid_[size_t(r)] = cpu_gather_->valid()[size_t(r)];
         return;
     }
-    const std::vector<gpu::GatherResult> results = gatherer_->gather(batch, aim_texture_->id());
+    const std::vector<gpu::GatherResult> results = gatherer_->gather(batch, aim_texture_->id(), aim_texture_->charts());
     const int w = scene_.atlas.width;
     std::vector<int> invalid;
     for (size_t k = 0; k < batch.size(); ++k) {
