@@ -12,24 +12,6 @@ namespace {
 
 constexpr int kMaxLights = 64;
 
-// Shared by every scene pass: identical position math keeps depth equal between passes.
-const char* kSceneVertex = R"(
-layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 normal;
-layout(location = 2) in vec2 uv;
-uniform mat4 model, view_projection;
-out vec3 v_world;
-out vec3 v_normal;
-out vec2 v_uv;
-invariant gl_Position;
-void main() {
-    vec4 world = model * vec4(position, 1.0);
-    v_world = world.xyz;
-    v_normal = mat3(model) * normal;
-    v_uv = uv;
-    gl_Position = view_projection * world;
-}
-)";
 
 const char* kLightsGlsl = R"(
 const int kMaxLights = 64;

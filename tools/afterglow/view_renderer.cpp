@@ -11,23 +11,6 @@ namespace {
 
 constexpr int kIdTextureWidth = 4096;  // surface ids of all triangles, row by row
 
-const char* kSceneVertex = R"(
-layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 normal;
-layout(location = 2) in vec2 uv;
-uniform mat4 model, view_projection;
-out vec3 v_normal;
-out vec3 v_world;
-out vec2 v_uv;
-invariant gl_Position;
-void main() {
-    vec4 world = model * vec4(position, 1.0);
-    v_world = world.xyz;
-    v_normal = mat3(model) * normal;
-    v_uv = uv;
-    gl_Position = view_projection * world;
-}
-)";
 
 // mode 0: an atlas (AIM radiance or IIM) on the scene, plus emission; 1: surfaces in unique
 // colours; 2: a flat tint (the selection).
@@ -122,7 +105,7 @@ void main() {
 ViewRenderer::ViewRenderer(const Scene& scene, const gpu::SceneMeshes& meshes, int width,
                            int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
-    scene_program_ = gpu::Program("view scene", kSceneVertex, kSceneFragment);
+    scene_program_ = gpu::Program("view scene", gpu::kSceneVertex, kSceneFragment);
     copy_program_ = gpu::Program("view copy", kFullScreenVertex, kCopyFragment);
     points_program_ = gpu::Program("view points", kPointsVertex, kPointsFragment);
     present_program_ = gpu::Program("view present", kFullScreenVertex, kPresentFragment);
