@@ -46,13 +46,17 @@ float wrap(float x) { return x >= 1.0f ? x - 1.0f : x; }
 
 }  // namespace
 
-CpuGather::CpuGather(const Scene& scene, const RayTracer& rays, ThreadPool& pool)
-    : scene_(scene), rays_(rays), pool_(pool) {
-    valid_.assign(scene_.atlas.texels.size(), 0);
-}
+CpuGather::CpuGather(const Scene& scene, const RayTracer& rays, ThreadPool& pool,
+                     const std::vector<glm::vec3>* aim)
+    : scene_(scene), rays_(rays), pool_(pool), aim_(aim) {}
 
-CpuGather::TexelResult CpuGather::gather_texel(int record,
-                                               const std::vector<glm::vec3>& aim_radiance) const {
+CpuGather::CpuGather(const Scene& scene, ThreadPool& pool, const std::vector<glm::vec3>* aim)
+    : scene_(scene), own_rays_(std::make_unique<RayTracer>(scene)), rays_(*own_rays_), pool_(pool),
+      aim_(aim) {}
+
+CpuGather::~CpuGather() = default;
+
+GatherResult CpuGather::gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const {
     const LightmapAtlas& atlas = scene_.atlas;
     const TexelRecord& texel = atlas.texels[size_t(record)];
     const Transform& transform = scene_.objects[size_t(texel.object)].transform;
@@ -82,19 +86,21 @@ CpuGather::TexelResult CpuGather::gather_texel(int record,
         sum += sample_lightmap(atlas, aim_radiance, hit.object, hit.triangle, hit.barycentric);
     }
     // Cosine-weighted directions make E = π · mean(L) (eq. 11.1); the IIM holds E / π.
-    TexelResult result;
+    GatherResult result;
     result.iim = sum / float(points_.size());
-    result.valid = float(back_faces) <= kBackFaceInvalidFraction * float(points_.size());
+    result.back_fraction = float(back_faces) / float(points_.size());
     return result;
 }
 
-void CpuGather::gather(const std::vector<int>& texel_ids,
-                       const std::vector<glm::vec3>& aim_radiance, std::vector<glm::vec3>& iim) {
-    const LightmapAtlas& atlas = scene_.atlas;
-    const size_t atlas_size = size_t(atlas.width) * size_t(atlas.height);
-    assert(aim_radiance.size() == atlas_size && iim.size() == atlas_size);
-    (void)atlas_size;
-    if (valid_.size() != atlas.texels.size()) valid_.assign(atlas.texels.size(), 0);
+std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels) {
+    assert(aim_ && "CpuGather: gather(texels) needs the AIM given at construction");
+    return gather(texels, *aim_);
+}
+
+std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
+                                            const std::vector<glm::vec3>& aim_radiance) {
+    assert(aim_radiance.size() == size_t(scene_.atlas.width) * size_t(scene_.atlas.height));
+    if (own_rays_) own_rays_->update(scene_);
 
     // A 2D Hammersley set: (i + ½)/N against the base-2 radical inverse.
     const int count = std::max(1, scene_.settings.gather.cpu_rays);
@@ -105,26 +111,15 @@ void CpuGather::gather(const std::vector<int>& texel_ids,
                 glm::vec2((float(i) + 0.5f) / float(count), float(radical_inverse(2, uint64_t(i))));
     }
 
-    std::vector<TexelResult> results(texel_ids.size());
+    std::vector<GatherResult> results(texels.size());
     pool_.parallel_for(
-        texel_ids.size(), [&](size_t i) { results[i] = gather_texel(texel_ids[i], aim_radiance); },
-        4);
+        texels.size(), [&](size_t i) { results[i] = gather_texel(texels[i], aim_radiance); }, 4);
 
-    std::vector<int> invalid;
-    for (size_t i = 0; i < texel_ids.size(); ++i) {
-        const int r = texel_ids[i];
-        valid_[size_t(r)] = results[i].valid;
-        const TexelRecord& texel = atlas.texels[size_t(r)];
-        if (results[i].valid)
-            iim[size_t(texel.y) * size_t(atlas.width) + size_t(texel.x)] = results[i].iim;
-        else
-            invalid.push_back(r);
-    }
-    if (!invalid.empty()) repair_invalid_texels(atlas, iim, valid_, invalid);
-
-    stats_.texels = int(texel_ids.size());
-    stats_.invalid = int(invalid.size());
-    stats_.rays = uint64_t(texel_ids.size()) * uint64_t(count);
+    stats_.texels = int(texels.size());
+    stats_.invalid = 0;
+    for (const GatherResult& r : results) stats_.invalid += r.back_fraction > kBackFaceInvalidFraction;
+    stats_.rays = uint64_t(texels.size()) * uint64_t(count);
+    return results;
 }
 
 }  // namespace ag::cpu

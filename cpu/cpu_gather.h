@@ -6,9 +6,11 @@
 
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
 #include "cpu/ray_tracer.h"
+#include "shared/gather.h"
 #include "shared/parallel.h"
 #include "shared/scene.h"
 
@@ -16,41 +18,39 @@ namespace ag::cpu {
 
 struct CpuGatherStats {
     int texels = 0;     // texels gathered by the last call
-    int invalid = 0;    // of those, repaired from neighbours (gather started inside geometry)
+    int invalid = 0;    // of those, with more back faces than kBackFaceInvalidFraction
     uint64_t rays = 0;  // rays cast by the last call
 };
 
-class CpuGather {
+class CpuGather final : public Gatherer {
 public:
-    // `rays` must reflect the scene's current transforms when gather() runs (the photon
-    // simulation keeps its tracer up to date each frame).
-    CpuGather(const Scene& scene, const RayTracer& rays, ThreadPool& pool);
+    // Casts rays with `rays`, which must reflect the scene's current transforms when gather()
+    // runs. `aim` (atlas-sized, as Aim::radiance()) is what gather(texels) reads; it may be null
+    // when only the two-argument form is used.
+    CpuGather(const Scene& scene, const RayTracer& rays, ThreadPool& pool,
+              const std::vector<glm::vec3>* aim = nullptr);
+    // Owns its ray tracer and brings it up to date before every gather (the pipeline's photon
+    // simulation updates its own tracer on the workers while the gather runs).
+    CpuGather(const Scene& scene, ThreadPool& pool, const std::vector<glm::vec3>* aim);
+    ~CpuGather() override;
 
-    // Gathers the texels `texel_ids` (indices into scene.atlas.texels) with
-    // settings.gather.cpu_rays rays each, reading `aim_radiance` (atlas-sized, as Aim::radiance())
-    // and writing E/π into `iim` (atlas-sized) at those texels only. Texels whose rays see too
-    // many back faces (kBackFaceInvalidFraction) are invalid and take the value of valid
-    // neighbours of their chart (repair_invalid_texels). Deterministic for any thread count.
-    void gather(const std::vector<int>& texel_ids, const std::vector<glm::vec3>& aim_radiance,
-                std::vector<glm::vec3>& iim);
-
-    // Per texel record: 1 if its latest gather was valid; 0 if invalid or never gathered. Only
-    // valid texels serve as sources for repairs.
-    const std::vector<char>& valid() const { return valid_; }
+    GatherBackend backend() const override { return GatherBackend::cpu; }
+    std::vector<GatherResult> gather(const std::vector<int>& texels) override;
+    // The same with an explicit AIM: settings.gather.cpu_rays cosine-distributed QMC rays per
+    // texel read `aim_radiance` where they land.
+    std::vector<GatherResult> gather(const std::vector<int>& texels,
+                                     const std::vector<glm::vec3>& aim_radiance);
     const CpuGatherStats& last_stats() const { return stats_; }
 
 private:
-    struct TexelResult {
-        glm::vec3 iim{0.0f};
-        bool valid = false;
-    };
-    TexelResult gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const;
+    GatherResult gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const;
 
     const Scene& scene_;
+    std::unique_ptr<RayTracer> own_rays_;
     const RayTracer& rays_;
     ThreadPool& pool_;
+    const std::vector<glm::vec3>* aim_;
     std::vector<glm::vec2> points_;  // unscrambled 2D Hammersley set, settings.gather.cpu_rays
-    std::vector<char> valid_;
     CpuGatherStats stats_;
 };
 

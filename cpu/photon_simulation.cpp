@@ -128,7 +128,16 @@ void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& gr
     }
 }
 
-PhotonFrameStats PhotonSimulation::frame() {
+PhotonFrameStats PhotonSimulation::frame() { return frame(scene_.settings.photons.retrace_budget); }
+
+int PhotonSimulation::invalidate_all() {
+    PhotonFrameStats stats;
+    for (int l = 0; l < int(scene_.lights.size()); ++l)
+        for (int g = 0; g < scene_.settings.photons.groups; ++g) invalidate(l, g, stats);
+    return stats.groups_invalidated;
+}
+
+PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     PhotonFrameStats stats;
     stats.frame = ++frame_;
     apply_changes(stats);
@@ -157,7 +166,7 @@ PhotonFrameStats PhotonSimulation::frame() {
 
     // Work off the queue under the budget (whole groups; at least one per frame).
     std::vector<std::pair<int, int>> batch;
-    int budget = settings.retrace_budget;
+    int budget = retrace_budget;
     while (!queue_.empty() && (batch.empty() || budget >= settings.photons_per_group)) {
         batch.push_back(queue_.front());
         queue_.pop_front();

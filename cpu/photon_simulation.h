@@ -44,6 +44,11 @@ public:
     // One frame of photon work on the pool's worker threads: applies the scene's edits since the
     // last frame, verifies one photon per group, re-traces queued groups within the budget.
     PhotonFrameStats frame();
+    // The same with another retrace budget (photons) than settings.photons.retrace_budget.
+    PhotonFrameStats frame(int retrace_budget);
+    // Queues every group of every enabled light for a retrace (brute force: nothing is trusted);
+    // returns how many were queued.
+    int invalidate_all();
 
     // Traces every group from scratch in the current scene (a fresh simulation's state).
     void trace_all();

@@ -64,6 +64,7 @@ in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
 uniform sampler2D iim;
+uniform int iim_in_screen;  // 1: the indirect term is a screen-space image (IndirectSpace::screen)
 uniform sampler2D caustics;
 uniform int has_caustics;
 uniform vec3 albedo;
@@ -84,7 +85,9 @@ void main() {
         return;
     }
     out_direct.rgb = emission;
-    out_indirect.rgb = albedo * texture(iim, v_uv).rgb;  // L_indirect = IIM × albedo
+    // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
+    vec3 e = iim_in_screen != 0 ? texture(iim, gl_FragCoord.xy / screen).rgb : texture(iim, v_uv).rgb;
+    out_indirect.rgb = albedo * e;
     if (has_caustics != 0) out_caustics.rgb = texture(caustics, gl_FragCoord.xy / screen).rgb;
 }
 )";
@@ -303,8 +306,15 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light, const glm::mat
 }
 
 void FrameRenderer::render(GLuint iim, GLuint caustics) {
+    render(IndirectTerm{iim, IndirectSpace::lightmap}, caustics);
+}
+
+void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     const std::vector<LightSample> lights = light_samples(scene_);
-    render_cube_maps(iim, lights);
+    // Cube maps see the scene by its lightmaps; a screen-space term has none to give them.
+    const GLuint iim = indirect.texture;
+    const bool in_screen = indirect.space == IndirectSpace::screen;
+    render_cube_maps(in_screen ? 0 : iim, lights);
 
     Camera camera = scene_.camera;
     camera.width = width_;
@@ -321,6 +331,7 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
     gbuffer_.use();
     gbuffer_.set("view_projection", view_projection);
     gbuffer_.set("iim", 0);
+    gbuffer_.set("iim_in_screen", in_screen ? 1 : 0);
     gbuffer_.set("caustics", 1);
     gbuffer_.set("environment", 2);
     gbuffer_.set("has_caustics", caustics ? 1 : 0);

@@ -32,6 +32,15 @@ struct LightSample {
 // The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples).
 std::vector<LightSample> light_samples(const Scene& scene);
 
+// Where an indirect method's term lives (DESIGN.md "Indirect methods on one scene graph"): an
+// atlas-sized lightmap read at each surface point (the IIM), or a frame-sized image read at each
+// pixel. Both hold E_indirect/π; the frame multiplies by the albedo.
+enum class IndirectSpace { lightmap, screen };
+struct IndirectTerm {
+    GLuint texture = 0;
+    IndirectSpace space = IndirectSpace::lightmap;
+};
+
 struct FrameImages {
     Image frame;
     std::array<Image, 4> aov;  // indexed by Aov
@@ -44,6 +53,8 @@ public:
     // Renders the current scene. `iim` and `caustics` are GL textures (atlas-sized IIM;
     // screen-sized caustic radiance, or 0 for none).
     void render(GLuint iim, GLuint caustics = 0);
+    // The same with the indirect term in lightmap or screen space.
+    void render(const IndirectTerm& indirect, GLuint caustics = 0);
     FrameImages read_back() const;  // rows top-first, linear radiance
 
     int width() const { return width_; }

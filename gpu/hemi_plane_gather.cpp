@@ -108,8 +108,9 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCo
     return std::vector<float>(w.begin(), w.end());
 }
 
-HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles)
-    : scene_(scene), meshes_(meshes) {
+HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles,
+                                 const LightmapTexture* aim)
+    : scene_(scene), meshes_(meshes), aim_(aim) {
     resolution_ = 1;
     while (resolution_ < scene.settings.gather.plane_resolution) resolution_ *= 2;  // mip alignment
     level_ = 0;
@@ -134,6 +135,11 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
         throw GlError("hemi-plane gather: framebuffer incomplete");
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("HemiPlaneGather");
+}
+
+std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels) {
+    if (!aim_) throw GlError("HemiPlaneGather: gather(texels) needs the AIM texture given at construction");
+    return gather(texels, aim_->id(), aim_->charts());
 }
 
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture,

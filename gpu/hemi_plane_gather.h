@@ -11,7 +11,9 @@
 #include <glm/glm.hpp>
 
 #include "gpu/gl_objects.h"
+#include "gpu/lightmap_texture.h"
 #include "gpu/scene_meshes.h"
+#include "shared/gather.h"
 #include "shared/scene.h"
 
 namespace ag::gpu {
@@ -25,15 +27,15 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCo
 // (4/π)·s·atan(s), s = a/√(1+a²).
 double hemi_plane_coverage(float half_width);
 
-struct GatherResult {
-    glm::vec3 iim{0.0f};       // E_indirect / π: L_indirect = albedo × iim
-    float back_fraction = 0.0f;  // weighted share of the view that shows back faces
-};
-
-class HemiPlaneGather {
+class HemiPlaneGather final : public Gatherer {
 public:
     // Up to `tiles` texels are gathered per pass (rounded up to a square of tiles).
-    HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256);
+    // `aim`, if given, is the AIM texture gather(texels) reads, chart-aware.
+    HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256,
+                    const LightmapTexture* aim = nullptr);
+
+    GatherBackend backend() const override { return GatherBackend::gl; }
+    std::vector<GatherResult> gather(const std::vector<int>& texels) override;
 
     // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
     // (atlas-sized RGBA32F). With `chart_texture` (LightmapTexture::charts()) the AIM is read
@@ -50,6 +52,7 @@ public:
 private:
     const Scene& scene_;
     const SceneMeshes& meshes_;
+    const LightmapTexture* aim_;
     int resolution_, tiles_x_, level_;
     int max_per_pass_ = 0;
     Program program_;

@@ -14,6 +14,11 @@ inline constexpr std::array kGatherBackendNames = {"auto", "gl", "cpu"};
 
 // How the hemi-plane gather accounts for the part of the hemisphere the plane misses
 // (Larsen ch. 11: renormalise; Gautron 2006 Table 4.1: stretch the border pixels).
+// Where the indirect term comes from (DESIGN.md "Indirect methods on one scene graph"): each is an
+// ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11).
+enum class IndirectMethodKind { iim };
+inline constexpr std::array kIndirectMethodNames = {"iim"};
+
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
 
@@ -49,6 +54,10 @@ struct GatherSettings {
     int cpu_rays = 256;             // rays per texel for the CPU gather backend
 };
 
+struct IndirectSettings {
+    IndirectMethodKind method = IndirectMethodKind::iim;
+};
+
 struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
@@ -70,6 +79,7 @@ struct Settings {
     LightmapSettings lightmap;
     AimSettings aim;
     GatherSettings gather;
+    IndirectSettings indirect;
     CausticSettings caustics;
     DirectSettings direct;
     SpecularSettings specular;
@@ -125,6 +135,9 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6, "IIM texels gathered per frame"});
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000, "frames over which a new IIM fades in"});
     v.field(Field<int>{"cpu_rays", s.gather.cpu_rays, 1, 1e6, "rays per texel, CPU gather"});
+    v.end_section();
+    v.section("indirect", "the indirect term: which method supplies it");
+    v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{"method", s.indirect.method, kIndirectMethodNames, "indirect method"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});

@@ -1,6 +1,7 @@
 // CPU final gather (Larsen ch. 11) against analytic form factors, atlas sampling without bleeding
 // across charts, back-face repair, colour bleeding in the Cornell box, thread-count independence.
 #include "cpu/cpu_gather.h"
+#include "cpu/iim.h"
 
 #include <gtest/gtest.h>
 
@@ -98,6 +99,19 @@ struct FacingResult {
     bool all_valid = true;
 };
 
+// Gathers `records` the way the pipeline does: through cpu::Iim, which judges each result's
+// validity and repairs invalid texels from their chart's valid neighbours.
+struct Gathered {
+    std::vector<glm::vec3> iim;  // atlas-sized
+    std::vector<char> valid;     // per texel record
+    int invalid = 0;
+};
+Gathered gather_records(const Scene& scene, Gatherer& gatherer, const std::vector<int>& records) {
+    Iim map(scene);
+    const IimFrameStats stats = map.gather_records(gatherer, records, 0);
+    return {map.gathered(), map.texel_valid(), stats.invalid};
+}
+
 FacingResult gather_under_square(float receiver, float a, float texel_size, int rays_per_texel,
                                  glm::vec3 radiance) {
     Scene s;
@@ -106,7 +120,7 @@ FacingResult gather_under_square(float receiver, float a, float texel_size, int 
     s.objects.push_back(quad_object("emitter", 2.0f * a, glm::vec3(0.0f, 1.0f, 0.0f), kFacingDown));
     s.settings.gather.cpu_rays = rays_per_texel;
     const Scene scene = finish(s, texel_size);
-    std::vector<glm::vec3> aim = atlas_values(scene), iim = atlas_values(scene);
+    std::vector<glm::vec3> aim = atlas_values(scene);
     std::vector<int> receivers;
     for (int r = 0; r < int(scene.atlas.texels.size()); ++r) {
         const TexelRecord& t = scene.atlas.texels[size_t(r)];
@@ -117,15 +131,16 @@ FacingResult gather_under_square(float receiver, float a, float texel_size, int 
     }
     ThreadPool pool(2);
     RayTracer rays(scene);
-    CpuGather gather(scene, rays, pool);
-    gather.gather(receivers, aim, iim);
+    CpuGather gather(scene, rays, pool, &aim);
+    const Gathered g = gather_records(scene, gather, receivers);
+    const std::vector<glm::vec3>& iim = g.iim;
     FacingResult out;
     for (int r : receivers) {
         const TexelRecord& t = scene.atlas.texels[size_t(r)];
         const glm::vec3 p = world_position(scene, t);
         out.got.push_back(iim[atlas_index(scene.atlas, t)]);
         out.form_factor.push_back(square_form_factor(p.x, p.z, a, 1.0));
-        out.all_valid = out.all_valid && gather.valid()[size_t(r)];
+        out.all_valid = out.all_valid && g.valid[size_t(r)];
     }
     out.rays_cast = rays.rays_cast();
     out.rays_counted = gather.last_stats().rays;
@@ -363,7 +378,7 @@ TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
     const Scene scene = finish(s, 0.25f);
     const float cube_radiance = 50.0f;
 
-    std::vector<glm::vec3> aim = atlas_values(scene), iim = atlas_values(scene);
+    std::vector<glm::vec3> aim = atlas_values(scene);
     std::vector<int> floor;
     for (int r = 0; r < int(scene.atlas.texels.size()); ++r) {
         const TexelRecord& t = scene.atlas.texels[size_t(r)];
@@ -374,14 +389,16 @@ TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
     }
     ThreadPool pool(2);
     RayTracer rays(scene);
-    CpuGather gather(scene, rays, pool);
-    gather.gather(floor, aim, iim);
+    CpuGather gather(scene, rays, pool, &aim);
+    const Gathered g = gather_records(scene, gather, floor);
+    const std::vector<glm::vec3>& iim = g.iim;
+    const std::vector<char>& valid = g.valid;
 
     const LightmapAtlas& atlas = scene.atlas;
     auto value = [&](int r) { return iim[atlas_index(atlas, atlas.texels[size_t(r)])].x; };
     float valid_min = 1e30f, valid_max = 0.0f;
     for (int r : floor) {
-        if (!gather.valid()[size_t(r)]) continue;
+        if (!valid[size_t(r)]) continue;
         valid_min = std::min(valid_min, value(r));
         valid_max = std::max(valid_max, value(r));
     }
@@ -392,13 +409,13 @@ TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
         const glm::vec3 p = world_position(scene, t);
         const float d = std::max(std::abs(p.x - 0.5f), std::abs(p.z - 0.5f));
         if (d > 0.76f) {
-            EXPECT_TRUE(gather.valid()[size_t(r)]) << p.x << ", " << p.z;
+            EXPECT_TRUE(valid[size_t(r)]) << p.x << ", " << p.z;
             ++outside;
         } else if (d < 0.74f) {
-            EXPECT_FALSE(gather.valid()[size_t(r)]) << p.x << ", " << p.z;
+            EXPECT_FALSE(valid[size_t(r)]) << p.x << ", " << p.z;
             ++inside;
         }
-        if (gather.valid()[size_t(r)]) continue;
+        if (valid[size_t(r)]) continue;
         ++invalid;
         const float got = value(r);
         EXPECT_GE(got, valid_min) << p.x << ", " << p.z;
@@ -410,7 +427,7 @@ TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
         for (int dy = -1; dy <= 1; ++dy)
             for (int dx = -1; dx <= 1; ++dx) {
                 const int nr = atlas.texel_at(t.x + dx, t.y + dy);
-                if ((dx || dy) && nr >= 0 && gather.valid()[size_t(nr)]) sum += value(nr), ++n;
+                if ((dx || dy) && nr >= 0 && valid[size_t(nr)]) sum += value(nr), ++n;
             }
         if (n > 0) {
             EXPECT_NEAR(got, sum / float(n), 1e-5f * got) << p.x << ", " << p.z;
@@ -421,6 +438,7 @@ TEST(CpuGather, TexelsInsideGeometryAreRepairedFromNeighbours) {
     EXPECT_GE(ring, 8);
     EXPECT_GT(invalid, ring);  // some only reachable through other invalid texels
     EXPECT_GE(outside, 100);
+    EXPECT_EQ(g.invalid, invalid);
     EXPECT_EQ(gather.last_stats().invalid, invalid);
 }
 
@@ -432,10 +450,10 @@ TEST(CpuGather, CornellColourBleeding) {
     const Scene& scene = s.scene;
     ASSERT_EQ(scene.objects[size_t(scene.find_object("left_wall"))].material.name, "red");
     ASSERT_EQ(scene.objects[size_t(scene.find_object("right_wall"))].material.name, "green");
-    std::vector<glm::vec3> iim = atlas_values(scene);
-    CpuGather gather(scene, s.sim->rays(), s.pool);
-    gather.gather(all_texels(scene), s.aim->radiance(), iim);
-    EXPECT_GT(gather.last_stats().invalid, 0);  // the floor under the cube
+    CpuGather gather(scene, s.sim->rays(), s.pool, &s.aim->radiance());
+    const Gathered g = gather_records(scene, gather, all_texels(scene));
+    const std::vector<glm::vec3>& iim = g.iim;
+    EXPECT_GT(g.invalid, 0);  // the floor under the cube
 
     auto nearest = [&](const std::string& object, glm::vec3 target) {
         const int o = scene.find_object(object);
@@ -469,22 +487,29 @@ TEST(CpuGather, CornellColourBleeding) {
 TEST(CpuGather, SameResultForAnyThreadCount) {
     Simulated s("cornell.json");
     const Scene& scene = s.scene;
-    std::vector<glm::vec3> one = atlas_values(scene), three = atlas_values(scene);
     ThreadPool pool1(1), pool3(3);
-    CpuGather gather1(scene, s.sim->rays(), pool1), gather3(scene, s.sim->rays(), pool3);
-    gather1.gather(all_texels(scene), s.aim->radiance(), one);
-    gather3.gather(all_texels(scene), s.aim->radiance(), three);
-    ASSERT_EQ(one.size(), three.size());
-    for (size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], three[i]) << "atlas texel " << i;
-    EXPECT_EQ(gather1.valid(), gather3.valid());
+    CpuGather gather1(scene, s.sim->rays(), pool1, &s.aim->radiance()),
+        gather3(scene, s.sim->rays(), pool3, &s.aim->radiance());
+    const std::vector<GatherResult> raw1 = gather1.gather(all_texels(scene)),
+                                    raw3 = gather3.gather(all_texels(scene));
+    ASSERT_EQ(raw1.size(), raw3.size());
+    for (size_t i = 0; i < raw1.size(); ++i) {
+        ASSERT_EQ(raw1[i].iim, raw3[i].iim) << "record " << i;
+        ASSERT_EQ(raw1[i].back_fraction, raw3[i].back_fraction) << "record " << i;
+    }
+    const Gathered one = gather_records(scene, gather1, all_texels(scene)),
+                   three = gather_records(scene, gather3, all_texels(scene));
+    for (size_t i = 0; i < one.iim.size(); ++i) ASSERT_EQ(one.iim[i], three.iim[i]) << "atlas texel " << i;
+    EXPECT_EQ(one.valid, three.valid);
     // Batches: gathering in pieces gives the same as all at once (repairs read earlier batches).
-    std::vector<glm::vec3> pieces = atlas_values(scene);
-    CpuGather gather2(scene, s.sim->rays(), s.pool);
+    CpuGather gather2(scene, s.sim->rays(), s.pool, &s.aim->radiance());
     std::vector<int> ids = all_texels(scene), valid_first, invalid_then;
-    for (int r : ids) (gather1.valid()[size_t(r)] ? valid_first : invalid_then).push_back(r);
-    gather2.gather(valid_first, s.aim->radiance(), pieces);
-    gather2.gather(invalid_then, s.aim->radiance(), pieces);
-    for (size_t i = 0; i < one.size(); ++i) ASSERT_EQ(one[i], pieces[i]) << "atlas texel " << i;
+    for (int r : ids) (one.valid[size_t(r)] ? valid_first : invalid_then).push_back(r);
+    Iim pieces(scene);
+    pieces.gather_records(gather2, valid_first, 0);
+    pieces.gather_records(gather2, invalid_then, 0);
+    for (size_t i = 0; i < one.iim.size(); ++i)
+        ASSERT_EQ(one.iim[i], pieces.gathered()[i]) << "atlas texel " << i;
 }
 
 }  // namespace ag::cpu

@@ -17,7 +17,7 @@
 #include "shared/qmc.h"
 #include "shared/scene_edit.h"
 #include "shared/shapes.h"
-#include "tools/afterglow/pipeline.h"
+#include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
 
@@ -181,10 +181,9 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
         aim_texture.update_all(aim.radiance());
         std::vector<int> texels;
         for (int t = 0; t < int(scene.atlas.texels.size()) && t < 256; ++t) texels.push_back(t);
-        std::vector<glm::vec3> iim(aim.radiance().size());
         for (int r : {8, 16, 32}) {
             scene.settings.gather.plane_resolution = r;
-            gpu::HemiPlaneGather batched(scene, meshes, 256), single(scene, meshes, 1);
+            gpu::HemiPlaneGather batched(scene, meshes, 256, &aim_texture), single(scene, meshes, 1, &aim_texture);
             single.set_max_per_pass(1);
             auto time_ms = [&](auto&& fn) {
                 fn();  // warm-up
@@ -197,14 +196,16 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
                 }
                 return 1e3 * best / double(texels.size());
             };
-            const double gl_batched = time_ms([&] { batched.gather(texels, aim_texture.id(), aim_texture.charts()); });
-            const double gl_single = time_ms([&] { single.gather(texels, aim_texture.id(), aim_texture.charts()); });
+            // Every backend through the one Gatherer interface the pipeline uses.
+            auto time_gather = [&](Gatherer& g) { return time_ms([&] { g.gather(texels); }); };
+            const double gl_batched = time_gather(batched);
+            const double gl_single = time_gather(single);
             scene.settings.gather.cpu_rays = r * r;
-            cpu::CpuGather cpu_r(scene, sim.rays(), pool);
-            const double cpu_rr = time_ms([&] { cpu_r.gather(texels, aim.radiance(), iim); });
+            cpu::CpuGather cpu_r(scene, sim.rays(), pool, &aim.radiance());
+            const double cpu_rr = time_gather(cpu_r);
             scene.settings.gather.cpu_rays = 256;
-            cpu::CpuGather cpu_256(scene, sim.rays(), pool);
-            const double cpu_256_ms = time_ms([&] { cpu_256.gather(texels, aim.radiance(), iim); });
+            cpu::CpuGather cpu_256(scene, sim.rays(), pool, &aim.radiance());
+            const double cpu_256_ms = time_gather(cpu_256);
             std::printf("%-26s %9zu %3dx%-3d %11.3f ms %11.3f ms %11.3f ms %11.3f ms\n", path.c_str(),
                         scene.triangle_count(), r, r, gl_batched, gl_single, cpu_rr, cpu_256_ms);
         }
@@ -218,8 +219,9 @@ int bench_frame(const std::string& path, int repeat, const Args& args) {
     auto context = bench_context(args);
     const int frames = args.get_int("frames", 100, 1, 100000), size = args.get_int("size", 512, 16, 8192);
     Scene scene = load_scene(path);
-    Pipeline pipeline(scene, size, size, scene.settings.threads);
-    for (int f = 0; f < 60 && !pipeline.converged(); ++f) pipeline.frame();  // settle first
+    Pipeline pipeline(scene, PipelineOptions{size, size});
+    FrameLoop loop(pipeline);
+    for (int f = 0; f < 60 && !pipeline.converged(); ++f) loop.step();  // settle first
     int mover = -1;
     for (int o = 0; o < int(scene.objects.size()) && mover < 0; ++o)
         if (scene.objects[size_t(o)].dynamic && scene.objects[size_t(o)].material.type == MaterialType::diffuse) mover = o;
@@ -232,10 +234,10 @@ int bench_frame(const std::string& path, int repeat, const Args& args) {
             PipelineStats acc;
             for (int f = 0; f < frames; ++f) {
                 if (moving) {
-                    pipeline.sync();  // edits happen between frames
+                    loop.begin_edits();
                     translate_object(scene, mover, {f % 40 < 20 ? 2.0f : -2.0f, 0.0f, 0.0f});
                 }
-                const PipelineStats s = pipeline.frame();
+                const PipelineStats s = loop.step();
                 acc.photon_ms += s.photon_ms, acc.aim_ms += s.aim_ms, acc.caustic_ms += s.caustic_ms;
                 acc.gather_ms += s.gather_ms, acc.draw_ms += s.draw_ms, acc.wait_ms += s.wait_ms;
                 acc.photons.groups_invalidated += s.photons.groups_invalidated;

@@ -14,11 +14,10 @@
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/metrics.h"
-#include "shared/scene_edit.h"
+#include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
 #include "shared/script.h"
 #include "tools/afterglow/commands.h"
-#include "tools/afterglow/pipeline.h"
 #include "tools/afterglow/progress.h"
 
 namespace ag::cli {
@@ -141,8 +140,7 @@ int run_converge(const Args& args) {
         Scene final_state = scene;
         if (!script_path.empty()) {
             Script ahead(script_path);
-            ahead.on_start(final_state);
-            for (int f = 0; f < frames; ++f) ahead.on_frame(final_state, f, f / 30.0);
+            run_script_ahead(ahead, final_state, frames);
         }
         cpu::ReferenceSettings rs;
         rs.method = cpu::ReferenceMethod::photon_mapping;
@@ -176,17 +174,8 @@ int run_converge(const Args& args) {
     std::optional<Script> script;
     if (!script_path.empty()) script.emplace(script_path);
     auto context = gpu::make_gl_context(backend);
-    const bool full = mode == "full";
-    if (full) {
-        // Brute force through the same pipeline: every photon, AIM surface and texel is redone
-        // every frame (no selection, no blending).
-        scene.settings.photons.retrace_budget = 1 << 30;
-        scene.settings.aim.surfaces_per_frame = 1 << 30;
-        scene.settings.aim.delta_threshold = 0.0f;
-        scene.settings.gather.texels_per_frame = 1 << 30;
-        scene.settings.gather.blend_frames = 1;
-    }
-    Pipeline pipeline(scene, width, height, threads);
+    Pipeline pipeline(scene, PipelineOptions{width, height, threads,
+                                             mode == "full" ? PipelineMode::full : PipelineMode::selective});
 
     std::ostringstream csv;
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_retraced,"
@@ -195,17 +184,11 @@ int run_converge(const Args& args) {
     std::vector<double> errors, times;
     std::vector<int> edited_frames;
     double wall = 0.0;
-    if (script) script->on_start(scene);
+    FrameLoop loop(pipeline, script ? &*script : nullptr);
+    loop.on_script_error = [](const std::string& message) { warn(message); };
     for (int f = 0; f < frames; ++f) {
         const Clock::time_point t0 = Clock::now();
-        pipeline.sync();
-        const uint64_t before = scene.version;
-        if (script && !script->on_frame(scene, f, f / 30.0)) warn(*script->last_error());
-        const bool edited = scene.version != before;
-        if (full)  // "moving" every light to where it is invalidates all of its photon groups
-            for (int l = 0; l < int(scene.lights.size()); ++l)
-                if (scene.lights[size_t(l)].enabled) set_light_position(scene, l, scene.lights[size_t(l)].center());
-        const PipelineStats st = pipeline.frame();
+        const PipelineStats st = loop.step();
         pipeline.sync();
         wall += std::chrono::duration<double>(Clock::now() - t0).count();
         // Metrics are taken outside the timed part.
@@ -216,6 +199,7 @@ int run_converge(const Args& args) {
                             : component == "caustics" ? images.aov[size_t(gpu::Aov::caustics)]
                                                       : images.aov[size_t(gpu::Aov::specular)];
         const ImageMetrics m = compare_images(test, reference);
+        const bool edited = loop.edited();
         errors.push_back(m.rel_mse);
         times.push_back(wall);
         if (edited) edited_frames.push_back(f);

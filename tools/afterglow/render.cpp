@@ -8,9 +8,9 @@
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/script.h"
+#include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
-#include "tools/afterglow/pipeline.h"
 #include "tools/afterglow/progress.h"
 
 namespace ag::cli {
@@ -90,28 +90,18 @@ int run_render(const Args& args) {
     if (!script_path.empty()) script.emplace(script_path);  // a syntax error stops here (exit 1)
 
     auto context = gpu::make_gl_context(backend);
-    Pipeline pipeline(scene, width, height, threads);
+    Pipeline pipeline(scene, PipelineOptions{width, height, threads});
     if (scene.settings.gather.backend == GatherBackend::automatic)
         std::fprintf(stderr, "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
                      kGatherBackendNames[size_t(pipeline.gather_backend())], pipeline.gl_gather_us(),
                      pipeline.cpu_gather_us());
     Progress progress("render", frames, !args.has("quiet"));
-    PipelineStats last;
     double total_ms = 0.0;
-    if (script && !script->on_start(scene)) warn(*script->last_error());
-    int script_errors = 0;
-    for (int f = 0; f < frames; ++f) {
-        // Edits happen between frames: the photon work of the last frame is finished first.
-        pipeline.sync();
-        if (script && !script->on_frame(scene, f, f / 30.0)) {
-            if (++script_errors <= 5) warn(*script->last_error() + " (edit skipped, rendering goes on)");
-        }
-        last = pipeline.frame();
-        total_ms += last.frame_ms;
-        progress.update(f + 1);
-    }
+    const PipelineStats last = run_frames(pipeline, script ? &*script : nullptr, frames, [&](const FrameEvent& e) {
+        total_ms += e.stats->frame_ms;
+        progress.update(e.frame + 1);
+    });
     progress.finish();
-    pipeline.sync();
 
     const gpu::FrameImages images = pipeline.images();
     std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());

@@ -23,10 +23,10 @@
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/scene_edit.h"
+#include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
 #include "shared/script.h"
 #include "tools/afterglow/commands.h"
-#include "tools/afterglow/pipeline.h"
 #include "tools/afterglow/view_controller.h"
 #include "tools/afterglow/view_input.h"
 #include "tools/afterglow/view_renderer.h"
@@ -341,6 +341,7 @@ private:
     std::unique_ptr<ViewRenderer> renderer_;
     std::unique_ptr<ViewController> controller_;
     std::unique_ptr<ViewUi> ui_;
+    std::unique_ptr<FrameLoop> loop_;  // the script clock; edits between frames
     std::optional<Script> script_;
     std::string script_path_;
     EditableState initial_;
@@ -494,10 +495,7 @@ void Viewer::restart_script() {
         return;
     }
     state_.script = ScriptStatus{script_path_, true, 0, "", 0, frame_};
-    if (!script_->on_start(scene_)) {
-        state_.script.error = *script_->last_error();
-        ++state_.script.error_count;
-    }
+    loop_->start_script(&*script_);
     last_edit_frame_ = frame_;
     state_.message("script restarted");
 }
@@ -506,12 +504,8 @@ void Viewer::run_script(int frame) {
     if (!script_) return;
     ScriptStatus& s = state_.script;
     const uint64_t before = scene_.version;
-    if (!script_->on_frame(scene_, s.frame, s.frame / 30.0)) {
-        s.error = *script_->last_error();
-        ++s.error_count;
-        if (s.error_count <= 5) state_.message(s.error + " (edit skipped, rendering goes on)");
-    }
-    ++s.frame;
+    loop_->run_script();  // errors reach on_script_error
+    s.frame = loop_->script_frame();
     if (scene_.version != before) {
         s.last_edit_frame = frame;
         last_edit_frame_ = frame;
@@ -775,7 +769,14 @@ int Viewer::run() {
     ui_ = std::make_unique<ViewUi>(window_);  // chains the callbacks above
     live_.ui = ui_.get();
 
-    pipeline_ = std::make_unique<Pipeline>(scene_, width_, height_, threads);
+    pipeline_ = std::make_unique<Pipeline>(scene_, PipelineOptions{width_, height_, threads});
+    loop_ = std::make_unique<FrameLoop>(*pipeline_);
+    loop_->on_script_error = [this](const std::string& error) {
+        ScriptStatus& s = state_.script;
+        s.error = error;
+        ++s.error_count;
+        if (s.error_count <= 5) state_.message(error + " (edit skipped, rendering goes on)");
+    };
     renderer_ = std::make_unique<ViewRenderer>(scene_, pipeline_->meshes(), width_, height_);
     controller_ = std::make_unique<ViewController>(scene_, width_, height_);
     initial_ = snapshot(scene_);
@@ -787,11 +788,7 @@ int Viewer::run() {
     if (script_) {
         state_.script.path = script_path_;
         state_.script.playing = true;
-        if (!script_->on_start(scene_)) {
-            state_.script.error = *script_->last_error();
-            ++state_.script.error_count;
-            state_.message(state_.script.error);
-        }
+        loop_->start_script(&*script_);
     }
 
     size_t next_replay = 0;
@@ -814,7 +811,7 @@ int Viewer::run() {
         controller_->advance(state_.replaying ? 1.0 / 30.0 : std::min(0.1, loop_ms / 1000.0));
 
         // Edits happen between frames: the last frame's photon work is finished.
-        pipeline_->sync();
+        loop_->begin_edits();
         const bool had_restart = requests_.restart;
         apply_requests();
         if (had_restart) script_start_frame = frame_;
@@ -822,7 +819,7 @@ int Viewer::run() {
         if (edits) last_edit_frame_ = frame_;
         if (script_ && state_.script.playing) run_script(frame_);
 
-        const PipelineStats stats = pipeline_->frame();
+        const PipelineStats stats = loop_->step(false);  // the script ran above, when playing
         count_gathered();
 
         GLuint source = 0;

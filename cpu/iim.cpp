@@ -1,0 +1,139 @@
+#include "cpu/iim.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "shared/lightmap_sample.h"
+
+namespace ag::cpu {
+
+Iim::Iim(const Scene& scene) : scene_(scene) {
+    const size_t records = scene_.atlas.texels.size();
+    const size_t n = size_t(scene_.atlas.width) * size_t(scene_.atlas.height);
+    is_pending_.assign(records, 1);
+    valid_.assign(records, 0);
+    texel_generation_.assign(records, -1);
+    raw_.assign(n, glm::vec3(0.0f));
+    from_.assign(n, glm::vec3(0.0f));
+    to_.assign(n, glm::vec3(0.0f));
+    shown_.assign(n, glm::vec3(0.0f));
+    blend_start_.assign(n, -1);
+    for (int t = 0; t < int(records); ++t) pending_.push_back(t);
+}
+
+void Iim::schedule(PhotonMaps& maps) {
+    // Larsen ch. 11: re-gather the texels of surfaces whose indirect photon hits changed most.
+    std::vector<int> surfaces;
+    for (int s = 0; s < int(maps.surface_count()); ++s) {
+        const SurfaceHits& h = maps.surface(s);
+        const double flux = std::abs(energy(h.flux));
+        if (h.delta_i <= 0.0 ||
+            (flux > 0.0 && h.delta_i / flux <= double(scene_.settings.aim.delta_threshold)))
+            continue;
+        surfaces.push_back(s);
+    }
+    std::stable_sort(surfaces.begin(), surfaces.end(), [&](int a, int b) {
+        return maps.surface(a).delta_i > maps.surface(b).delta_i;
+    });
+    for (int s : surfaces) {
+        maps.surface(s).delta_i = 0.0;
+        for (int t = 0; t < int(scene_.atlas.texels.size()); ++t)
+            if (scene_.atlas.texels[size_t(t)].surface == s && !is_pending_[size_t(t)]) {
+                is_pending_[size_t(t)] = 1;
+                pending_.push_back(t);
+            }
+    }
+}
+
+void Iim::invalidate_all() {
+    for (int t = 0; t < int(scene_.atlas.texels.size()); ++t)
+        if (!is_pending_[size_t(t)]) {
+            is_pending_[size_t(t)] = 1;
+            pending_.push_back(t);
+        }
+}
+
+IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
+    std::vector<int> batch;
+    std::vector<char> in_batch(texel_generation_.size(), 0);
+    while (!pending_.empty() && int(batch.size()) < budget) {
+        in_batch[size_t(pending_.front())] = 1;
+        batch.push_back(pending_.front());
+        is_pending_[size_t(pending_.front())] = 0;
+        pending_.pop_front();
+    }
+    // The rest of the budget refreshes texels gathered with older AIMs, round robin, so the IIM
+    // settles on the final AIMs once edits stop.
+    const size_t n = texel_generation_.size();
+    for (size_t visited = 0; visited < n && int(batch.size()) < budget; ++visited) {
+        const size_t t = sweep_;
+        sweep_ = (sweep_ + 1) % n;
+        if (!is_pending_[t] && texel_generation_[t] < aim_generation_ && !in_batch[t]) {
+            in_batch[t] = 1;
+            batch.push_back(int(t));
+        }
+    }
+    IimFrameStats stats = gather_records(gatherer, batch, frame);
+    stats.pending = int(pending_.size());
+    return stats;
+}
+
+IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& batch,
+                                  uint64_t frame) {
+    IimFrameStats stats;
+    last_gathered_.clear();
+    if (batch.empty()) return stats;
+    for (int t : batch) texel_generation_[size_t(t)] = aim_generation_;
+
+    const std::vector<GatherResult> results = gatherer.gather(batch);
+    const int w = scene_.atlas.width;
+    std::vector<int> invalid;
+    for (size_t k = 0; k < batch.size(); ++k) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(batch[k])];
+        raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[k].iim;
+        // Behind or inside geometry: take the chart's valid neighbours instead of leaking.
+        const bool valid = results[k].back_fraction <= kBackFaceInvalidFraction;
+        valid_[size_t(batch[k])] = valid;
+        if (!valid) invalid.push_back(batch[k]);
+    }
+    if (!invalid.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, invalid);
+
+    for (int r : batch) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+        const size_t a = size_t(t.y) * size_t(w) + size_t(t.x);
+        from_[a] = shown_[a];
+        to_[a] = raw_[a];
+        if (blend_start_[a] < 0) blending_.push_back(int(a));
+        blend_start_[a] = int(frame);
+    }
+    stats.gathered = int(batch.size());
+    stats.invalid = int(invalid.size());
+    last_gathered_ = batch;
+    return stats;
+}
+
+const std::vector<int>& Iim::blend(uint64_t frame, int blend_frames) {
+    // Two IIM buffers, blended over `blend_frames` so new gathers never pop.
+    std::vector<int> still;
+    for (int a : blending_) {
+        const float t = std::min(
+            1.0f, float(int(frame) - blend_start_[size_t(a)] + 1) / float(std::max(1, blend_frames)));
+        shown_[size_t(a)] = glm::mix(from_[size_t(a)], to_[size_t(a)], t);
+        if (t < 1.0f)
+            still.push_back(a);
+        else
+            blend_start_[size_t(a)] = -1;
+    }
+    changed_.swap(blending_);
+    blending_.swap(still);
+    return changed_;
+}
+
+bool Iim::settled() const {
+    if (!pending_.empty() || !blending_.empty()) return false;
+    for (int g : texel_generation_)
+        if (g < aim_generation_) return false;
+    return true;
+}
+
+}  // namespace ag::cpu

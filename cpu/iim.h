@@ -1,0 +1,75 @@
+// The indirect illumination map, IIM (Larsen ch. 11): per lightmap texel the indirect irradiance
+// E/π gathered from the AIMs. Texels of surfaces whose indirect photon hits changed most (Δi) are
+// re-gathered first; texels gathered with older AIMs are refreshed round robin with what is left
+// of the budget; a gather that saw too many back faces is invalid and repaired from its chart's
+// neighbours; new values fade in over blend_frames so the picture never pops.
+#pragma once
+
+#include <cstdint>
+#include <deque>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "cpu/photon_map.h"
+#include "shared/gather.h"
+#include "shared/scene.h"
+
+namespace ag::cpu {
+
+struct IimFrameStats {
+    int gathered = 0;  // texels gathered this frame
+    int invalid = 0;   // of those, repaired from neighbours (back faces in view)
+    int pending = 0;   // texels still queued by Δi after scheduling
+};
+
+class Iim {
+public:
+    // Every texel starts queued (nothing is gathered yet).
+    explicit Iim(const Scene& scene);
+
+    // A new AIM reached the gatherers: every texel gathered before is stale.
+    void aim_changed() { ++aim_generation_; }
+    // Queues the texels of surfaces whose indirect hits changed (Δi above aim.delta_threshold of
+    // the surface's flux), largest Δi first, and resets those surfaces' Δi.
+    void schedule(PhotonMaps& maps);
+    // Queues every texel (brute force).
+    void invalidate_all();
+    // Gathers up to `budget` texels with `gatherer`: queued ones first, then stale ones round
+    // robin. Results that saw more than kBackFaceInvalidFraction back faces are repaired from
+    // valid neighbours of their chart. The new values start blending at `frame`.
+    IimFrameStats gather(Gatherer& gatherer, int budget, uint64_t frame);
+    // Gathers exactly `records` (validity, repair and blending as above).
+    IimFrameStats gather_records(Gatherer& gatherer, const std::vector<int>& records,
+                                 uint64_t frame);
+    // Advances every blend to `frame` over `blend_frames` frames; returns the atlas texels whose
+    // shown value changed (to upload).
+    const std::vector<int>& blend(uint64_t frame, int blend_frames);
+
+    // Atlas-sized (width × height): what the frame shows, and the latest gathered values.
+    const std::vector<glm::vec3>& shown() const { return shown_; }
+    const std::vector<glm::vec3>& gathered() const { return raw_; }
+    // Per texel record.
+    const std::vector<char>& texel_pending() const { return is_pending_; }
+    const std::vector<char>& texel_valid() const { return valid_; }
+    const std::vector<int>& last_gathered() const { return last_gathered_; }  // records
+    int pending() const { return int(pending_.size()); }
+    // Nothing queued, blending, or gathered with an older AIM than the latest.
+    bool settled() const;
+
+private:
+    const Scene& scene_;
+    std::deque<int> pending_;  // texel records, FIFO, each at most once
+    std::vector<char> is_pending_;
+    std::vector<int> last_gathered_;
+    std::vector<char> valid_;                     // per record: last gather saw few back faces
+    std::vector<glm::vec3> raw_, from_, to_, shown_;  // atlas-sized
+    std::vector<int> blend_start_;  // per atlas texel: frame the new value arrived, −1 = done
+    std::vector<int> blending_;     // atlas texels currently blending
+    std::vector<int> changed_;      // returned by blend()
+    int aim_generation_ = 0;
+    std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
+    size_t sweep_ = 0;
+};
+
+}  // namespace ag::cpu

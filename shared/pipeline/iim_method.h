@@ -1,0 +1,57 @@
+// The indirect term as Larsen computes it (ch. 8-11): IIM lightmaps gathered from the AIMs by
+// either gather backend (GL hemi-planes or CPU rays, one ag::Gatherer interface), scheduled by Δi
+// and blended in by cpu::Iim, uploaded to an atlas-sized texture the frame reads per surface point.
+#pragma once
+
+#include <memory>
+#include <vector>
+
+#include "cpu/cpu_gather.h"
+#include "cpu/iim.h"
+#include "gpu/hemi_plane_gather.h"
+#include "gpu/lightmap_texture.h"
+#include "gpu/scene_meshes.h"
+#include "shared/parallel.h"
+#include "shared/pipeline/indirect_method.h"
+
+namespace ag {
+
+class IimMethod final : public IndirectMethod {
+public:
+    // `aim_texture` and `aim_values` (atlas-sized) are the AIMs as handed over to the GL thread;
+    // the GL gather reads the first, the CPU gather the second. The backend comes from
+    // settings.gather.backend; `automatic` measures both on a few texels and keeps the faster.
+    IimMethod(const Scene& scene, const gpu::SceneMeshes& meshes,
+              const gpu::LightmapTexture& aim_texture, const std::vector<glm::vec3>& aim_values);
+
+    IndirectMethodKind kind() const override { return IndirectMethodKind::iim; }
+    void update(const IndirectInputs& in, PipelineStats& stats) override;
+    void hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) override;
+    void invalidate_all() override { iim_.invalidate_all(); }
+    gpu::IndirectTerm term() const override;
+    bool settled() const override { return iim_.settled(); }
+
+    const cpu::Iim& iim() const { return iim_; }
+    GLuint texture() const { return texture_.id(); }
+    Gatherer& gatherer(GatherBackend backend);
+    GatherBackend backend() const { return backend_; }
+    // Switches the backend (gl or cpu; `automatic` is only measured at construction).
+    void set_backend(GatherBackend backend);
+    // Per-texel gather cost measured when choosing the backend (µs; 0 if not measured).
+    double gl_gather_us() const { return gl_us_; }
+    double cpu_gather_us() const { return cpu_us_; }
+
+private:
+    void choose_backend();
+
+    const Scene& scene_;
+    cpu::Iim iim_;
+    gpu::LightmapTexture texture_;
+    gpu::HemiPlaneGather gl_gather_;
+    ThreadPool cpu_pool_{1};  // the CPU gather runs beside the photon work, on its own worker
+    cpu::CpuGather cpu_gather_;
+    GatherBackend backend_ = GatherBackend::gl;
+    double gl_us_ = 0.0, cpu_us_ = 0.0;
+};
+
+}  // namespace ag

@@ -1,0 +1,41 @@
+// How the progressive pipeline gets its indirect term (DESIGN.md "Indirect methods on one scene
+// graph"): one interface, selected by settings.indirect.method. The IIM lightmaps of Larsen
+// ch. 8-11 (ag::IimMethod) are the first implementation; a method supplies its term in lightmap
+// space or in screen space and the frame composes either (gpu::IndirectTerm).
+#pragma once
+
+#include <cstdint>
+#include <memory>
+
+#include "cpu/photon_simulation.h"
+#include "gpu/frame_renderer.h"
+#include "shared/pipeline/pipeline_stats.h"
+
+namespace ag {
+
+// What a method may read on the GL thread while this frame's photon work runs on the workers:
+// only state handed over at the end of the previous frame.
+struct IndirectInputs {
+    uint64_t frame = 0;
+    bool aim_changed = false;  // the AIM texture (and the staged AIM values) changed this frame
+    bool brute_force = false;  // redo everything this frame, no budgets, no blending
+};
+
+class IndirectMethod {
+public:
+    virtual ~IndirectMethod() = default;
+    virtual IndirectMethodKind kind() const = 0;
+    // GL thread, before the frame is drawn: bring the term up to date within the budgets.
+    virtual void update(const IndirectInputs& in, PipelineStats& stats) = 0;
+    // After the hand-over, with the workers idle: read what the photon work of this frame
+    // produced (deltas, hits) to plan the next frames.
+    virtual void hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) = 0;
+    // Forget everything: the next update() recomputes the whole term (brute-force baseline).
+    virtual void invalidate_all() = 0;
+    // The term for this frame's compose.
+    virtual gpu::IndirectTerm term() const = 0;
+    // Nothing left to repair or refine.
+    virtual bool settled() const = 0;
+};
+
+}  // namespace ag

@@ -1,0 +1,175 @@
+#include "shared/pipeline/pipeline.h"
+
+#include "gpu/gl.h"
+
+namespace ag {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double ms_between(Clock::time_point a, Clock::time_point b) {
+    return std::chrono::duration<double, std::milli>(b - a).count();
+}
+double ms_since(Clock::time_point t) { return ms_between(t, Clock::now()); }
+const std::vector<char> kNoPending;
+const std::vector<int> kNoneGathered;
+}  // namespace
+
+std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
+                                                     const gpu::SceneMeshes& meshes,
+                                                     const gpu::LightmapTexture& aim_texture,
+                                                     const std::vector<glm::vec3>& aim_values) {
+    switch (scene.settings.indirect.method) {
+        case IndirectMethodKind::iim:
+            return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
+    }
+    return nullptr;
+}
+
+Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
+    : scene_(scene),
+      mode_(options.mode),
+      on_cpu_work_start_(options.on_cpu_work_start),
+      on_gl_drawn_(options.on_gl_drawn),
+      pool_(options.threads >= 0 ? options.threads : scene.settings.threads),
+      aim_texture_(scene.atlas) {
+    const int width = options.width > 0 ? options.width : scene_.camera.width;
+    const int height = options.height > 0 ? options.height : scene_.camera.height;
+    photons_ = std::make_unique<cpu::PhotonSimulation>(scene_, pool_);
+    aim_ = std::make_unique<cpu::Aim>(scene_, pool_);
+    caustic_tracer_ = std::make_unique<cpu::CausticTracer>(scene_, pool_);
+    meshes_ = std::make_unique<gpu::SceneMeshes>(scene_);
+    renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);
+    caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
+    staged_aim_.assign(size_t(scene_.atlas.width) * size_t(scene_.atlas.height), glm::vec3(0.0f));
+    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_);
+}
+
+Pipeline::~Pipeline() { sync(); }
+
+void Pipeline::sync() {
+    if (cpu_work_.valid()) cpu_work_.wait();
+}
+
+void Pipeline::start_cpu_work() {
+    // Photons, AIMs and caustic photons for this frame's scene, on the workers.
+    const bool full = mode_ == PipelineMode::full;
+    cpu_work_ = std::async(std::launch::async, [this, full] {
+        CpuWork w;
+        if (on_cpu_work_start_) on_cpu_work_start_();
+        const Clock::time_point t0 = Clock::now();
+        w.photons = full ? photons_->frame(1 << 30) : photons_->frame();
+        const Clock::time_point t1 = Clock::now();
+        if (full) {
+            w.photons.aim_texels_rebuilt = aim_->rebuild_all(photons_->maps());
+            w.photons.aim_surfaces_rebuilt = int(photons_->maps().surface_count());
+        } else {
+            w.photons.aim_texels_rebuilt =
+                aim_->update(photons_->maps(), &w.photons.aim_surfaces_rebuilt);
+        }
+        const Clock::time_point t2 = Clock::now();
+        w.caustics = caustic_tracer_->frame();
+        w.photon_ms = ms_between(t0, t1);
+        w.aim_ms = ms_between(t1, t2);
+        w.caustic_ms = ms_since(t2);
+        return w;
+    });
+}
+
+PipelineStats Pipeline::frame() {
+    const Clock::time_point start = Clock::now();
+    PipelineStats stats;
+    stats.frame = ++frame_;
+    sync();
+    if (scene_.version != seen_version_ || frame_ == 1) caustic_frames_since_edit_ = 0;
+    seen_version_ = scene_.version;
+    ++caustic_frames_since_edit_;
+    int invalidated = 0;
+    if (mode_ == PipelineMode::full) {
+        invalidated = photons_->invalidate_all();
+        indirect_->invalidate_all();
+    }
+    start_cpu_work();
+
+    // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.
+    Clock::time_point t = Clock::now();
+    const bool aim_changed = !aim_dirty_.empty();
+    aim_texture_.update(staged_aim_, aim_dirty_);
+    aim_dirty_.clear();
+    indirect_->update(IndirectInputs{frame_, aim_changed, mode_ == PipelineMode::full}, stats);
+    stats.gather_ms = ms_since(t);
+    t = Clock::now();
+    caustics_->render(caustic_positions_, caustic_powers_);
+    stats.caustic_tiles_filtered = caustics_->tiles_filtered();
+    renderer_->render(indirect_->term(), caustics_->texture());
+    gpu::gl::Finish();
+    stats.draw_ms = ms_since(t);
+    if (on_gl_drawn_) on_gl_drawn_();
+
+    t = Clock::now();
+    hand_over(stats);
+    stats.photons.groups_invalidated += invalidated;
+    stats.wait_ms = ms_since(t);
+    stats.frame_ms = ms_since(start);
+    return stats;
+}
+
+void Pipeline::hand_over(PipelineStats& stats) {
+    // Wait for the CPU side, then stage its results for the next frame's GL work.
+    const CpuWork w = cpu_work_.get();
+    stats.photons = w.photons;
+    stats.caustics = w.caustics;
+    stats.photon_ms = w.photon_ms;
+    stats.aim_ms = w.aim_ms;
+    stats.caustic_ms = w.caustic_ms;
+    caustic_positions_.clear();
+    caustic_powers_.clear();
+    for (const cpu::CausticPhoton& p : caustic_tracer_->photons())
+        if (p.power != glm::vec3(0.0f)) {
+            caustic_positions_.push_back(p.position);
+            caustic_powers_.push_back(p.power);
+        }
+    aim_dirty_ = aim_->take_dirty_texels();
+    for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
+    indirect_->hand_over(*photons_, stats);
+}
+
+GLuint Pipeline::iim_texture() const {
+    const IimMethod* m = iim_method();
+    return m ? m->texture() : 0;
+}
+
+bool Pipeline::converged() const {
+    return photons_->settled() && aim_dirty_.empty() && indirect_->settled() &&
+           caustic_frames_since_edit_ > scene_.settings.caustics.frames;  // +1: drawn next frame
+}
+
+GatherBackend Pipeline::gather_backend() const {
+    const IimMethod* m = iim_method();
+    return m ? m->backend() : GatherBackend::gl;
+}
+
+void Pipeline::set_gather_backend(GatherBackend backend) {
+    if (IimMethod* m = iim_method()) m->set_backend(backend);
+}
+
+double Pipeline::gl_gather_us() const {
+    const IimMethod* m = iim_method();
+    return m ? m->gl_gather_us() : 0.0;
+}
+
+double Pipeline::cpu_gather_us() const {
+    const IimMethod* m = iim_method();
+    return m ? m->cpu_gather_us() : 0.0;
+}
+
+const std::vector<char>& Pipeline::texel_pending() const {
+    const IimMethod* m = iim_method();
+    return m ? m->iim().texel_pending() : kNoPending;
+}
+
+const std::vector<int>& Pipeline::last_gathered() const {
+    const IimMethod* m = iim_method();
+    return m ? m->iim().last_gathered() : kNoneGathered;
+}
+
+}  // namespace ag

@@ -1,0 +1,128 @@
+// The progressive pipeline of one frame (DESIGN.md "The frame, as data flows through it"): scene
+// edits → selective photon tracing and AIM rebuilds on worker threads, concurrently with the GL
+// thread, which uploads the AIMs handed over by the last frame, brings the indirect term up to
+// date (an IndirectMethod: IIM texels gathered by Δi under a budget, blended in), renders caustics
+// and composes the frame (Larsen eq. 13.2). The hand-over at the end of a frame is the only place
+// the two sides meet; the GL thread never waits on photon work it did not start this frame.
+#pragma once
+
+#include <array>
+#include <chrono>
+#include <functional>
+#include <future>
+#include <memory>
+#include <vector>
+
+#include "cpu/aim.h"
+#include "cpu/caustic_tracer.h"
+#include "cpu/photon_simulation.h"
+#include "gpu/caustics_renderer.h"
+#include "gpu/frame_renderer.h"
+#include "gpu/lightmap_texture.h"
+#include "gpu/scene_meshes.h"
+#include "shared/parallel.h"
+#include "shared/pipeline/iim_method.h"
+#include "shared/pipeline/indirect_method.h"
+#include "shared/pipeline/pipeline_stats.h"
+#include "shared/scene.h"
+
+namespace ag {
+
+// selective: Larsen's method, work by priority under the settings' budgets. full: brute force
+// through the same code, every photon group, AIM surface and IIM texel redone every frame, no
+// blending: the baseline an edit's settling time is held against.
+enum class PipelineMode { selective, full };
+inline constexpr std::array kPipelineModeNames = {"selective", "full"};
+
+struct PipelineOptions {
+    int width = 0, height = 0;  // frame size; 0 = the scene camera's
+    int threads = -1;           // worker threads; −1 = settings.threads (0 = all cores)
+    PipelineMode mode = PipelineMode::selective;
+    // Instrumentation (tracing, tests): called on the worker when a frame's CPU work starts, and
+    // on the GL thread once the frame is drawn, before the hand-over.
+    std::function<void()> on_cpu_work_start, on_gl_drawn;
+};
+
+// Makes the indirect method named by settings.indirect.method.
+std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
+                                                     const gpu::SceneMeshes& meshes,
+                                                     const gpu::LightmapTexture& aim_texture,
+                                                     const std::vector<glm::vec3>& aim_values);
+
+class Pipeline {
+public:
+    // A GL context must be current. Edit the scene only between frames (after sync(); FrameLoop
+    // does this).
+    Pipeline(Scene& scene, const PipelineOptions& options);
+    ~Pipeline();
+    Pipeline(const Pipeline&) = delete;
+    Pipeline& operator=(const Pipeline&) = delete;
+
+    // One progressive frame; the scene may have been edited since the last call.
+    PipelineStats frame();
+    // Waits for the photon work in flight (call before editing the scene).
+    void sync();
+
+    Scene& scene() { return scene_; }
+    PipelineMode mode() const { return mode_; }
+    uint64_t frame_index() const { return frame_; }
+    gpu::FrameImages images() const { return renderer_->read_back(); }
+    const gpu::FrameRenderer& renderer() const { return *renderer_; }
+    const IndirectMethod& indirect() const { return *indirect_; }
+    // The IIM method when it is the active one, else null (for lightmap views and statistics).
+    IimMethod* iim_method() { return dynamic_cast<IimMethod*>(indirect_.get()); }
+    const IimMethod* iim_method() const { return dynamic_cast<const IimMethod*>(indirect_.get()); }
+    GLuint aim_texture() const { return aim_texture_.id(); }
+    GLuint iim_texture() const;  // 0 without the IIM method
+    // Nothing queued, pending or blending anywhere.
+    bool converged() const;
+
+    // Gather backend of the IIM method (gl when there is none).
+    GatherBackend gather_backend() const;
+    void set_gather_backend(GatherBackend backend);
+    double gl_gather_us() const;
+    double cpu_gather_us() const;
+
+    // For the viewer's diagnostic views; read them between frames.
+    const cpu::PhotonSimulation& photons() const { return *photons_; }
+    const gpu::SceneMeshes& meshes() const { return *meshes_; }
+    const std::vector<char>& texel_pending() const;  // per texel record; empty without IIM
+    const std::vector<int>& last_gathered() const;   // texel records gathered last frame
+
+private:
+    void start_cpu_work();
+    void hand_over(PipelineStats& stats);
+
+    Scene& scene_;
+    PipelineMode mode_;
+    std::function<void()> on_cpu_work_start_, on_gl_drawn_;
+    ThreadPool pool_;
+    std::unique_ptr<cpu::PhotonSimulation> photons_;
+    std::unique_ptr<cpu::Aim> aim_;
+    std::unique_ptr<cpu::CausticTracer> caustic_tracer_;
+    std::unique_ptr<gpu::SceneMeshes> meshes_;
+    std::unique_ptr<gpu::FrameRenderer> renderer_;
+    std::unique_ptr<gpu::CausticsRenderer> caustics_;
+    gpu::LightmapTexture aim_texture_;
+    std::unique_ptr<IndirectMethod> indirect_;
+
+    // Results of the CPU side, written by the worker, read only after the hand-over.
+    struct CpuWork {
+        cpu::PhotonFrameStats photons;
+        cpu::CausticStats caustics;
+        double photon_ms = 0, aim_ms = 0, caustic_ms = 0;
+    };
+    std::future<CpuWork> cpu_work_;
+    // Staged at the hand-over for the next frame's GL work (no data race with the workers).
+    std::vector<int> aim_dirty_;         // AIM texels changed by the last photon frame
+    std::vector<glm::vec3> staged_aim_;  // atlas-sized AIM radiance as the GL side sees it
+    std::vector<glm::vec3> caustic_positions_, caustic_powers_;
+    uint64_t frame_ = 0;
+    // Caustic photons are re-traced a slice a frame (ch. 12): they hold the current scene once
+    // settings.caustics.frames frames have passed since it last changed, and are drawn a frame
+    // after they are traced.
+    uint64_t seen_version_ = 0;
+    int caustic_frames_since_edit_ = 0;
+};
+
+}  // namespace ag

@@ -1,0 +1,25 @@
+// What one progressive frame did and what it cost (ag::Pipeline::frame()).
+#pragma once
+
+#include <cstdint>
+
+#include "cpu/caustic_tracer.h"
+#include "cpu/photon_simulation.h"
+
+namespace ag {
+
+struct PipelineStats {
+    uint64_t frame = 0;
+    cpu::PhotonFrameStats photons;
+    cpu::CausticStats caustics;
+    int caustic_tiles_filtered = 0;
+    int iim_texels_gathered = 0;
+    int iim_texels_pending = 0;
+    int iim_texels_invalid = 0;  // back-face texels repaired from neighbours
+    // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
+    // thread; wait_ms is what the GL thread then waited for them.
+    double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0,
+           frame_ms = 0;
+};
+
+}  // namespace ag

@@ -1,0 +1,235 @@
+// The progressive pipeline as a library: a frame with nothing changed does no repair work, an edit
+// reaches the IIM and settles where a fresh pipeline settles, the GL thread draws while the photon
+// work runs, brute force redoes everything, the frame loop owns the script clock, and a
+// screen-space indirect term composes exactly like the same term in lightmap space.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+
+#include "../gpu/gl_fixture.h"
+#include "gpu/gl.h"
+#include "shared/pipeline/frame_loop.h"
+#include "shared/scene_edit.h"
+#include "shared/scene_file.h"
+
+namespace ag {
+namespace {
+
+Scene cornell() {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    scene.settings.gather.backend = GatherBackend::cpu;  // deterministic and fast on llvmpipe
+    scene.settings.gather.texels_per_frame = 200;
+    scene.settings.aim.surfaces_per_frame = 12;
+    return scene;
+}
+
+// Steps until the pipeline reports nothing left to do; returns the frames it took.
+int settle(FrameLoop& loop, int max_frames = 400) {
+    for (int f = 0; f < max_frames; ++f) {
+        loop.step();
+        if (loop.pipeline().converged()) return f + 1;
+    }
+    return -1;
+}
+
+class PipelineTest : public test::GlTest {};
+
+TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
+    Scene scene = cornell();
+    Pipeline pipeline(scene, PipelineOptions{48, 48});
+    FrameLoop loop(pipeline);
+    ASSERT_GT(settle(loop), 0);
+    const gpu::FrameImages before = pipeline.images();
+    for (int f = 0; f < 3; ++f) {
+        const PipelineStats s = loop.step();
+        EXPECT_FALSE(loop.edited());
+        EXPECT_GT(s.photons.photons_verified, 0);  // the safety net still runs
+        EXPECT_EQ(s.photons.groups_invalidated, 0);
+        EXPECT_EQ(s.photons.photons_retraced, 0);
+        EXPECT_EQ(s.photons.aim_texels_rebuilt, 0);
+        EXPECT_EQ(s.iim_texels_gathered, 0);
+        EXPECT_EQ(s.iim_texels_pending, 0);
+        EXPECT_TRUE(pipeline.converged());
+    }
+    const gpu::FrameImages after = pipeline.images();
+    for (size_t a = 0; a < after.aov.size(); ++a)
+        EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << gpu::kAovNames[a];
+    EXPECT_EQ(before.frame.pixels, after.frame.pixels);
+}
+
+TEST_F(PipelineTest, AnEditReachesTheIimAndSettlesLikeAFreshPipeline) {
+    Scene scene = cornell();
+    Pipeline pipeline(scene, PipelineOptions{48, 48});
+    FrameLoop loop(pipeline);
+    ASSERT_GT(settle(loop), 0);
+    const std::vector<glm::vec3> iim_before = pipeline.iim_method()->iim().shown();
+
+    loop.begin_edits();
+    const int cube = scene.find_object("cube");
+    translate_object(scene, cube, {254.5f, 0.0f, -59.0f});
+    const PipelineStats edit_frame = loop.step();
+    EXPECT_TRUE(loop.edited());
+    EXPECT_GT(edit_frame.photons.groups_invalidated, 0);
+    ASSERT_GT(settle(loop), 0);
+    const std::vector<glm::vec3>& iim_after = pipeline.iim_method()->iim().shown();
+
+    // The floor where the cube stood brightens, where it now stands darkens.
+    int brighter = 0, darker = 0;
+    const int floor = scene.find_object("floor");
+    for (const TexelRecord& t : scene.atlas.texels) {
+        if (t.object != floor) continue;
+        const size_t a = size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x);
+        const float b = iim_before[a].x + iim_before[a].y + iim_before[a].z;
+        const float c = iim_after[a].x + iim_after[a].y + iim_after[a].z;
+        brighter += c > 1.1f * b;
+        darker += c < 0.9f * b;
+    }
+    EXPECT_GT(brighter, 3);
+    EXPECT_GT(darker, 3);
+
+    // Repairing after the edit ends where a pipeline started on the edited scene ends.
+    Scene fresh_scene = cornell();
+    translate_object(fresh_scene, fresh_scene.find_object("cube"), {254.5f, 0.0f, -59.0f});
+    Pipeline fresh(fresh_scene, PipelineOptions{48, 48});
+    FrameLoop fresh_loop(fresh);
+    ASSERT_GT(settle(fresh_loop), 0);
+    const std::vector<glm::vec3>& expected = fresh.iim_method()->iim().shown();
+    double worst = 0.0;
+    for (const TexelRecord& t : scene.atlas.texels) {
+        const size_t a = size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x);
+        for (int c = 0; c < 3; ++c)
+            worst = std::max(worst, double(std::abs(iim_after[a][c] - expected[a][c])) /
+                                        (1e-3 + double(expected[a][c])));
+    }
+    std::printf("settled IIM after the edit against a fresh pipeline: worst %.3g relative\n", worst);
+    // AIM surfaces whose flux changed by less than aim.delta_threshold keep their old estimate.
+    EXPECT_LT(worst, 0.01);
+}
+
+// The GL thread gathers and draws while the frame's photon work is still running: the worker
+// holds its work until the GL thread has drawn. If the GL thread waited on the workers before
+// drawing, the worker would give up after the timeout and the test would fail.
+TEST_F(PipelineTest, TheGlThreadDrawsWhileThePhotonWorkRuns) {
+    Scene scene = cornell();
+    std::mutex m;
+    std::condition_variable cv;
+    bool drawn = false;
+    int overlapped = 0, timed_out = 0;
+    PipelineOptions options{48, 48};
+    options.on_cpu_work_start = [&] {
+        std::unique_lock lock(m);
+        if (cv.wait_for(lock, std::chrono::seconds(60), [&] { return drawn; }))
+            ++overlapped;
+        else
+            ++timed_out;
+        drawn = false;
+    };
+    options.on_gl_drawn = [&] {
+        {
+            std::lock_guard lock(m);
+            drawn = true;
+        }
+        cv.notify_all();
+    };
+    Pipeline pipeline(scene, options);
+    FrameLoop loop(pipeline);
+    for (int f = 0; f < 5; ++f) loop.step();
+    pipeline.sync();
+    EXPECT_EQ(overlapped, 5);
+    EXPECT_EQ(timed_out, 0);
+}
+
+TEST_F(PipelineTest, BruteForceRedoesEverythingEveryFrame) {
+    Scene scene = cornell();
+    Pipeline pipeline(scene, PipelineOptions{32, 32, -1, PipelineMode::full});
+    FrameLoop loop(pipeline);
+    const int groups = scene.settings.photons.groups * int(scene.lights.size());
+    for (int f = 0; f < 3; ++f) {
+        const PipelineStats s = loop.step();
+        EXPECT_EQ(s.photons.photons_retraced, groups * scene.settings.photons.photons_per_group);
+        EXPECT_EQ(s.photons.aim_surfaces_rebuilt, int(scene.surfaces.size()));
+        EXPECT_EQ(s.iim_texels_gathered, int(scene.atlas.texels.size()));
+    }
+}
+
+TEST_F(PipelineTest, TheFrameLoopOwnsTheScriptClock) {
+    Scene scene = cornell();
+    const int cube = scene.find_object("cube");
+    const glm::vec3 start = scene.objects[size_t(cube)].transform.translation;
+    // Moves the cube 1 mm per frame on frames 2 and 3 only, and records the time it was given.
+    Script script = Script::from_string(R"(
+local cube
+function on_start(scene) cube = scene:object("cube") end
+function on_frame(scene, frame, time)
+    if frame == 2 or frame == 3 then
+        local x, y, z = cube:position()
+        cube:set_position(x + 1, y, z + time)
+    end
+end)",
+                                        "clock.lua");
+    Pipeline pipeline(scene, PipelineOptions{32, 32});
+    std::vector<int> edited;
+    run_frames(pipeline, &script, 6, [&](const FrameEvent& e) {
+        if (e.edited) edited.push_back(e.frame);
+        EXPECT_NE(e.stats, nullptr);
+    });
+    EXPECT_EQ(edited, (std::vector<int>{2, 3}));
+    const glm::vec3 end = scene.objects[size_t(cube)].transform.translation;
+    EXPECT_FLOAT_EQ(end.x - start.x, 2.0f);
+    EXPECT_NEAR(end.z - start.z, (2.0 + 3.0) / kScriptFramesPerSecond, 1e-4);
+
+    // The same script run ahead on a copy reaches the same state without a pipeline.
+    Scene ahead = cornell();
+    Script again = Script::from_string(R"(
+local cube
+function on_start(scene) cube = scene:object("cube") end
+function on_frame(scene, frame, time)
+    if frame == 2 or frame == 3 then
+        local x, y, z = cube:position()
+        cube:set_position(x + 1, y, z + time)
+    end
+end)",
+                                       "clock.lua");
+    run_script_ahead(again, ahead, 6);
+    EXPECT_EQ(ahead.objects[size_t(cube)].transform.translation, end);
+}
+
+// A screen-space method's term (E/π per pixel) and the same constant in the lightmap give the
+// same indirect image: the frame composes either space alike.
+TEST_F(PipelineTest, AScreenSpaceTermComposesLikeTheLightmap) {
+    Scene scene = cornell();
+    const int w = 40, h = 30;
+    gpu::SceneMeshes meshes(scene);
+    gpu::FrameRenderer renderer(scene, meshes, w, h);
+    const glm::vec3 value(0.25f, 0.5f, 0.125f);
+
+    gpu::LightmapTexture lightmap(scene.atlas);
+    lightmap.update_all(std::vector<glm::vec3>(
+        size_t(scene.atlas.width) * size_t(scene.atlas.height), value));
+    renderer.render(gpu::IndirectTerm{lightmap.id(), gpu::IndirectSpace::lightmap});
+    const Image in_lightmap = renderer.read_back().aov[size_t(gpu::Aov::indirect)];
+
+    gpu::Texture screen = gpu::make_texture();
+    std::vector<float> rgba(size_t(w) * size_t(h) * 4);
+    for (size_t i = 0; i < size_t(w) * size_t(h); ++i)
+        for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = value[c];
+    gpu::gl::BindTexture(GL_TEXTURE_2D, screen.get());
+    gpu::gl::TexImage2D(GL_TEXTURE_2D, 0, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+    gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    renderer.render(gpu::IndirectTerm{screen.get(), gpu::IndirectSpace::screen});
+    const Image in_screen = renderer.read_back().aov[size_t(gpu::Aov::indirect)];
+
+    ASSERT_EQ(in_screen.pixels.size(), in_lightmap.pixels.size());
+    int lit = 0;
+    for (size_t i = 0; i < in_screen.pixels.size(); ++i) {
+        EXPECT_NEAR(in_screen.pixels[i], in_lightmap.pixels[i], 1e-5f) << "value " << i;
+        lit += in_screen.pixels[i] > 0.0f;
+    }
+    EXPECT_GT(lit, int(in_screen.pixels.size()) / 4);
+}
+
+}  // namespace
+}  // namespace ag
