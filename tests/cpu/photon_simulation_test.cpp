@@ -4,7 +4,9 @@
 #include <algorithm>
 #include <map>
 #include <random>
+#include <set>
 #include <tuple>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -63,7 +65,29 @@ void expect_identical_maps(const PhotonMaps& a, const PhotonMaps& b) {
 }
 
 
-// Applies one random edit of the kinds the issue lists.
+// World bounds of the static objects: dynamic objects are only moved to where they stay inside,
+// so the scene's diagonal (hence ray epsilon and path tolerance) is the one a fresh trace sees.
+Bounds static_bounds(const Scene& scene) {
+    Bounds b;
+    for (const Object& o : scene.objects)
+        if (!o.dynamic)
+            for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b;
+}
+
+// Places object `o` at `t` if it stays inside the static bounds; false (and no edit) otherwise.
+bool place_inside(Scene& scene, int o, const Transform& t) {
+    const Bounds room = static_bounds(scene);
+    for (const glm::vec3& p : scene.objects[size_t(o)].mesh.positions) {
+        const glm::vec3 w = t.apply_point(p);
+        if (glm::any(glm::lessThan(w, room.min)) || glm::any(glm::greaterThan(w, room.max))) return false;
+    }
+    set_object_transform(scene, o, t);
+    return true;
+}
+
+// Applies one random edit of the kinds the issue lists: small moves and turns, jumps (teleports
+// across the room in one edit), large rotations, light moves, switches and colours, albedos.
 void random_edit(Scene& scene, std::mt19937& rng) {
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     std::vector<int> dynamic;
@@ -73,13 +97,15 @@ void random_edit(Scene& scene, std::mt19937& rng) {
     for (int i = 0; i < int(scene.objects.size()); ++i)
         if (scene.objects[size_t(i)].material.type == MaterialType::diffuse) diffuse.push_back(i);
     const float step = 0.08f * scene.diagonal();
-    switch (rng() % 6) {
+    switch (rng() % 9) {
         case 0:
         case 1:
             if (!dynamic.empty()) {
                 const int o = dynamic[rng() % dynamic.size()];
-                translate_object(scene, o, {step * u(rng), 0.0f, step * u(rng)});
-                if (rng() % 2) rotate_object(scene, o, {0, 1, 0}, 30.0f * u(rng));
+                Transform t = scene.objects[size_t(o)].transform;
+                t.translation += glm::vec3(step * u(rng), 0.0f, step * u(rng));
+                if (rng() % 2) t.rotation = glm::angleAxis(glm::radians(30.0f * u(rng)), glm::vec3(0, 1, 0)) * t.rotation;
+                place_inside(scene, o, t);
             }
             break;
         case 2: {
@@ -103,6 +129,67 @@ void random_edit(Scene& scene, std::mt19937& rng) {
             const int o = diffuse[rng() % diffuse.size()];
             set_albedo(scene, o, glm::vec3(0.2f + 0.6f * std::abs(u(rng)), 0.3f + 0.6f * std::abs(u(rng)), 0.5f));
             break;
+        }
+        case 6:
+        case 7:  // a jump: anywhere in the room at the same height, in one set_position
+            if (!dynamic.empty()) {
+                const int o = dynamic[rng() % dynamic.size()];
+                const Bounds room = static_bounds(scene);
+                for (int attempt = 0; attempt < 8; ++attempt) {
+                    Transform t = scene.objects[size_t(o)].transform;
+                    const glm::vec3 f(0.5f + 0.5f * u(rng), 0.0f, 0.5f + 0.5f * u(rng));
+                    t.translation.x = room.min.x + f.x * (room.max.x - room.min.x);
+                    t.translation.z = room.min.z + f.z * (room.max.z - room.min.z);
+                    if (place_inside(scene, o, t)) break;
+                }
+            }
+            break;
+        case 8:  // a large rotation about an arbitrary axis
+            if (!dynamic.empty()) {
+                const int o = dynamic[rng() % dynamic.size()];
+                Transform t = scene.objects[size_t(o)].transform;
+                const glm::vec3 axis(u(rng), 1.0f + u(rng), u(rng));
+                t.rotation = glm::angleAxis(glm::radians(180.0f * u(rng)), glm::normalize(axis)) * t.rotation;
+                place_inside(scene, o, t);
+            }
+            break;
+    }
+}
+
+// Stored paths equal within the path tolerance (world and object space), photon by photon.
+bool same_paths(const PhotonGroup& a, const PhotonGroup& b, float tolerance) {
+    if (a.photon_begin != b.photon_begin) return false;
+    for (size_t i = 0; i < a.vertices.size(); ++i) {
+        const PathVertex &x = a.vertices[i], &y = b.vertices[i];
+        if (x.surface != y.surface || glm::length(x.position - y.position) > tolerance ||
+            glm::length(x.local - y.local) > tolerance)
+            return false;
+    }
+    return true;
+}
+
+// Bit-identical stored paths and hit positions of every traced group against a fresh trace; hit
+// powers within float rounding (a light colour edit rescales hits instead of re-tracing them).
+void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b, const std::string& what) {
+    const Scene& scene = b.scene();
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < scene.settings.photons.groups; ++g) {
+            const PhotonGroup &x = a.maps().group(l, g), &y = b.maps().group(l, g);
+            ASSERT_EQ(x.traced, y.traced) << what << ": light " << l << " group " << g;
+            ASSERT_EQ(x.photon_begin, y.photon_begin) << what << ": light " << l << " group " << g;
+            for (size_t i = 0; i < x.vertices.size(); ++i) {
+                ASSERT_EQ(x.vertices[i].surface, y.vertices[i].surface) << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].position, y.vertices[i].position) << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].local, y.vertices[i].local) << what << ": light " << l << " group " << g;
+            }
+        }
+    for (int s = 0; s < int(a.maps().surface_count()); ++s) {
+        const auto ha = hits_of(a.maps(), s), hb = hits_of(b.maps(), s);
+        ASSERT_EQ(ha.size(), hb.size()) << what << ": surface " << s;
+        for (const auto& [key, hit] : ha) {
+            auto it = hb.find(key);
+            ASSERT_NE(it, hb.end()) << what << ": surface " << s;
+            EXPECT_EQ(hit.position, it->second.position) << what << ": surface " << s;
         }
     }
 }
@@ -138,6 +225,7 @@ void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edi
     fresh.trace_all();
     expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene.diagonal(),
                      scene_file + " seed " + std::to_string(seed));
+    expect_exact_paths(sim, fresh, scene_file + " seed " + std::to_string(seed));
 }
 
 }  // namespace
@@ -160,15 +248,30 @@ TEST(SelectiveTracing, RepairIsIndependentOfThreadCount) {
     ThreadPool one(1), three(3);
     PhotonSimulation sa(a, one), sb(b, three);
     std::mt19937 ra(5), rb(5);
-    for (int e = 0; e < 10; ++e) {
-        random_edit(a, ra);
-        random_edit(b, rb);
+    const auto frames = [&] {
         for (int f = 0; f < 3; ++f) {
             const PhotonFrameStats x = sa.frame(), y = sb.frame();
             EXPECT_EQ(x.groups_invalidated, y.groups_invalidated);
+            EXPECT_EQ(x.groups_invalidated_by_query, y.groups_invalidated_by_query);
+            EXPECT_EQ(x.query_segments_tested, y.query_segments_tested);
+            EXPECT_EQ(sa.invalidated_last_frame(), sb.invalidated_last_frame());
             EXPECT_EQ(x.photons_retraced, y.photons_retraced);
         }
+    };
+    for (int e = 0; e < 10; ++e) {
+        random_edit(a, ra);
+        random_edit(b, rb);
+        frames();
     }
+    // A jump across the room in one edit.
+    const int cube = a.find_object("cube");
+    ASSERT_GE(cube, 0);
+    for (Scene* s : {&a, &b}) {
+        Transform t = s->objects[size_t(cube)].transform;
+        t.translation = {400.0f, t.translation.y, 130.0f};
+        set_object_transform(*s, cube, t);
+    }
+    frames();
     expect_identical_maps(sa.maps(), sb.maps());
 }
 
@@ -192,6 +295,63 @@ TEST(SelectiveTracing, MovingTheCubeInvalidatesGroupsWithinGFrames) {
     int invalidated = 0;
     for (int f = 0; f < scene.settings.photons.groups && invalidated == 0; ++f) invalidated += sim.frame().groups_invalidated;
     EXPECT_GT(invalidated, 0);
+}
+
+// Jumps the cube 261 mm in one set_position (where cornell_move_cube.lua slides it) on a settled
+// simulation, and returns (groups whose stored paths a fresh trace changes, groups invalidated in
+// the frame of the edit).
+std::pair<std::set<std::pair<int, int>>, std::set<std::pair<int, int>>> cube_jump(bool query, PhotonFrameStats& stats) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.set_query_invalidation(query);
+    settle(sim);
+    const int cube = scene.find_object("cube");
+    std::vector<PhotonGroup> before;
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < scene.settings.photons.groups; ++g) before.push_back(sim.maps().group(l, g));
+    Transform t = scene.objects[size_t(cube)].transform;
+    t.translation += glm::vec3(254.5f, 0.0f, -59.0f);
+    set_object_transform(scene, cube, t);
+    stats = sim.frame();
+    std::set<std::pair<int, int>> invalidated(sim.invalidated_last_frame().begin(), sim.invalidated_last_frame().end());
+
+    // Ground truth by brute force: every group's photons re-traced in the edited scene.
+    PhotonSimulation fresh(scene, pool);
+    fresh.trace_all();
+    const float tolerance = scene.settings.photons.path_tolerance * scene.diagonal();
+    std::set<std::pair<int, int>> changed;
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < scene.settings.photons.groups; ++g)
+            if (!same_paths(before[size_t(l * scene.settings.photons.groups + g)], fresh.maps().group(l, g), tolerance))
+                changed.emplace(l, g);
+    return {changed, invalidated};
+}
+
+// A moved object invalidates in the frame of the edit every group whose stored path crossed its
+// old or new placement; round-robin verification alone finds only some of them in that frame.
+TEST(SelectiveTracing, CubeJumpInvalidatesEveryChangedGroupInTheEditFrame) {
+    PhotonFrameStats stats;
+    const auto [changed, invalidated] = cube_jump(true, stats);
+    ASSERT_FALSE(changed.empty());
+    size_t missed = 0;
+    for (const auto& c : changed) missed += invalidated.count(c) ? 0 : 1;
+    EXPECT_EQ(missed, 0u) << "of " << changed.size() << " changed groups";
+    EXPECT_GT(stats.groups_invalidated_by_query, 0);
+    EXPECT_GT(stats.query_segments_tested, 0u);
+    std::printf("cube jump: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
+                changed.size(), invalidated.size(), stats.groups_invalidated_by_query,
+                static_cast<unsigned long long>(stats.query_segments_tested));
+
+    PhotonFrameStats off;
+    const auto [changed_off, invalidated_off] = cube_jump(false, off);
+    EXPECT_EQ(changed_off, changed);
+    size_t missed_off = 0;
+    for (const auto& c : changed_off) missed_off += invalidated_off.count(c) ? 0 : 1;
+    EXPECT_GT(missed_off, 0u);  // without the query the test above would fail
+    EXPECT_EQ(off.groups_invalidated_by_query, 0);
+    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n", missed_off,
+                changed_off.size());
 }
 
 TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {
