@@ -86,8 +86,8 @@ private:
     };
 
     void apply_changes(PhotonFrameStats& stats);
-    // Invalidates every traced group with a path segment crossing object `o` at `before` or at
-    // its current transform (the object's bounds in its own frame, padded: conservative).
+    // Invalidates every traced group with a path segment crossing a moved object at its transform
+    // before (given) or now (the object's bounds in its own frame, padded: conservative).
     void invalidate_crossing(const std::vector<std::pair<int, Transform>>& moved, PhotonFrameStats& stats);
     double group_flux(int light, int group) const;
     void invalidate(int light, int group, PhotonFrameStats& stats);

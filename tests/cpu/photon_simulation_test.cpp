@@ -2,6 +2,7 @@
 #include "cpu/photon_simulation.h"
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <random>
 #include <set>
@@ -206,8 +207,11 @@ int settle(PhotonSimulation& sim) {
     return frames;
 }
 
-void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits) {
+// With `verify` off the round-robin safety net is switched off: the edits' own invalidation (the
+// moved-object query, light and albedo edits) must then find every group alone.
+void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits, bool verify = true) {
     Scene scene = load_scene(test::scene_path(scene_file));
+    if (!verify) scene.settings.photons.verify_per_frame = 0;
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     settle(sim);
@@ -236,6 +240,11 @@ TEST(SelectiveTracing, RepairEqualsRebuildCornell) {
 
 TEST(SelectiveTracing, RepairEqualsRebuildTwoRooms) {
     for (uint32_t seed = 100; seed <= 108; ++seed) repair_equals_rebuild("two_rooms.json", seed, 6);
+}
+
+TEST(SelectiveTracing, RepairEqualsRebuildWithoutVerification) {
+    for (uint32_t seed = 300; seed <= 311; ++seed) repair_equals_rebuild("cornell.json", seed, 8, false);
+    for (uint32_t seed = 400; seed <= 408; ++seed) repair_equals_rebuild("two_rooms.json", seed, 8, false);
 }
 
 TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
@@ -297,61 +306,82 @@ TEST(SelectiveTracing, MovingTheCubeInvalidatesGroupsWithinGFrames) {
     EXPECT_GT(invalidated, 0);
 }
 
-// Jumps the cube 261 mm in one set_position (where cornell_move_cube.lua slides it) on a settled
-// simulation, and returns (groups whose stored paths a fresh trace changes, groups invalidated in
-// the frame of the edit).
-std::pair<std::set<std::pair<int, int>>, std::set<std::pair<int, int>>> cube_jump(bool query, PhotonFrameStats& stats) {
-    Scene scene = load_scene(test::scene_path("cornell.json"));
+struct EditOutcome {
+    std::set<std::pair<int, int>> changed;      // groups whose stored paths a fresh trace changes
+    std::set<std::pair<int, int>> invalidated;  // groups invalidated in the frame of the edit
+    PhotonFrameStats stats;                     // of that frame
+};
+
+// Applies `edit` to a settled simulation of `scene_file`, runs one frame, and finds the ground truth
+// by brute force: every group's photons re-traced in the edited scene.
+EditOutcome step_edit(const std::string& scene_file, const std::function<void(Scene&)>& edit, bool query) {
+    Scene scene = load_scene(test::scene_path(scene_file));
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     sim.set_query_invalidation(query);
     settle(sim);
-    const int cube = scene.find_object("cube");
+    const int groups = scene.settings.photons.groups;
     std::vector<PhotonGroup> before;
     for (int l = 0; l < int(scene.lights.size()); ++l)
-        for (int g = 0; g < scene.settings.photons.groups; ++g) before.push_back(sim.maps().group(l, g));
-    Transform t = scene.objects[size_t(cube)].transform;
-    t.translation += glm::vec3(254.5f, 0.0f, -59.0f);
-    set_object_transform(scene, cube, t);
-    stats = sim.frame();
-    std::set<std::pair<int, int>> invalidated(sim.invalidated_last_frame().begin(), sim.invalidated_last_frame().end());
-
-    // Ground truth by brute force: every group's photons re-traced in the edited scene.
+        for (int g = 0; g < groups; ++g) before.push_back(sim.maps().group(l, g));
+    edit(scene);
+    EditOutcome out;
+    out.stats = sim.frame();
+    out.invalidated.insert(sim.invalidated_last_frame().begin(), sim.invalidated_last_frame().end());
     PhotonSimulation fresh(scene, pool);
     fresh.trace_all();
     const float tolerance = scene.settings.photons.path_tolerance * scene.diagonal();
-    std::set<std::pair<int, int>> changed;
     for (int l = 0; l < int(scene.lights.size()); ++l)
-        for (int g = 0; g < scene.settings.photons.groups; ++g)
-            if (!same_paths(before[size_t(l * scene.settings.photons.groups + g)], fresh.maps().group(l, g), tolerance))
-                changed.emplace(l, g);
-    return {changed, invalidated};
+        for (int g = 0; g < groups; ++g)
+            if (!same_paths(before[size_t(l * groups + g)], fresh.maps().group(l, g), tolerance)) out.changed.emplace(l, g);
+    return out;
+}
+
+size_t missed(const EditOutcome& o) {
+    size_t n = 0;
+    for (const auto& c : o.changed) n += o.invalidated.count(c) ? 0 : 1;
+    return n;
+}
+
+// The cube jumps 261 mm in one set_position (to where cornell_move_cube.lua slides it).
+void jump_cube(Scene& scene) {
+    const int cube = scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    Transform t = scene.objects[size_t(cube)].transform;
+    t.translation += glm::vec3(254.5f, 0.0f, -59.0f);
+    set_object_transform(scene, cube, t);
 }
 
 // A moved object invalidates in the frame of the edit every group whose stored path crossed its
 // old or new placement; round-robin verification alone finds only some of them in that frame.
 TEST(SelectiveTracing, CubeJumpInvalidatesEveryChangedGroupInTheEditFrame) {
-    PhotonFrameStats stats;
-    const auto [changed, invalidated] = cube_jump(true, stats);
-    ASSERT_FALSE(changed.empty());
-    size_t missed = 0;
-    for (const auto& c : changed) missed += invalidated.count(c) ? 0 : 1;
-    EXPECT_EQ(missed, 0u) << "of " << changed.size() << " changed groups";
-    EXPECT_GT(stats.groups_invalidated_by_query, 0);
-    EXPECT_GT(stats.query_segments_tested, 0u);
+    const EditOutcome on = step_edit("cornell.json", jump_cube, true);
+    ASSERT_FALSE(on.changed.empty());
+    EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
+    EXPECT_GT(on.stats.groups_invalidated_by_query, 0);
+    EXPECT_GT(on.stats.query_segments_tested, 0u);
     std::printf("cube jump: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
-                changed.size(), invalidated.size(), stats.groups_invalidated_by_query,
-                static_cast<unsigned long long>(stats.query_segments_tested));
+                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+                static_cast<unsigned long long>(on.stats.query_segments_tested));
 
-    PhotonFrameStats off;
-    const auto [changed_off, invalidated_off] = cube_jump(false, off);
-    EXPECT_EQ(changed_off, changed);
-    size_t missed_off = 0;
-    for (const auto& c : changed_off) missed_off += invalidated_off.count(c) ? 0 : 1;
-    EXPECT_GT(missed_off, 0u);  // without the query the test above would fail
-    EXPECT_EQ(off.groups_invalidated_by_query, 0);
-    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n", missed_off,
-                changed_off.size());
+    const EditOutcome off = step_edit("cornell.json", jump_cube, false);
+    EXPECT_EQ(off.changed, on.changed);
+    EXPECT_GT(missed(off), 0u);  // without the query the check above fails
+    EXPECT_EQ(off.stats.groups_invalidated_by_query, 0);
+    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n", missed(off),
+                off.changed.size());
+}
+
+// The same for the door of two_rooms opened by 90 degrees in one edit (a rotation about its hinge).
+TEST(SelectiveTracing, DoorStepInvalidatesEveryChangedGroupInTheEditFrame) {
+    const EditOutcome on = step_edit("two_rooms.json", [](Scene& scene) {
+        rotate_object(scene, scene.find_object("door"), {0, 1, 0}, 90.0f);
+    }, true);
+    ASSERT_FALSE(on.changed.empty());
+    EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
+    std::printf("door step: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
+                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+                static_cast<unsigned long long>(on.stats.query_segments_tested));
 }
 
 TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {
