@@ -1,11 +1,61 @@
 #include "cpu/photon_simulation.h"
 
 #include <algorithm>
+#include <chrono>
 #include <set>
+
+#include <glm/gtc/quaternion.hpp>
 
 #include "shared/scene_edit.h"
 
 namespace ag::cpu {
+
+namespace {
+
+// Does the segment a + t·d, t ∈ [0, 1] (or [0, ∞) for a ray), meet the box? Slab test, closed
+// box: a segment that only touches a face counts.
+bool segment_meets_box(const glm::vec3& a, const glm::vec3& d, bool ray, const Bounds& box) {
+    float t0 = 0.0f, t1 = ray ? 1e30f : 1.0f;
+    for (int k = 0; k < 3; ++k) {
+        if (d[k] == 0.0f) {
+            if (a[k] < box.min[k] || a[k] > box.max[k]) return false;
+            continue;
+        }
+        const float inv = 1.0f / d[k];
+        float near = (box.min[k] - a[k]) * inv, far = (box.max[k] - a[k]) * inv;
+        if (near > far) std::swap(near, far);
+        t0 = std::max(t0, near);
+        t1 = std::min(t1, far);
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+bool boxes_overlap(const Bounds& a, const Bounds& b) {
+    return !a.empty() && !b.empty() && glm::all(glm::lessThanEqual(a.min, b.max)) &&
+           glm::all(glm::lessThanEqual(b.min, a.max));
+}
+
+// One placement of a moved object: its padded bounds in its own frame (an oriented box in the
+// world) and their world AABB for the broad phase.
+struct Placement {
+    glm::mat3 to_local{1.0f};
+    glm::vec3 translation{0.0f};
+    Bounds local, world;
+};
+
+Placement make_placement(const Transform& t, const Bounds& local) {
+    Placement p;
+    p.to_local = glm::mat3_cast(glm::conjugate(t.rotation));
+    p.translation = t.translation;
+    p.local = local;
+    for (int c = 0; c < 8; ++c)
+        p.world.add(t.apply_point({c & 1 ? local.max.x : local.min.x, c & 2 ? local.max.y : local.min.y,
+                                   c & 4 ? local.max.z : local.min.z}));
+    return p;
+}
+
+}  // namespace
 
 PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     rays_ = std::make_unique<RayTracer>(scene_);
@@ -16,32 +66,49 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());
     invalidations_.assign(scene_.lights.size(), 0);
+    segments_.resize(scene_.lights.size() * size_t(groups));
+    for (const Object& o : scene_.objects) {
+        placed_.push_back(o.transform);
+        object_bounds_.push_back(mesh_bounds(o.mesh));
+    }
     for (int l = 0; l < int(scene_.lights.size()); ++l) {
         traced_power_[size_t(l)] = tracer_->photon_power(l);
         if (!scene_.lights[size_t(l)].enabled) continue;
         for (int g = 0; g < groups; ++g) {
             maps_.group(l, g).queued = true;
-            queue_.emplace_back(l, g);
+            queue_.insert({group_flux(l, g), l, g});
         }
     }
+}
+
+double PhotonSimulation::group_flux(int light, int group) const {
+    const PhotonGroup& g = maps_.group(light, group);
+    if (!g.traced) return double(scene_.settings.photons.photons_per_group) * energy(tracer_->photon_power(light));
+    double flux = 0.0;
+    for (const PathVertex& v : g.vertices)
+        if (v.hit >= 0) flux += energy(maps_.surface(v.surface).hits[size_t(v.hit)].power);
+    return flux;
 }
 
 void PhotonSimulation::invalidate(int light, int group, PhotonFrameStats& stats) {
     PhotonGroup& g = maps_.group(light, group);
     if (g.queued || !scene_.lights[size_t(light)].enabled) return;  // a dark light has no photons
     g.queued = true;
-    queue_.emplace_back(light, group);
+    // Largest flux first: the flux its stored hits carry (what the maps are wrong by), or for a
+    // group with no hits yet the flux it emits.
+    queue_.insert({group_flux(light, group), light, group});
+    invalidated_.emplace_back(light, group);
     ++stats.groups_invalidated;
     ++invalidations_[size_t(light)];
 }
 
 void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
     const int groups = scene_.settings.photons.groups;
-    bool moved = false;
+    std::vector<bool> moved(scene_.objects.size(), false);
     for (const SceneChange& c : changes_since(scene_, seen_sequence_)) {
         switch (c.kind) {
             case ChangeKind::object_transform:
-                moved = true;  // verification finds the groups whose paths changed
+                moved[size_t(c.index)] = true;  // queried below, once per object
                 break;
             case ChangeKind::object_material: {
                 // Every photon that reached a front face of this object left a hit there, so the
@@ -83,7 +150,7 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                         maps_.clear_group(c.index, g);
                         maps_.group(c.index, g).queued = false;
                     }
-                    std::erase_if(queue_, [&](const auto& q) { return q.first == c.index; });
+                    std::erase_if(queue_, [&](const QueuedGroup& q) { return q.light == c.index; });
                 }
                 break;
             }
@@ -92,8 +159,91 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
         }
     }
     if (!scene_.changes.empty()) seen_sequence_ = std::max(seen_sequence_, scene_.changes.back().sequence);
-    if (moved) rays_->update(scene_);
+    // Paths were traced with every object where placed_ says; several edits of one object since
+    // the last frame count as one move from there to where it is now.
+    std::vector<std::pair<int, Transform>> placements;  // (object, transform before)
+    for (int o = 0; o < int(moved.size()); ++o) {
+        const Transform& now = scene_.objects[size_t(o)].transform;
+        Transform& before = placed_[size_t(o)];
+        if (!moved[size_t(o)] || (before.translation == now.translation && before.rotation == now.rotation)) continue;
+        placements.emplace_back(o, before);
+        before = now;
+    }
+    if (!placements.empty()) {
+        if (query_on_) invalidate_crossing(placements, stats);
+        rays_->update(scene_);
+    }
     tracer_->refresh();
+}
+
+void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Transform>>& moved,
+                                           PhotonFrameStats& stats) {
+    const auto start = std::chrono::steady_clock::now();
+    // Stored segments start at a vertex, rays at that vertex offset by epsilon along the normal:
+    // pad every box by a few epsilons so a ray that grazes the object is never missed.
+    const float pad = 10.0f * rays_->epsilon();
+    std::vector<Placement> placements;
+    for (const auto& [o, before] : moved) {
+        Bounds local = object_bounds_[size_t(o)];
+        if (local.empty()) continue;
+        local.min -= glm::vec3(pad);
+        local.max += glm::vec3(pad);
+        placements.push_back(make_placement(before, local));
+        placements.push_back(make_placement(scene_.objects[size_t(o)].transform, local));
+    }
+    stats.objects_moved = int(moved.size());
+    const auto crosses = [&](const glm::vec3& a, const glm::vec3& d, bool ray) {
+        for (const Placement& p : placements)
+            if (segment_meets_box(p.to_local * (a - p.translation), p.to_local * d, ray, p.local)) return true;
+        return false;
+    };
+
+    const int groups = scene_.settings.photons.groups;
+    const size_t count = scene_.lights.size() * size_t(groups);
+    std::vector<uint8_t> hit(count, 0);
+    std::vector<uint64_t> tested(count, 0);
+    pool_.parallel_for(count, [&](size_t i) {
+        const int l = int(i / size_t(groups)), g = int(i % size_t(groups));
+        const PhotonGroup& group = maps_.group(l, g);
+        if (!group.traced || group.queued) return;
+        const GroupSegments& seg = segments_[i];
+        // Broad phase: the group's segments' bounds against each placement's world AABB.
+        bool near = false;
+        for (const Placement& p : placements) near = near || boxes_overlap(seg.bounds, p.world);
+        if (!near && !seg.escapes) return;
+        // Narrow phase: each segment against each placement's oriented box.
+        uint64_t n = 0;
+        for (size_t k = 0; k + 1 < group.photon_begin.size() && !hit[i]; ++k) {
+            glm::vec3 a = seg.ends[k].origin;
+            if (near) {
+                for (uint32_t v = group.photon_begin[k]; v < group.photon_begin[k + 1]; ++v) {
+                    const glm::vec3 b = group.vertices[v].position;
+                    ++n;
+                    if (crosses(a, b - a, false)) {
+                        hit[i] = 1;
+                        break;
+                    }
+                    a = b;
+                }
+            } else if (group.photon_begin[k + 1] > group.photon_begin[k]) {
+                a = group.vertices[group.photon_begin[k + 1] - 1].position;
+            }
+            if (!hit[i] && seg.ends[k].escape != glm::vec3(0.0f)) {
+                ++n;
+                if (crosses(a, seg.ends[k].escape, true)) hit[i] = 1;
+            }
+        }
+        tested[i] = n;
+    }, 4);
+    // Invalidate in group order on this thread: the queue is the same for any thread count.
+    for (size_t i = 0; i < count; ++i) {
+        stats.query_segments_tested += tested[i];
+        if (!hit[i]) continue;
+        const int before = stats.groups_invalidated;
+        invalidate(int(i / size_t(groups)), int(i % size_t(groups)), stats);
+        stats.groups_invalidated_by_query += stats.groups_invalidated - before;
+    }
+    stats.query_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
 bool PhotonSimulation::same_path(const PhotonGroup& group, int photon, const std::vector<TracedVertex>& path) const {
@@ -116,15 +266,26 @@ void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& gr
     const int per_group = scene_.settings.photons.photons_per_group;
     const size_t jobs = groups.size() * size_t(per_group);
     if (traced_.size() < jobs) traced_.resize(jobs);
+    if (traced_ends_.size() < jobs) traced_ends_.resize(jobs);
     pool_.parallel_for(jobs, [&](size_t job) {
         const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
         traced_[job].clear();  // keeps its capacity from earlier frames
-        tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
+        traced_ends_[job] = tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
     }, 8);
     // Merge in group order on this thread: the maps end up identical for any thread count.
     for (size_t gi = 0; gi < groups.size(); ++gi) {
-        maps_.set_group(groups[gi].first, groups[gi].second, &traced_[gi * size_t(per_group)], size_t(per_group));
-        maps_.group(groups[gi].first, groups[gi].second).queued = false;
+        const auto [l, g] = groups[gi];
+        maps_.set_group(l, g, &traced_[gi * size_t(per_group)], size_t(per_group));
+        maps_.group(l, g).queued = false;
+        GroupSegments& seg = segments_[size_t(l) * size_t(scene_.settings.photons.groups) + size_t(g)];
+        seg = GroupSegments{};
+        seg.ends.assign(traced_ends_.begin() + std::ptrdiff_t(gi * size_t(per_group)),
+                        traced_ends_.begin() + std::ptrdiff_t((gi + 1) * size_t(per_group)));
+        for (const PathEnds& e : seg.ends) {
+            seg.bounds.add(e.origin);
+            seg.escapes = seg.escapes || e.escape != glm::vec3(0.0f);
+        }
+        for (const PathVertex& v : maps_.group(l, g).vertices) seg.bounds.add(v.position);
     }
 }
 
@@ -140,6 +301,7 @@ int PhotonSimulation::invalidate_all() {
 PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     PhotonFrameStats stats;
     stats.frame = ++frame_;
+    invalidated_.clear();
     apply_changes(stats);
     const PhotonSettings& settings = scene_.settings.photons;
 
@@ -168,8 +330,8 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     std::vector<std::pair<int, int>> batch;
     int budget = retrace_budget;
     while (!queue_.empty() && (batch.empty() || budget >= settings.photons_per_group)) {
-        batch.push_back(queue_.front());
-        queue_.pop_front();
+        batch.emplace_back(queue_.begin()->light, queue_.begin()->group);
+        queue_.erase(queue_.begin());
         budget -= settings.photons_per_group;
     }
     retrace_groups(batch);

@@ -1,13 +1,15 @@
 // Selective photon tracing (Larsen ch. 9): a photon simulation of the scene that is repaired, not
-// recomputed, when the scene changes. Each frame one photon per QMC group is re-traced (round
-// robin) and compared with its stored path; a diverged group is invalidated, its hits subtracted,
-// and it waits in a queue that is worked off under a per-frame photon budget.
+// recomputed, when the scene changes. A moved object invalidates at once every group whose stored
+// path crosses its old or new placement; each frame one photon per QMC group is also re-traced
+// (round robin) and compared with its stored path as a safety net. Invalid groups wait in a queue,
+// largest flux first, worked off under a per-frame photon budget.
 #pragma once
 
 #include <cstdint>
-#include <deque>
 #include <memory>
+#include <set>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "cpu/photon_map.h"
@@ -21,7 +23,11 @@ namespace ag::cpu {
 struct PhotonFrameStats {
     uint64_t frame = 0;
     int photons_verified = 0;
-    int groups_invalidated = 0;   // by verification, light moves, albedo edits, switching on
+    int groups_invalidated = 0;   // by all causes: query, verification, light and albedo edits
+    int groups_invalidated_by_query = 0;  // paths crossing a moved object's old or new placement
+    int objects_moved = 0;                // objects whose placement the query tested
+    uint64_t query_segments_tested = 0;   // path segments tested exactly (narrow phase)
+    double query_ms = 0.0;                // wall time of the moved-object query
     int photons_retraced = 0;
     int groups_retraced = 0;
     int groups_queued = 0;        // still waiting after this frame
@@ -54,6 +60,10 @@ public:
     void trace_all();
 
     bool settled() const { return queue_.empty(); }
+    // Off: moved objects are found only by round-robin verification (for measurements and tests).
+    void set_query_invalidation(bool on) { query_on_ = on; }
+    // (light, group) of every group invalidated during the last frame(), in invalidation order.
+    const std::vector<std::pair<int, int>>& invalidated_last_frame() const { return invalidated_; }
     const PhotonMaps& maps() const { return maps_; }
     PhotonMaps& maps() { return maps_; }
     const Scene& scene() const { return scene_; }
@@ -64,7 +74,27 @@ public:
     uint64_t invalidations(int light) const { return invalidations_[size_t(light)]; }
 
 private:
+    // A group's place in the retrace queue: largest flux first, then (light, group) for a fixed order.
+    struct QueuedGroup {
+        double flux = 0.0;
+        int light = 0, group = 0;
+        bool operator<(const QueuedGroup& o) const {
+            if (flux != o.flux) return flux > o.flux;
+            return std::pair(light, group) < std::pair(o.light, o.group);
+        }
+    };
+    // What edit queries need of a group's stored paths beyond its vertices.
+    struct GroupSegments {
+        Bounds bounds;                   // every finite segment, emission origins included
+        std::vector<PathEnds> ends;      // per photon
+        bool escapes = false;            // some photon's last ray left the scene (unbounded)
+    };
+
     void apply_changes(PhotonFrameStats& stats);
+    // Invalidates every traced group with a path segment crossing a moved object at its transform
+    // before (given) or now (the object's bounds in its own frame, padded: conservative).
+    void invalidate_crossing(const std::vector<std::pair<int, Transform>>& moved, PhotonFrameStats& stats);
+    double group_flux(int light, int group) const;
     void invalidate(int light, int group, PhotonFrameStats& stats);
     void retrace_groups(const std::vector<std::pair<int, int>>& groups);
     bool same_path(const PhotonGroup& group, int photon, const std::vector<TracedVertex>& path) const;
@@ -74,13 +104,19 @@ private:
     std::unique_ptr<RayTracer> rays_;
     std::unique_ptr<PhotonTracer> tracer_;
     PhotonMaps maps_;
-    std::deque<std::pair<int, int>> queue_;  // (light, group), FIFO
+    std::set<QueuedGroup> queue_;
+    std::vector<std::pair<int, int>> invalidated_;   // during the last frame
+    std::vector<GroupSegments> segments_;           // [light * groups + group]
+    std::vector<Transform> placed_;                 // per object: the transform the paths were traced in
+    std::vector<Bounds> object_bounds_;             // per object, in its own frame
+    bool query_on_ = true;
     uint64_t seen_sequence_ = 0;
     uint64_t frame_ = 0;
     float tolerance_ = 0.0f;                 // world units
     std::vector<glm::vec3> traced_power_;    // per light: photon power the stored hits carry
     std::vector<uint64_t> invalidations_;    // per light
     std::vector<std::vector<TracedVertex>> traced_;  // re-used path buffers, one per photon job
+    std::vector<PathEnds> traced_ends_;              // their ends
 };
 
 }  // namespace ag::cpu

@@ -86,7 +86,7 @@ float PhotonTracer::sample(int light, uint64_t k, int dim) const {
     return float(h >> 8) * (1.0f / 16777216.0f);
 }
 
-void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
+PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
     const Light& l = scene_.lights[size_t(light)];
     const uint64_t k = uint64_t(group) * uint64_t(per_group_) + uint64_t(index);
     // Group g owns stratum [g/G, (g+1)/G) of the Hilbert parameter; photon i takes the i-th
@@ -106,12 +106,17 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
     }
     glm::vec3 power = photon_power(light);
     const float eps = rays_.epsilon();
+    PathEnds ends;
+    ends.origin = ray.origin;
 
     for (int bounce = 0; bounce < max_bounces_; ++bounce) {
         ray.tmin = 0.0f;
         ray.tmax = 1e30f;
         const RayHit hit = rays_.intersect(ray);
-        if (!hit.hit) return;
+        if (!hit.hit) {
+            ends.escape = ray.direction;
+            return ends;
+        }
         const Object& object = scene_.objects[size_t(hit.object)];
         const Material& m = object.material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
@@ -131,10 +136,10 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
             // (walls lit from both sides need thickness).
             v.stored = front;
             out.push_back(v);
-            if (!front) return;
+            if (!front) return ends;
             // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
             const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
-            if (p <= 0.0f || sample(light, k, dim) >= p) return;
+            if (p <= 0.0f || sample(light, k, dim) >= p) return ends;
             power *= m.albedo / p;
             ray.origin = hit.position + eps * facing;
             ray.direction = cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));
@@ -144,6 +149,7 @@ void PhotonTracer::trace(int light, int group, int index, std::vector<TracedVert
             ray = specular_bounce(m, hit, ray.direction, u, eps);
         }
     }
+    return ends;
 }
 
 }  // namespace ag::cpu

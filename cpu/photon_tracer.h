@@ -26,6 +26,13 @@ struct TracedVertex {
     bool stored = false;              // deposited as a photon hit (front side of a diffuse surface)
 };
 
+// Where a traced path starts and whether its last ray left the scene: with the stored vertices
+// these give every segment the photon travelled, which edit queries test against moved objects.
+struct PathEnds {
+    glm::vec3 origin{0.0f};  // the emission ray's origin
+    glm::vec3 escape{0.0f};  // direction of a last ray that hit nothing; zero if the path ended on a hit
+};
+
 // Maps t ∈ [0,1) along a Hilbert curve to the unit square. The curve preserves area, so an
 // interval of length 1/G is a compact stratum of area 1/G: the emission domain of one group.
 glm::vec2 hilbert_point(double t);
@@ -38,7 +45,7 @@ public:
     void refresh();
 
     // Traces photon `index` of group `group` of light `light`, appending its vertices to `out`.
-    void trace(int light, int group, int index, std::vector<TracedVertex>& out) const;
+    PathEnds trace(int light, int group, int index, std::vector<TracedVertex>& out) const;
 
     // Flux of one photon of `light` as emitted (Φ / (G·P)); zero for a switched-off light.
     glm::vec3 photon_power(int light) const;

@@ -2,9 +2,12 @@
 #include "cpu/photon_simulation.h"
 
 #include <algorithm>
+#include <functional>
 #include <map>
 #include <random>
+#include <set>
 #include <tuple>
+#include <utility>
 
 #include <gtest/gtest.h>
 
@@ -63,7 +66,29 @@ void expect_identical_maps(const PhotonMaps& a, const PhotonMaps& b) {
 }
 
 
-// Applies one random edit of the kinds the issue lists.
+// World bounds of the static objects: dynamic objects are only moved to where they stay inside,
+// so the scene's diagonal (hence ray epsilon and path tolerance) is the one a fresh trace sees.
+Bounds static_bounds(const Scene& scene) {
+    Bounds b;
+    for (const Object& o : scene.objects)
+        if (!o.dynamic)
+            for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b;
+}
+
+// Places object `o` at `t` if it stays inside the static bounds; false (and no edit) otherwise.
+bool place_inside(Scene& scene, int o, const Transform& t) {
+    const Bounds room = static_bounds(scene);
+    for (const glm::vec3& p : scene.objects[size_t(o)].mesh.positions) {
+        const glm::vec3 w = t.apply_point(p);
+        if (glm::any(glm::lessThan(w, room.min)) || glm::any(glm::greaterThan(w, room.max))) return false;
+    }
+    set_object_transform(scene, o, t);
+    return true;
+}
+
+// Applies one random edit of the kinds the issue lists: small moves and turns, jumps (teleports
+// across the room in one edit), large rotations, light moves, switches and colours, albedos.
 void random_edit(Scene& scene, std::mt19937& rng) {
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     std::vector<int> dynamic;
@@ -73,13 +98,15 @@ void random_edit(Scene& scene, std::mt19937& rng) {
     for (int i = 0; i < int(scene.objects.size()); ++i)
         if (scene.objects[size_t(i)].material.type == MaterialType::diffuse) diffuse.push_back(i);
     const float step = 0.08f * scene.diagonal();
-    switch (rng() % 6) {
+    switch (rng() % 9) {
         case 0:
         case 1:
             if (!dynamic.empty()) {
                 const int o = dynamic[rng() % dynamic.size()];
-                translate_object(scene, o, {step * u(rng), 0.0f, step * u(rng)});
-                if (rng() % 2) rotate_object(scene, o, {0, 1, 0}, 30.0f * u(rng));
+                Transform t = scene.objects[size_t(o)].transform;
+                t.translation += glm::vec3(step * u(rng), 0.0f, step * u(rng));
+                if (rng() % 2) t.rotation = glm::angleAxis(glm::radians(30.0f * u(rng)), glm::vec3(0, 1, 0)) * t.rotation;
+                place_inside(scene, o, t);
             }
             break;
         case 2: {
@@ -104,6 +131,67 @@ void random_edit(Scene& scene, std::mt19937& rng) {
             set_albedo(scene, o, glm::vec3(0.2f + 0.6f * std::abs(u(rng)), 0.3f + 0.6f * std::abs(u(rng)), 0.5f));
             break;
         }
+        case 6:
+        case 7:  // a jump: anywhere in the room at the same height, in one set_position
+            if (!dynamic.empty()) {
+                const int o = dynamic[rng() % dynamic.size()];
+                const Bounds room = static_bounds(scene);
+                for (int attempt = 0; attempt < 8; ++attempt) {
+                    Transform t = scene.objects[size_t(o)].transform;
+                    const glm::vec3 f(0.5f + 0.5f * u(rng), 0.0f, 0.5f + 0.5f * u(rng));
+                    t.translation.x = room.min.x + f.x * (room.max.x - room.min.x);
+                    t.translation.z = room.min.z + f.z * (room.max.z - room.min.z);
+                    if (place_inside(scene, o, t)) break;
+                }
+            }
+            break;
+        case 8:  // a large rotation about an arbitrary axis
+            if (!dynamic.empty()) {
+                const int o = dynamic[rng() % dynamic.size()];
+                Transform t = scene.objects[size_t(o)].transform;
+                const glm::vec3 axis(u(rng), 1.0f + u(rng), u(rng));
+                t.rotation = glm::angleAxis(glm::radians(180.0f * u(rng)), glm::normalize(axis)) * t.rotation;
+                place_inside(scene, o, t);
+            }
+            break;
+    }
+}
+
+// Stored paths equal within the path tolerance (world and object space), photon by photon.
+bool same_paths(const PhotonGroup& a, const PhotonGroup& b, float tolerance) {
+    if (a.photon_begin != b.photon_begin) return false;
+    for (size_t i = 0; i < a.vertices.size(); ++i) {
+        const PathVertex &x = a.vertices[i], &y = b.vertices[i];
+        if (x.surface != y.surface || glm::length(x.position - y.position) > tolerance ||
+            glm::length(x.local - y.local) > tolerance)
+            return false;
+    }
+    return true;
+}
+
+// Bit-identical stored paths and hit positions of every traced group against a fresh trace; hit
+// powers within float rounding (a light colour edit rescales hits instead of re-tracing them).
+void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b, const std::string& what) {
+    const Scene& scene = b.scene();
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < scene.settings.photons.groups; ++g) {
+            const PhotonGroup &x = a.maps().group(l, g), &y = b.maps().group(l, g);
+            ASSERT_EQ(x.traced, y.traced) << what << ": light " << l << " group " << g;
+            ASSERT_EQ(x.photon_begin, y.photon_begin) << what << ": light " << l << " group " << g;
+            for (size_t i = 0; i < x.vertices.size(); ++i) {
+                ASSERT_EQ(x.vertices[i].surface, y.vertices[i].surface) << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].position, y.vertices[i].position) << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].local, y.vertices[i].local) << what << ": light " << l << " group " << g;
+            }
+        }
+    for (int s = 0; s < int(a.maps().surface_count()); ++s) {
+        const auto ha = hits_of(a.maps(), s), hb = hits_of(b.maps(), s);
+        ASSERT_EQ(ha.size(), hb.size()) << what << ": surface " << s;
+        for (const auto& [key, hit] : ha) {
+            auto it = hb.find(key);
+            ASSERT_NE(it, hb.end()) << what << ": surface " << s;
+            EXPECT_EQ(hit.position, it->second.position) << what << ": surface " << s;
+        }
     }
 }
 
@@ -119,8 +207,11 @@ int settle(PhotonSimulation& sim) {
     return frames;
 }
 
-void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits) {
+// With `verify` off the round-robin safety net is switched off: the edits' own invalidation (the
+// moved-object query, light and albedo edits) must then find every group alone.
+void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits, bool verify = true) {
     Scene scene = load_scene(test::scene_path(scene_file));
+    if (!verify) scene.settings.photons.verify_per_frame = 0;
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     settle(sim);
@@ -138,6 +229,7 @@ void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edi
     fresh.trace_all();
     expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene.diagonal(),
                      scene_file + " seed " + std::to_string(seed));
+    expect_exact_paths(sim, fresh, scene_file + " seed " + std::to_string(seed));
 }
 
 }  // namespace
@@ -150,6 +242,11 @@ TEST(SelectiveTracing, RepairEqualsRebuildTwoRooms) {
     for (uint32_t seed = 100; seed <= 108; ++seed) repair_equals_rebuild("two_rooms.json", seed, 6);
 }
 
+TEST(SelectiveTracing, RepairEqualsRebuildWithoutVerification) {
+    for (uint32_t seed = 300; seed <= 311; ++seed) repair_equals_rebuild("cornell.json", seed, 8, false);
+    for (uint32_t seed = 400; seed <= 408; ++seed) repair_equals_rebuild("two_rooms.json", seed, 8, false);
+}
+
 TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
     for (uint32_t seed = 200; seed <= 202; ++seed) repair_equals_rebuild("bumpy_13k.json", seed, 5);
 }
@@ -160,15 +257,30 @@ TEST(SelectiveTracing, RepairIsIndependentOfThreadCount) {
     ThreadPool one(1), three(3);
     PhotonSimulation sa(a, one), sb(b, three);
     std::mt19937 ra(5), rb(5);
-    for (int e = 0; e < 10; ++e) {
-        random_edit(a, ra);
-        random_edit(b, rb);
+    const auto frames = [&] {
         for (int f = 0; f < 3; ++f) {
             const PhotonFrameStats x = sa.frame(), y = sb.frame();
             EXPECT_EQ(x.groups_invalidated, y.groups_invalidated);
+            EXPECT_EQ(x.groups_invalidated_by_query, y.groups_invalidated_by_query);
+            EXPECT_EQ(x.query_segments_tested, y.query_segments_tested);
+            EXPECT_EQ(sa.invalidated_last_frame(), sb.invalidated_last_frame());
             EXPECT_EQ(x.photons_retraced, y.photons_retraced);
         }
+    };
+    for (int e = 0; e < 10; ++e) {
+        random_edit(a, ra);
+        random_edit(b, rb);
+        frames();
     }
+    // A jump across the room in one edit.
+    const int cube = a.find_object("cube");
+    ASSERT_GE(cube, 0);
+    for (Scene* s : {&a, &b}) {
+        Transform t = s->objects[size_t(cube)].transform;
+        t.translation = {400.0f, t.translation.y, 130.0f};
+        set_object_transform(*s, cube, t);
+    }
+    frames();
     expect_identical_maps(sa.maps(), sb.maps());
 }
 
@@ -192,6 +304,84 @@ TEST(SelectiveTracing, MovingTheCubeInvalidatesGroupsWithinGFrames) {
     int invalidated = 0;
     for (int f = 0; f < scene.settings.photons.groups && invalidated == 0; ++f) invalidated += sim.frame().groups_invalidated;
     EXPECT_GT(invalidated, 0);
+}
+
+struct EditOutcome {
+    std::set<std::pair<int, int>> changed;      // groups whose stored paths a fresh trace changes
+    std::set<std::pair<int, int>> invalidated;  // groups invalidated in the frame of the edit
+    PhotonFrameStats stats;                     // of that frame
+};
+
+// Applies `edit` to a settled simulation of `scene_file`, runs one frame, and finds the ground truth
+// by brute force: every group's photons re-traced in the edited scene.
+EditOutcome step_edit(const std::string& scene_file, const std::function<void(Scene&)>& edit, bool query) {
+    Scene scene = load_scene(test::scene_path(scene_file));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.set_query_invalidation(query);
+    settle(sim);
+    const int groups = scene.settings.photons.groups;
+    std::vector<PhotonGroup> before;
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < groups; ++g) before.push_back(sim.maps().group(l, g));
+    edit(scene);
+    EditOutcome out;
+    out.stats = sim.frame();
+    out.invalidated.insert(sim.invalidated_last_frame().begin(), sim.invalidated_last_frame().end());
+    PhotonSimulation fresh(scene, pool);
+    fresh.trace_all();
+    const float tolerance = scene.settings.photons.path_tolerance * scene.diagonal();
+    for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < groups; ++g)
+            if (!same_paths(before[size_t(l * groups + g)], fresh.maps().group(l, g), tolerance)) out.changed.emplace(l, g);
+    return out;
+}
+
+size_t missed(const EditOutcome& o) {
+    size_t n = 0;
+    for (const auto& c : o.changed) n += o.invalidated.count(c) ? 0 : 1;
+    return n;
+}
+
+// The cube jumps 261 mm in one set_position (to where cornell_move_cube.lua slides it).
+void jump_cube(Scene& scene) {
+    const int cube = scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    Transform t = scene.objects[size_t(cube)].transform;
+    t.translation += glm::vec3(254.5f, 0.0f, -59.0f);
+    set_object_transform(scene, cube, t);
+}
+
+// A moved object invalidates in the frame of the edit every group whose stored path crossed its
+// old or new placement; round-robin verification alone finds only some of them in that frame.
+TEST(SelectiveTracing, CubeJumpInvalidatesEveryChangedGroupInTheEditFrame) {
+    const EditOutcome on = step_edit("cornell.json", jump_cube, true);
+    ASSERT_FALSE(on.changed.empty());
+    EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
+    EXPECT_GT(on.stats.groups_invalidated_by_query, 0);
+    EXPECT_GT(on.stats.query_segments_tested, 0u);
+    std::printf("cube jump: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
+                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+                static_cast<unsigned long long>(on.stats.query_segments_tested));
+
+    const EditOutcome off = step_edit("cornell.json", jump_cube, false);
+    EXPECT_EQ(off.changed, on.changed);
+    EXPECT_GT(missed(off), 0u);  // without the query the check above fails
+    EXPECT_EQ(off.stats.groups_invalidated_by_query, 0);
+    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n", missed(off),
+                off.changed.size());
+}
+
+// The same for the door of two_rooms opened by 90 degrees in one edit (a rotation about its hinge).
+TEST(SelectiveTracing, DoorStepInvalidatesEveryChangedGroupInTheEditFrame) {
+    const EditOutcome on = step_edit("two_rooms.json", [](Scene& scene) {
+        rotate_object(scene, scene.find_object("door"), {0, 1, 0}, 90.0f);
+    }, true);
+    ASSERT_FALSE(on.changed.empty());
+    EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
+    std::printf("door step: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
+                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+                static_cast<unsigned long long>(on.stats.query_segments_tested));
 }
 
 TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {

@@ -87,6 +87,40 @@ TEST(ScriptExamples, EveryExampleRunsAHundredFramesAndEditsItsScene) {
     EXPECT_GE(count, 3);
 }
 
+// The step scripts edit their scene in exactly one frame (20), each with the one edit it names.
+TEST(ScriptExamples, StepScriptsEditInOneFrame) {
+    const struct {
+        const char* script;
+        ChangeKind kind;
+    } steps[] = {{"cornell_cube_jump.lua", ChangeKind::object_transform},
+                 {"two_rooms_door_step.lua", ChangeKind::object_transform},
+                 {"two_rooms_light_off_step.lua", ChangeKind::light_enabled},
+                 {"cornell_albedo_step.lua", ChangeKind::object_material}};
+    for (const auto& step : steps) {
+        SCOPED_TRACE(step.script);
+        Scene scene = load_scene(scene_for(kScenes / step.script).string());
+        Script s((kScenes / step.script).string());
+        ASSERT_TRUE(s.on_start(scene)) << error_of(s);
+        std::vector<int> edited;
+        for (int f = 0; f < 100; ++f) {
+            const uint64_t version = scene.version;
+            ASSERT_TRUE(s.on_frame(scene, f, f / 30.0)) << error_of(s);
+            if (scene.version != version) edited.push_back(f);
+        }
+        EXPECT_EQ(edited, std::vector<int>{20});
+        ASSERT_EQ(scene.changes.size(), 1u);
+        EXPECT_EQ(scene.changes[0].kind, step.kind);
+    }
+    // The jump lands where the slide ends.
+    Scene jump = load_scene((kScenes / "cornell.json").string()), slide = jump;
+    Script a((kScenes / "cornell_cube_jump.lua").string()), b((kScenes / "cornell_move_cube.lua").string());
+    run_frames(a, jump, 61);
+    run_frames(b, slide, 61);
+    const int cube = jump.find_object("cube");
+    EXPECT_LT(glm::length(jump.objects[size_t(cube)].transform.translation -
+                          slide.objects[size_t(cube)].transform.translation), 1e-3f);
+}
+
 TEST(ScriptExamples, CornellCubeSlidesThenStops) {
     Scene scene = load_scene((kScenes / "cornell.json").string());
     const int cube = scene.find_object("cube");
