@@ -76,3 +76,6 @@ ag_cli_test(info_set 0 "\"texels_per_frame\": 40" info scenes/cornell.json --set
             --set gather.texels_per_frame=40 --set seed=7)
 ag_cli_test(info_set_enum 0 "\"backend\": \"cpu\"" info scenes/cornell.json --settings
             --set gather.backend=cpu)
+# Values inline (--frames=2, -n=2) or separate, options before or after the scene.
+ag_cli_test(photons_short_inline 0 "frames 2 in" photons -n=2 -q scenes/cornell.json)
+ag_cli_test(photons_long_inline 0 "frames 3 in" photons --frames=3 scenes/cornell.json -q)

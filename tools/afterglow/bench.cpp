@@ -42,7 +42,8 @@ const Command kBenchCommand{
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
         integer("frames", "N", "frames per measurement for 'frame'", 1, 100000, 100),
-        integer("size", "N", "square frame size for 'frame' and 'caustics' (at least 64 there)", 16, 8192, 512),
+        integer("size", "N", "square frame size for 'frame' and 'caustics' (at least 64 there)", 16,
+                8192, 512),
     },
     1,
     8,
@@ -278,7 +279,9 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
     }
     auto context = bench_context(args);
     const int size = args.get_int("size");
-    if (size < 64) throw CliError("afterglow bench caustics: --size expects N >= 64, got " + std::to_string(size));
+    if (size < 64)
+        throw CliError("afterglow bench caustics: --size expects N >= 64, got " +
+                       std::to_string(size));
     // A synthetic caustic: a disc of photons on the floor under the camera's view, sized so that
     // it covers the asked share of the screen.
     Scene floor_scene;

@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cassert>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <nlohmann/json.hpp>
@@ -41,8 +42,8 @@ bool parse_size(const std::string& text, int& width, int& height) {
     int w = 0, h = 0;
     char x = 0, extra = 0;
     if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
-        !std::isdigit(static_cast<unsigned char>(text[0])) || w < 1 || h < 1 ||
-        w > kMaxImageSize || h > kMaxImageSize)
+        !std::isdigit(static_cast<unsigned char>(text[0])) || w < 1 || h < 1 || w > kMaxImageSize ||
+        h > kMaxImageSize)
         return false;
     width = w;
     height = h;
@@ -212,18 +213,32 @@ Args::Args(const Command& command, const std::vector<std::string>& argv) : comma
         opt->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
         switch (o.type) {
             case OptionType::integer:
-                opt->check(CLI::Range(static_cast<long long>(o.min), static_cast<long long>(o.max)));
+                opt->check(
+                    CLI::Range(static_cast<long long>(o.min), static_cast<long long>(o.max)));
                 break;
             case OptionType::number:
                 opt->check(finite_validator())->check(CLI::Range(o.min, o.max));
                 break;
-            case OptionType::choice: opt->check(CLI::IsMember(o.choices)); break;
-            case OptionType::size: opt->check(size_validator()); break;
-            default: break;
+            case OptionType::choice:
+                opt->check(CLI::IsMember(o.choices));
+                break;
+            case OptionType::size:
+                opt->check(size_validator());
+                break;
+            default:
+                break;
         }
     }
 
-    std::vector<std::string> reversed(argv.rbegin(), argv.rend());  // CLI11 takes them reversed
+    // CLI11 takes the arguments reversed; "-n=2" (which CLI11 reads as "-n" "=2") as "-n" "2".
+    std::vector<std::string> reversed;
+    for (auto it = argv.rbegin(); it != argv.rend(); ++it) {
+        const std::string& a = *it;
+        const bool short_inline =
+            a.size() > 2 && a[0] == '-' && std::isalpha((unsigned char)a[1]) && a[2] == '=';
+        if (short_inline) reversed.push_back(a.substr(3));
+        reversed.push_back(short_inline ? a.substr(0, 2) : a);
+    }
     try {
         app.parse(std::move(reversed));
     } catch (const CLI::CallForHelp&) {
@@ -236,8 +251,9 @@ Args::Args(const Command& command, const std::vector<std::string>& argv) : comma
             const std::string flag_name = "--" + o.name;
             if (what.rfind(flag_name + ":", 0) != 0 && what.rfind(o.name + " was given", 0) != 0)
                 continue;
-            throw CliError(where + ": option " + flag_name +
-                           (o.value.empty() ? " takes no value" : " expects a value (" + o.value + ")"));
+            throw CliError(
+                where + ": option " + flag_name +
+                (o.value.empty() ? " takes no value" : " expects a value (" + o.value + ")"));
         }
         throw CliError(where + ": " + what + " (see '" + where + " --help')");
     } catch (const CLI::ParseError& e) {
@@ -280,7 +296,8 @@ std::string Args::get(const std::string& name, const std::string& fallback) cons
 
 int Args::get_int(const std::string& name) const {
     const std::string v = get(name);
-    if (v.empty()) throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no default");
+    if (v.empty())
+        throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no default");
     return std::stoi(v);  // checked against the declared range while parsing
 }
 
@@ -290,7 +307,8 @@ int Args::get_int(const std::string& name, int fallback) const {
 
 double Args::get_double(const std::string& name) const {
     const std::string v = get(name);
-    if (v.empty()) throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no default");
+    if (v.empty())
+        throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no default");
     return std::stod(v);
 }
 
@@ -302,7 +320,8 @@ int Args::get_choice(const std::string& name) const {
     const Option& o = option(name);
     const std::string v = get(name);
     const auto it = std::find(o.choices.begin(), o.choices.end(), v);
-    if (it == o.choices.end()) throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no value");
+    if (it == o.choices.end())
+        throw std::logic_error("afterglow " + command_.name + ": --" + name + " has no value");
     return int(it - o.choices.begin());
 }
 

@@ -32,9 +32,9 @@ struct Option {
     std::string value;  // placeholder shown in help ("N"); empty for a flag
     std::string help;
     OptionType type = OptionType::flag;
-    double min = 0.0, max = 0.0;        // integer and number: inclusive range
-    std::vector<std::string> choices;   // choice: the accepted names
-    std::string default_value;          // shown in help and returned when absent; empty: none
+    double min = 0.0, max = 0.0;       // integer and number: inclusive range
+    std::vector<std::string> choices;  // choice: the accepted names
+    std::string default_value;         // shown in help and returned when absent; empty: none
 };
 
 // Option helpers. `names` is "long" or "long,s" (a one-letter short alias).

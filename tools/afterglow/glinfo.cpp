@@ -11,8 +11,8 @@ const Command kGlinfoCommand{
     "[--gl auto|osmesa|egl|window]",
     "Create a GL 4.5 core context with the chosen backend and print its renderer and version.",
     {gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic,
-               gpu::GlBackend::window},
-              gpu::GlBackend::osmesa)},
+                gpu::GlBackend::window},
+               gpu::GlBackend::osmesa)},
     0,
     0,
 };

@@ -26,22 +26,28 @@ const Command kReferenceCommand{
     {
         choice("method,m", "pt|pm", "path tracing or photon mapping (required)", {"pt", "pm"}),
         text("output,o", "OUT.exr", "the full image; components and a PNG go beside it"),
-        integer("spp", "N", "samples per pixel (default 64 for pt, 16 for pm unless --time is given)", 1,
+        integer("spp", "N",
+                "samples per pixel (default 64 for pt, 16 for pm unless --time is given)", 1,
                 1 << 24),
-        number("time", "SECONDS", "stop after this long (whole passes only; photon maps included)", 0, 1e9),
+        number("time", "SECONDS", "stop after this long (whole passes only; photon maps included)",
+               0, 1e9),
         size_option("image size (default: the scene camera's resolution)"),
-        integer("threads", "N", "worker threads (default: settings.threads, 0 = all cores)", 0, 1024),
-        integer("seed", "N", "seed for all sequences (default: the scene's settings.seed)", 0, 2147483647),
+        integer("threads", "N", "worker threads (default: settings.threads, 0 = all cores)", 0,
+                1024),
+        integer("seed", "N", "seed for all sequences (default: the scene's settings.seed)", 0,
+                2147483647),
         integer("photons", "N", "pm: photons emitted for the global map", 0, 1 << 30,
                 cpu::ReferenceSettings{}.photons),
         integer("caustic-photons", "N", "pm: photons aimed at mirrors and glass", 0, 1 << 30,
                 cpu::ReferenceSettings{}.caustic_photons),
-        integer("knn", "K", "pm: photons per global density estimate", 1, 10000, cpu::ReferenceSettings{}.knn),
+        integer("knn", "K", "pm: photons per global density estimate", 1, 10000,
+                cpu::ReferenceSettings{}.knn),
         integer("caustic-knn", "K", "pm: photons per caustic density estimate", 1, 10000,
                 cpu::ReferenceSettings{}.caustic_knn),
-        number("caustic-radius", "R", "pm: caustic search radius cap (default 1% of scene size)", 0, 1e9),
-        integer("gather-rays", "N", "pm: final-gather rays per sample (x spp per pixel)", 1, 1 << 20,
-                cpu::ReferenceSettings{}.gather_rays),
+        number("caustic-radius", "R", "pm: caustic search radius cap (default 1% of scene size)", 0,
+               1e9),
+        integer("gather-rays", "N", "pm: final-gather rays per sample (x spp per pixel)", 1,
+                1 << 20, cpu::ReferenceSettings{}.gather_rays),
         integer("area-samples", "N", "pm: shadow rays per quad light per sample", 1, 1 << 16,
                 cpu::ReferenceSettings{}.area_light_samples),
         flag("quiet,q", "no progress bar (there is none unless stderr is a terminal)"),
@@ -83,8 +89,8 @@ int run_reference(const Args& args) {
     if (!args.has("method")) throw CliError(where + ": missing --method pt|pm");
     cpu::ReferenceSettings settings;
     const std::string method = args.get("method");
-    settings.method = method == "pt" ? cpu::ReferenceMethod::path_tracing
-                                                     : cpu::ReferenceMethod::photon_mapping;
+    settings.method =
+        method == "pt" ? cpu::ReferenceMethod::path_tracing : cpu::ReferenceMethod::photon_mapping;
     if (!args.has("output")) throw CliError(where + ": missing -o OUT.exr");
     const std::string out = args.get("output");
     if (out.size() < 5 || out.substr(out.size() - 4) != ".exr")

@@ -22,7 +22,8 @@ const Command kRenderCommand{
     "GL thread gathers and draws) and write the last frame as EXR and PNG. --aov also writes the "
     "direct, indirect, specular and caustics terms, which sum to the frame.",
     {
-        text("output,o", "OUT.exr", "the EXR to write; a PNG with the same stem is written beside it"),
+        text("output,o", "OUT.exr",
+             "the EXR to write; a PNG with the same stem is written beside it"),
         integer("frames,n", "N", "frames to run", 1, 1000000, 30),
         size_option("image size (default: the scene camera's resolution)"),
         flag("aov", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"),
@@ -31,8 +32,10 @@ const Command kRenderCommand{
         gather_option(),
         settings_option(),
         number("exposure", "EV", "PNG exposure in stops (radiance 1 is white at 0)", -100, 100, 0),
-        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0, 1024),
-        text("script", "S.lua", "scene-edit script (default: the scene's \"script\"); frame time = frame / 30 s"),
+        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,
+                1024),
+        text("script", "S.lua",
+             "scene-edit script (default: the scene's \"script\"); frame time = frame / 30 s"),
         flag("quiet,q", "no progress bar"),
     },
     1,

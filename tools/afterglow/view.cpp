@@ -44,8 +44,10 @@ const Command kViewCommand{
     "recorded input for tests; --frames, --shots and --exit-after-script make it run unattended.",
     {
         text("script", "S.lua",
-             "scene-edit script (default: the scene's \"script\"); script frame time = frame / 30 s"),
-        size_option("frame size (default: the scene camera's resolution); the panel is added beside it"),
+             "scene-edit script (default: the scene's \"script\"); script frame time = frame / 30 "
+             "s"),
+        size_option(
+            "frame size (default: the scene camera's resolution); the panel is added beside it"),
         integer("frames,n", "N", "exit after N frames (default: run until the window is closed)", 1,
                 100000000),
         text("shots", "DIR",
@@ -63,11 +65,13 @@ const Command kViewCommand{
              "per-frame times as JSON"),
         choice("view", "MODE", "initial view:", {kViewModeNames.begin(), kViewModeNames.end()},
                kViewModeNames[0]),
-        number("exposure", "EV", "display exposure in stops (radiance 1 is white at 0)", -100, 100, 0),
+        number("exposure", "EV", "display exposure in stops (radiance 1 is white at 0)", -100, 100,
+               0),
         gl_option({gpu::GlBackend::window}, gpu::GlBackend::window),
         gather_option(),
         settings_option(),
-        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0, 1024),
+        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,
+                1024),
         flag("quiet,q", "no messages on stderr except errors and the summary"),
     },
     1,
