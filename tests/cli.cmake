@@ -74,6 +74,7 @@ ag_cli_test(info_set_bad_form 2 "--set: expects KEY=VALUE" info scenes/cornell.j
 # --set reaches the scene's settings through the scene file's own reader.
 ag_cli_test(info_set 0 "\"texels_per_frame\": 40" info scenes/cornell.json --settings
             --set gather.texels_per_frame=40 --set seed=7)
+ag_cli_test(info_set_before_scene 0 "\"seed\": 7" info --set seed=7 scenes/cornell.json --settings)
 ag_cli_test(info_set_enum 0 "\"backend\": \"cpu\"" info scenes/cornell.json --settings
             --set gather.backend=cpu)
 # Values inline (--frames=2, -n=2) or separate, options before or after the scene.

@@ -206,7 +206,12 @@ Args::Args(const Command& command, const std::vector<std::string>& argv) : comma
             continue;
         }
         if (o.type == OptionType::settings) {
-            app.add_option(names, settings_)->check(settings_validator());
+            // One KEY=VALUE per --set (the next argument may be the scene), all of them kept.
+            app.add_option(names, settings_)
+                ->expected(1)
+                ->allow_extra_args(false)
+                ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+                ->check(settings_validator());
             continue;
         }
         CLI::Option* opt = app.add_option(names, text[o.name]);
