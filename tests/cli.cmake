@@ -11,8 +11,6 @@ endfunction()
 ag_cli_test(help 0 "info +Load a scene" --help)
 ag_cli_test(no_command 2 "usage: afterglow COMMAND")
 ag_cli_test(unknown_command 2 "unknown command 'frobnicate'" frobnicate)
-ag_cli_test(info_help 0 "usage: afterglow info SCENE" info --help)
-ag_cli_test(export_help 0 "usage: afterglow export SCENE" export --help)
 ag_cli_test(unknown_option 2 "unknown option '--bogus'" info --bogus scenes/cornell.json)
 ag_cli_test(missing_argument 2 "missing argument" info)
 ag_cli_test(missing_scene 1 "no_such_scene.json" info no_such_scene.json)
@@ -31,7 +29,54 @@ set_tests_properties(cli.export_cornell PROPERTIES LABELS unit)
 add_test(NAME cli.render_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/render_test.sh ${AG_BIN}
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.render_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
-ag_cli_test(render_bad_gl 2 "--gl: unknown GL backend 'vulkan'" render scenes/cornell.json -o x.exr --gl vulkan)
-ag_cli_test(render_bad_size 2 "--size expects WxH" render scenes/cornell.json -o x.exr --size 12by5)
 ag_cli_test(render_needs_exr 2 "ending in .exr" render scenes/cornell.json -o x.png)
-ag_cli_test(render_bad_gather 2 "--gather expects gl, cpu or auto" render scenes/cornell.json -o x.exr --gather gpu)
+
+# Bad flags are exit 2 with a message naming the flag and what it expects, checked while parsing
+# (before the scene loads or a window opens), the same for every command (tools/afterglow/cli.h).
+foreach(cmd info export photons render view converge reference compare glinfo bench)
+  ag_cli_test(${cmd}_help 0 "usage: afterglow ${cmd} .*" ${cmd} --help)
+  ag_cli_test(${cmd}_help_short 0 "  -h, --help +show this help" ${cmd} -h)
+endforeach()
+set(bad_sizes 0x5 5x abc 20000x10 12by5 x5 -3x5 5x0 5x5x5)
+foreach(cmd_args IN ITEMS "render;-o;x.exr" "view" "converge" "reference;-m;pt;-o;x.exr")
+  list(GET cmd_args 0 cmd)
+  foreach(size IN LISTS bad_sizes)
+    ag_cli_test(${cmd}_bad_size_${size} 2
+                "--size: expects WxH with positive integers up to 16384, got '${size}'"
+                ${cmd_args} scenes/cornell.json --size "${size}")
+  endforeach()
+  ag_cli_test(${cmd}_unknown_option 2 "afterglow ${cmd}: unknown option '--bogus'"
+              ${cmd_args} scenes/cornell.json --bogus 1)
+endforeach()
+foreach(cmd_args IN ITEMS "render;-o;x.exr" "view" "converge")
+  list(GET cmd_args 0 cmd)
+  ag_cli_test(${cmd}_bad_gather 2 "--gather: bogus not in .auto,gl,cpu." ${cmd_args}
+              scenes/cornell.json --gather bogus)
+  ag_cli_test(${cmd}_bad_set 2 "--set: 'photons.groups=0': /photons/groups: expected an integer"
+              ${cmd_args} scenes/cornell.json --set photons.groups=0)
+endforeach()
+ag_cli_test(render_bad_gl 2 "--gl: vulkan not in .osmesa,egl,auto." render scenes/cornell.json -o x.exr --gl vulkan)
+ag_cli_test(render_gl_window 2 "--gl: window not in .osmesa,egl,auto." render scenes/cornell.json -o x.exr --gl window)
+ag_cli_test(view_gl_osmesa 2 "--gl: osmesa not in .window." view scenes/cornell.json --gl osmesa)
+ag_cli_test(glinfo_bad_gl 2 "--gl: vulkan not in .osmesa,egl,auto,window." glinfo --gl vulkan)
+ag_cli_test(bench_bad_gl 2 "--gl: vulkan not in" bench frame --gl vulkan)
+ag_cli_test(view_bad_view 2 "--view: nope not in .frame,direct" view scenes/cornell.json --view nope)
+ag_cli_test(converge_bad_component 2 "--component: nope not in" converge scenes/cornell.json --component nope)
+ag_cli_test(reference_bad_method 2 "--method: mc not in .pt,pm." reference scenes/cornell.json -m mc -o x.exr)
+ag_cli_test(render_frames_range 2 "--frames: Value 0 not in range 1 to 1000000" render scenes/cornell.json -o x.exr -n 0)
+ag_cli_test(render_frames_not_int 2 "--frames: Value 2.5 not in range" render scenes/cornell.json -o x.exr --frames 2.5)
+ag_cli_test(render_exposure_nan 2 "--exposure: expects a finite number, got 'nan'" render scenes/cornell.json -o x.exr --exposure nan)
+ag_cli_test(render_missing_value 2 "option --frames expects a value \\(N\\)" render scenes/cornell.json -o x.exr --frames)
+ag_cli_test(info_flag_value 2 "option --objects takes no value" info scenes/cornell.json --objects=3)
+ag_cli_test(bench_repeat_range 2 "--repeat: Value 0 not in range 1 to 1000" bench knn --repeat 0)
+ag_cli_test(info_set_bad_key 2 "--set: 'photons.nope=1': /photons/nope: unknown key" info scenes/cornell.json --set photons.nope=1)
+ag_cli_test(info_set_bad_form 2 "--set: expects KEY=VALUE" info scenes/cornell.json --set gather)
+# --set reaches the scene's settings through the scene file's own reader.
+ag_cli_test(info_set 0 "\"texels_per_frame\": 40" info scenes/cornell.json --settings
+            --set gather.texels_per_frame=40 --set seed=7)
+ag_cli_test(info_set_before_scene 0 "\"seed\": 7" info --set seed=7 scenes/cornell.json --settings)
+ag_cli_test(info_set_enum 0 "\"backend\": \"cpu\"" info scenes/cornell.json --settings
+            --set gather.backend=cpu)
+# Values inline (--frames=2, -n=2) or separate, options before or after the scene.
+ag_cli_test(photons_short_inline 0 "frames 2 in" photons -n=2 -q scenes/cornell.json)
+ag_cli_test(photons_long_inline 0 "frames 3 in" photons --frames=3 scenes/cornell.json -q)

@@ -32,16 +32,21 @@ const Command kBenchCommand{
     "14.1 (300–2,000 photons; build and 100-nearest lookup). 'gather SCENE...': Larsen Table 14.2, "
     "ms per gathered texel for plane sizes 8/16/32, GL batched and unbatched against CPU rays. "
     "'frame SCENE': frames per second of the whole pipeline, static and with the first dynamic "
-    "object moving every frame. 'caustics SCENE': caustic photons traced per second per core and "
+    "object moving every frame (--indirect picks the method). 'caustics SCENE': caustic photons traced per second per core and "
     "the share reaching a specular object; the screen filter over the whole screen against "
     "tile-culled filtering for a caustic covering about 1% and 5% of it (Larsen: 37.6 ms against "
     "0.38 ms for 1% of 512²).",
     {
-        {"repeat", "", "N", "repetitions, best time kept (default 5)"},
-        {"queries", "", "N", "kNN queries per measurement (default 2000)"},
-        {"gl", "", "BACKEND", "GL context for gather/frame: osmesa (default), egl, auto"},
-        {"frames", "", "N", "frames per measurement for 'frame' (default 100)"},
-        {"size", "", "N", "square frame size for 'frame' (default 512)"},
+        integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
+        integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
+        gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
+                  gpu::GlBackend::osmesa),
+        integer("frames", "N", "frames per measurement for 'frame'", 1, 100000, 100),
+        integer("size", "N", "square frame size for 'frame' and 'caustics' (at least 64 there)", 16,
+                8192, 512),
+        gather_option(),
+        indirect_option(),
+        settings_option(),
     },
     1,
     8,
@@ -158,7 +163,7 @@ int bench_knn(int repeat, int queries) {
 }
 
 std::unique_ptr<gpu::GlContext> bench_context(const Args& args) {
-    auto context = gpu::make_gl_context(gpu::parse_gl_backend(args.get("gl", "osmesa")));
+    auto context = gpu::make_gl_context(args.gl_backend());
     std::printf("GL: %s (%s, backend %s)\n", context->renderer().c_str(), context->version().c_str(),
                 gpu::kGlBackendNames[size_t(context->backend())]);
     return context;
@@ -217,8 +222,9 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
 // Frames per second of the whole pipeline (photons on workers, AIMs, gathers, caustics, frame).
 int bench_frame(const std::string& path, int repeat, const Args& args) {
     auto context = bench_context(args);
-    const int frames = args.get_int("frames", 100, 1, 100000), size = args.get_int("size", 512, 16, 8192);
+    const int frames = args.get_int("frames"), size = args.get_int("size");
     Scene scene = load_scene(path);
+    args.apply_settings(scene);
     Pipeline pipeline(scene, PipelineOptions{size, size});
     FrameLoop loop(pipeline);
     for (int f = 0; f < 60 && !pipeline.converged(); ++f) loop.step();  // settle first
@@ -278,7 +284,10 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
                     100.0 * st.stored / std::max(1, st.traced));
     }
     auto context = bench_context(args);
-    const int size = args.get_int("size", 512, 64, 8192);
+    const int size = args.get_int("size");
+    if (size < 64)
+        throw CliError("afterglow bench caustics: --size expects N >= 64, got " +
+                       std::to_string(size));
     // A synthetic caustic: a disc of photons on the floor under the camera's view, sized so that
     // it covers the asked share of the screen.
     Scene floor_scene;
@@ -328,12 +337,12 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
 
 int run_bench(const Args& args) {
     const std::string what = args.positionals()[0];
-    const int repeat = args.get_int("repeat", 5, 1, 1000);
+    const int repeat = args.get_int("repeat");
     if (what == "photons") {
         if (args.positionals().size() < 2) throw CliError("afterglow bench photons: missing SCENE");
         return bench_photons(args.positionals()[1], repeat);
     }
-    if (what == "knn") return bench_knn(repeat, args.get_int("queries", 2000, 1, 100000000));
+    if (what == "knn") return bench_knn(repeat, args.get_int("queries"));
     if (what == "gather") {
         std::vector<std::string> scenes(args.positionals().begin() + 1, args.positionals().end());
         if (scenes.empty()) scenes = {"scenes/cornell_34.json", "scenes/bumpy_13k.json", "scenes/bumpy_133k.json"};

@@ -19,10 +19,10 @@ const Command kCompareCommand{
     "the reference's maximum) and SSIM on luminance. Exit 1 if an image cannot be read or the "
     "sizes differ.",
     {
-        {"mask", "", "M.png", "only pixels where the mask is nonzero count"},
-        {"heatmap", "", "OUT.png", "write the per-pixel relative error as a colour ramp"},
-        {"heatmap-max", "", "E", "relative error shown at the top of the ramp (default 0.5)"},
-        {"json", "", "", "print the metrics as one JSON object"},
+        text("mask", "M.png", "only pixels where the mask is nonzero count"),
+        text("heatmap", "OUT.png", "write the per-pixel relative error as a colour ramp"),
+        number("heatmap-max", "E", "relative error shown at the top of the ramp", 1e-6, 1e6, 0.5),
+        flag("json", "print the metrics as one JSON object"),
     },
     2,
     2,
@@ -34,8 +34,7 @@ int run_compare(const Args& args) {
     Image mask;
     if (args.has("mask")) mask = read_image(args.get("mask"));
     const Image* mask_ptr = args.has("mask") ? &mask : nullptr;
-    const double heatmap_max = args.get_double("heatmap-max", 0.5);
-    if (!(heatmap_max > 0.0)) throw CliError("afterglow compare: --heatmap-max expects E > 0");
+    const double heatmap_max = args.get_double("heatmap-max");
 
     ImageMetrics m;
     try {

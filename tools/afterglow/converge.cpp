@@ -32,22 +32,29 @@ const Command kConvergeCommand{
     "prints the time from the last edit until the error is within 10% of its settled value. "
     "--baseline full recomputes everything every frame, for comparison on the same plot.",
     {
-        {"script", "", "S.lua", "scene-edit script (default: the scene's \"script\")"},
-        {"reference", "", "REF.exr", "reference image (its .COMPONENT.exr beside it is used for --component)"},
-        {"frames", "n", "N", "frames to run (default 120)"},
-        {"size", "", "WxH", "image size (default 96x96)"},
-        {"component", "", "NAME", "indirect (default), direct, caustics, specular or full"},
-        {"baseline", "", "MODE", "selective (default) or full: recompute everything every frame"},
-        {"csv", "", "FILE.csv", "where to write the per-frame record (default out/NAME.MODE.csv)"},
-        {"plot", "", "FILE.png", "plot of error against time (default out/NAME.MODE.png); '' for none"},
-        {"compare", "", "OTHER.csv", "also draw this run's CSV on the plot"},
-        {"cache", "", "DIR", "reference cache (default out/reference-cache)"},
-        {"ref-spp", "", "N", "samples per pixel of a computed reference (default 64)"},
-        {"ref-photons", "", "N", "photons of a computed pm reference (default 400000)"},
-        {"gl", "", "BACKEND", "osmesa (default), egl, auto"},
-        {"gather", "", "BACKEND", "gl, cpu or auto (default: the scene's setting)"},
-        {"threads", "", "N", "worker threads (default: settings.threads)"},
-        {"quiet", "q", "", "no progress bar"},
+        text("script", "S.lua", "scene-edit script (default: the scene's \"script\")"),
+        text("reference", "REF.exr",
+             "reference image (its .COMPONENT.exr beside it is used for --component)"),
+        integer("frames,n", "N", "frames to run", 1, 1000000, 120),
+        size_option("image size", "96x96"),
+        choice("component", "NAME", "the component compared:",
+               {"full", "direct", "indirect", "caustics", "specular"}, "indirect"),
+        choice("baseline", "MODE", "full recomputes everything every frame:", {"selective", "full"},
+               "selective"),
+        text("csv", "FILE.csv", "where to write the per-frame record (default out/NAME.MODE.csv)"),
+        text("plot", "FILE.png",
+             "plot of error against time (default out/NAME.MODE.png); '' for none"),
+        text("compare", "OTHER.csv", "also draw this run's CSV on the plot"),
+        text("cache", "DIR", "reference cache", "out/reference-cache"),
+        integer("ref-spp", "N", "samples per pixel of a computed reference", 1, 1000000, 64),
+        integer("ref-photons", "N", "photons of a computed pm reference", 1000, 100000000, 400000),
+        gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
+                  gpu::GlBackend::osmesa),
+        gather_option(),
+        indirect_option(),
+        settings_option(),
+        integer("threads", "N", "worker threads (default: settings.threads)", 0, 1024),
+        flag("quiet,q", "no progress bar"),
     },
     1,
     1,
@@ -93,45 +100,23 @@ std::string component_path(const std::string& exr, const std::string& component)
 }  // namespace
 
 int run_converge(const Args& args) {
-    const int frames = args.get_int("frames", 120, 1, 1000000);
-    const std::string component = args.get("component", "indirect");
-    if (component != "full" && component != "direct" && component != "indirect" && component != "caustics" &&
-        component != "specular")
-        throw CliError("afterglow converge: --component expects full, direct, indirect, caustics or specular, got '" +
-                       component + "'");
-    const std::string mode = args.get("baseline", "selective");
-    if (mode != "selective" && mode != "full")
-        throw CliError("afterglow converge: --baseline expects selective or full, got '" + mode + "'");
-    int width = 96, height = 96;
-    if (args.has("size")) {
-        char x = 0, extra = 0;
-        if (std::sscanf(args.get("size").c_str(), "%d%c%d%c", &width, &x, &height, &extra) != 3 || x != 'x' ||
-            width <= 0 || height <= 0 || width > 16384 || height > 16384)
-            throw CliError("afterglow converge: --size expects WxH, got '" + args.get("size") + "'");
-    }
-    const gpu::GlBackend backend = [&] {
-        try {
-            return gpu::parse_gl_backend(args.get("gl", "osmesa"));
-        } catch (const std::invalid_argument& e) {
-            throw CliError(std::string("afterglow converge: --gl: ") + e.what());
-        }
-    }();
+    const int frames = args.get_int("frames");
+    const std::string component = args.get("component");
+    const std::string mode = args.get("baseline");
+    int width = 0, height = 0;
+    args.get_size("size", width, height);
+    const gpu::GlBackend backend = args.gl_backend();
 
     const std::string scene_path = args.positionals()[0];
     Scene scene = load_scene(scene_path);
+    args.apply_settings(scene);
     scene.camera.width = width;
     scene.camera.height = height;
-    if (args.has("gather")) {
-        size_t i = 0;
-        while (i < kGatherBackendNames.size() && args.get("gather") != kGatherBackendNames[i]) ++i;
-        if (i == kGatherBackendNames.size()) throw CliError("afterglow converge: --gather expects gl, cpu or auto");
-        scene.settings.gather.backend = GatherBackend(i);
-    }
     const std::string script_path = args.get("script", scene.script);
     const std::string name = std::filesystem::path(scene_path).stem().string();
     const std::string csv_path = args.get("csv", "out/" + name + "." + mode + ".csv");
     const std::string plot_path = args.get("plot", "out/" + name + "." + mode + ".png");
-    const int threads = args.get_int("threads", scene.settings.threads, 0, 1024);
+    const int threads = args.get_int("threads", scene.settings.threads);
 
     // The reference: given, or rendered for the scene's final state (the script run ahead on a
     // copy) and cached by a hash of that state.
@@ -144,13 +129,13 @@ int run_converge(const Args& args) {
         }
         cpu::ReferenceSettings rs;
         rs.method = cpu::ReferenceMethod::photon_mapping;
-        rs.spp = args.get_int("ref-spp", 64, 1, 1000000);
-        rs.photons = args.get_int("ref-photons", 400000, 1000, 100000000);
+        rs.spp = args.get_int("ref-spp");
+        rs.photons = args.get_int("ref-photons");
         rs.caustic_photons = rs.photons;
         rs.seed = scene.settings.seed;
         char hex[32];
         std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(state_hash(final_state, rs)));
-        const std::string cache = args.get("cache", "out/reference-cache");
+        const std::string cache = args.get("cache");
         std::filesystem::create_directories(cache);
         reference_path = cache + "/" + name + "-" + hex + ".exr";
         if (!std::filesystem::exists(component_path(reference_path, "indirect"))) {

@@ -12,7 +12,7 @@ const Command kExportCommand{
     "SCENE -o OUT.obj",
     "Write the whole scene in world space as Wavefront OBJ with an MTL beside it (Kd, Ks, Ni, Ke); "
     "lights become comment lines.",
-    {{"output", "o", "OUT.obj", "the OBJ file to write (the .mtl gets the same stem)"}},
+    {text("output,o", "OUT.obj", "the OBJ file to write (the .mtl gets the same stem)")},
     1,
     1,
 };

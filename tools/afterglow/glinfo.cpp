@@ -10,19 +10,15 @@ const Command kGlinfoCommand{
     "glinfo",
     "[--gl auto|osmesa|egl|window]",
     "Create a GL 4.5 core context with the chosen backend and print its renderer and version.",
-    {{"gl", "", "BACKEND", "auto (EGL on a GPU, else OSMesa), osmesa (default), egl or window"}},
+    {gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic,
+                gpu::GlBackend::window},
+               gpu::GlBackend::osmesa)},
     0,
     0,
 };
 
 int run_glinfo(const Args& args) {
-    gpu::GlBackend backend;
-    try {
-        backend = gpu::parse_gl_backend(args.get("gl", "osmesa"));
-    } catch (const std::invalid_argument& e) {
-        throw CliError(std::string("afterglow glinfo: --gl: ") + e.what());
-    }
-    auto context = gpu::make_gl_context(backend);
+    auto context = gpu::make_gl_context(args.gl_backend());
     std::cout << "backend  " << gpu::kGlBackendNames[size_t(context->backend())] << "\n"
               << "renderer " << context->renderer() << "\n"
               << "version  " << context->version() << "\n";

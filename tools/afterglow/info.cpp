@@ -15,8 +15,9 @@ const Command kInfoCommand{
     "Load a scene file and print its triangles, objects, surfaces, charts, atlas size, texel count "
     "and lights.",
     {
-        {"objects", "", "", "also list every object"},
-        {"settings", "", "", "also print the effective settings as JSON"},
+        flag("objects", "also list every object"),
+        flag("settings", "also print the effective settings as JSON"),
+        settings_option(),
     },
     1,
     1,
@@ -33,7 +34,8 @@ std::string fmt_vec(const glm::vec3& v) {
 }  // namespace
 
 int run_info(const Args& args) {
-    const Scene scene = load_scene(args.positionals()[0]);
+    Scene scene = load_scene(args.positionals()[0]);
+    args.apply_settings(scene);
     int dynamic = 0;
     for (const Object& o : scene.objects) dynamic += o.dynamic ? 1 : 0;
     size_t atlas_texels = size_t(scene.atlas.width) * size_t(scene.atlas.height);

@@ -28,23 +28,28 @@ const Command kPhotonsCommand{
     "query, segments it tested, its time); --dump writes per-surface hit counts, flux, delta_f, delta_i, per-light "
     "group states and per-frame counters as JSON.",
     {
-        {"frames", "n", "N", "frames to run (default 1)"},
-        {"dump", "", "FILE.json", "write the state as JSON (atomically)"},
-        {"threads", "", "N", "worker threads (default: settings.threads, 0 = all cores)"},
-        {"script", "", "S.lua", "scene-edit script run before each frame (default: none); frame time = frame / 30 s"},
-        {"no-query", "", "", "find moved objects by round-robin verification only (for comparison)"},
-        {"quiet", "q", "", "no per-frame lines on stderr"},
-        {"aim", "", "FILE", "write the AIM atlas (radiance per texel, scaled up 8x) as EXR or PNG"},
-        {"exposure", "", "EV", "exposure for a PNG written by --aim (default: auto, 99th percentile to 0.8)"},
+        integer("frames,n", "N", "frames to run", 0, 10000000, 1),
+        text("dump", "FILE.json", "write the state as JSON (atomically)"),
+        integer("threads", "N", "worker threads (default: settings.threads, 0 = all cores)", 0,
+                1024),
+        text("script", "S.lua", "scene-edit script run before each frame (default: none); frame time = frame / 30 s"),
+        flag("no-query", "find moved objects by round-robin verification only (for comparison)"),
+        settings_option(),
+        flag("quiet,q", "no per-frame lines on stderr"),
+        text("aim", "FILE", "write the AIM atlas (radiance per texel, scaled up 8x) as EXR or PNG"),
+        number("exposure", "EV",
+               "exposure for a PNG written by --aim (default: auto, 99th percentile to 0.8)", -100,
+               100),
     },
     1,
     1,
 };
 
 int run_photons(const Args& args) {
-    const int frames = args.get_int("frames", 1, 0, 10000000);
+    const int frames = args.get_int("frames");
     Scene scene = load_scene(args.positionals()[0]);
-    const int threads = args.get_int("threads", scene.settings.threads, 0, 1024);
+    args.apply_settings(scene);
+    const int threads = args.get_int("threads", scene.settings.threads);
     ThreadPool pool(threads);
     cpu::PhotonSimulation sim(scene, pool);
     sim.set_query_invalidation(!args.has("no-query"));

@@ -22,33 +22,28 @@ const Command kRenderCommand{
     "GL thread gathers and draws) and write the last frame as EXR and PNG. --aov also writes the "
     "direct, indirect, specular and caustics terms, which sum to the frame.",
     {
-        {"output", "o", "OUT.exr", "the EXR to write; a PNG with the same stem is written beside it"},
-        {"frames", "n", "N", "frames to run (default 30)"},
-        {"size", "", "WxH", "image size (default: the scene camera's resolution)"},
-        {"aov", "", "", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"},
-        {"gl", "", "BACKEND", "osmesa (default), egl, auto (EGL on a GPU, else OSMesa)"},
-        {"gather", "", "BACKEND", "gl | cpu | auto (measure both, keep the faster): the IIM gather backend "
-                                  "(default: the scene's settings.gather.backend)"},
-        {"exposure", "", "EV", "PNG exposure in stops (default 0: radiance 1 is white)"},
-        {"threads", "", "N", "worker threads for photon work (default: settings.threads)"},
-        {"script", "", "S.lua", "scene-edit script (default: the scene's \"script\"); frame time = frame / 30 s"},
-        {"quiet", "q", "", "no progress bar"},
+        text("output,o", "OUT.exr",
+             "the EXR to write; a PNG with the same stem is written beside it"),
+        integer("frames,n", "N", "frames to run", 1, 1000000, 30),
+        size_option("image size (default: the scene camera's resolution)"),
+        flag("aov", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"),
+        gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
+                  gpu::GlBackend::osmesa),
+        gather_option(),
+        indirect_option(),
+        settings_option(),
+        number("exposure", "EV", "PNG exposure in stops (radiance 1 is white at 0)", -100, 100, 0),
+        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,
+                1024),
+        text("script", "S.lua",
+             "scene-edit script (default: the scene's \"script\"); frame time = frame / 30 s"),
+        flag("quiet,q", "no progress bar"),
     },
     1,
     1,
 };
 
 namespace {
-
-void parse_size(const std::string& text, int& w, int& h) {
-    int a = 0, b = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') || a <= 0 ||
-        b <= 0 || a > 16384 || b > 16384)
-        throw CliError("afterglow render: --size expects WxH with positive integers up to 16384, got '" + text + "'");
-    w = a;
-    h = b;
-}
 
 std::string with_suffix(const std::string& exr, const std::string& suffix, const std::string& ext) {
     const std::filesystem::path p(exr);
@@ -62,28 +57,15 @@ int run_render(const Args& args) {
     const std::string out = args.get("output");
     if (std::filesystem::path(out).extension() != ".exr")
         throw CliError("afterglow render: -o expects a file name ending in .exr, got '" + out + "'");
-    const int frames = args.get_int("frames", 30, 1, 1000000);
-    gpu::GlBackend backend;
-    try {
-        backend = gpu::parse_gl_backend(args.get("gl", "osmesa"));
-    } catch (const std::invalid_argument& e) {
-        throw CliError(std::string("afterglow render: --gl: ") + e.what());
-    }
-    if (backend == gpu::GlBackend::window) throw CliError("afterglow render: --gl window is for `afterglow view`");
-    const std::string gather = args.get("gather", "");
-    const float exposure = float(args.get_double("exposure", 0.0));
+    const int frames = args.get_int("frames");
+    const gpu::GlBackend backend = args.gl_backend();
+    const float exposure = float(args.get_double("exposure"));
 
     Scene scene = load_scene(args.positionals()[0]);
+    args.apply_settings(scene);
     int width = scene.camera.width, height = scene.camera.height;
-    if (args.has("size")) parse_size(args.get("size"), width, height);
-    const int threads = args.get_int("threads", scene.settings.threads, 0, 1024);
-    if (!gather.empty()) {
-        size_t i = 0;
-        while (i < kGatherBackendNames.size() && gather != kGatherBackendNames[i]) ++i;
-        if (i == kGatherBackendNames.size())
-            throw CliError("afterglow render: --gather expects gl, cpu or auto, got '" + gather + "'");
-        scene.settings.gather.backend = GatherBackend(i);
-    }
+    args.get_size("size", width, height);
+    const int threads = args.get_int("threads", scene.settings.threads);
 
     std::optional<Script> script;
     const std::string script_path = args.get("script", scene.script);

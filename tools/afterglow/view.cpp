@@ -43,33 +43,37 @@ const Command kViewCommand{
     "terms or diagnostic views, change budgets and watch the frame-time breakdown. --replay feeds "
     "recorded input for tests; --frames, --shots and --exit-after-script make it run unattended.",
     {
-        {"script", "", "S.lua",
-         "scene-edit script (default: the scene's \"script\"); script frame time = frame / 30 s"},
-        {"size", "", "WxH",
-         "frame size (default: the scene camera's resolution); the panel is added beside it"},
-        {"frames", "n", "N", "exit after N frames (default: run until the window is closed)"},
-        {"shots", "", "DIR",
-         "write first.png and last.png there, and F12 screenshots (default for F12: beside the "
-         "scene)"},
-        {"exit-after-script", "", "",
-         "exit once the script has made no edit for --idle-frames frames"},
-        {"idle-frames", "", "N",
-         "frames without script edits before --exit-after-script exits (default 30)"},
-        {"replay", "", "EVENTS.json",
-         "feed recorded mouse and key events, per frame (format: docs/viewer.md)"},
-        {"record", "", "EVENTS.json",
-         "write the session's input events in the --replay format on exit"},
-        {"dump", "", "OUT.json",
-         "on exit write final object and light positions, edits, IIM texels gathered and "
-         "per-frame times as JSON"},
-        {"view", "", "MODE",
-         "initial view: frame, direct, indirect, caustics, specular, aim, iim, surfaces"},
-        {"exposure", "", "EV", "display exposure in stops (default 0: radiance 1 is white)"},
-        {"gl", "", "BACKEND", "window (the only choice: the viewer needs a window)"},
-        {"gather", "", "BACKEND",
-         "gl | cpu | auto: the IIM gather backend (default: settings.gather.backend)"},
-        {"threads", "", "N", "worker threads for photon work (default: settings.threads)"},
-        {"quiet", "q", "", "no messages on stderr except errors and the summary"},
+        text("script", "S.lua",
+             "scene-edit script (default: the scene's \"script\"); script frame time = frame / 30 "
+             "s"),
+        size_option(
+            "frame size (default: the scene camera's resolution); the panel is added beside it"),
+        integer("frames,n", "N", "exit after N frames (default: run until the window is closed)", 1,
+                100000000),
+        text("shots", "DIR",
+             "write first.png and last.png there, and F12 screenshots (default for F12: beside the "
+             "scene)"),
+        flag("exit-after-script", "exit once the script has made no edit for --idle-frames frames"),
+        integer("idle-frames", "N", "frames without script edits before --exit-after-script exits",
+                1, 1000000, 30),
+        text("replay", "EVENTS.json",
+             "feed recorded mouse and key events, per frame (format: docs/viewer.md)"),
+        text("record", "EVENTS.json",
+             "write the session's input events in the --replay format on exit"),
+        text("dump", "OUT.json",
+             "on exit write final object and light positions, edits, IIM texels gathered and "
+             "per-frame times as JSON"),
+        choice("view", "MODE", "initial view:", {kViewModeNames.begin(), kViewModeNames.end()},
+               kViewModeNames[0]),
+        number("exposure", "EV", "display exposure in stops (radiance 1 is white at 0)", -100, 100,
+               0),
+        gl_option({gpu::GlBackend::window}, gpu::GlBackend::window),
+        gather_option(),
+        indirect_option(),
+        settings_option(),
+        integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,
+                1024),
+        flag("quiet,q", "no messages on stderr except errors and the summary"),
     },
     1,
     1,
@@ -105,28 +109,6 @@ void keep_libraries_loaded() {
 
 void on_glfw_error(int, const char* description) {
     g_glfw_error = description ? description : "unknown";
-}
-
-void parse_size(const std::string& text, int& w, int& h) {
-    int a = 0, b = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &a, &x, &b, &extra) != 3 || (x != 'x' && x != 'X') ||
-        a <= 0 || b <= 0 || a > 16384 || b > 16384)
-        throw CliError(
-            "afterglow view: --size expects WxH with positive integers up to 16384, got '" + text +
-            "'");
-    w = a;
-    h = b;
-}
-
-template <class Names>
-int parse_choice(const Names& names, const std::string& value, const std::string& flag) {
-    std::string list;
-    for (size_t i = 0; i < names.size(); ++i) {
-        if (value == names[i]) return int(i);
-        list += (i ? ", " : "") + std::string(names[i]);
-    }
-    throw CliError("afterglow view: " + flag + " expects one of " + list + ", got '" + value + "'");
 }
 
 Json vec_json(const glm::vec3& v) { return Json::array({v.x, v.y, v.z}); }
@@ -321,6 +303,7 @@ private:
     void handle_events(const std::vector<InputEvent>& events);
     bool handle_key(const InputEvent& e);
     void apply_requests();
+    void make_pipeline();  // pipeline_, loop_ and renderer_ for the scene's settings
     void run_script(int frame);
     void restart_script();
     void update_stats(const PipelineStats& s, double loop_ms);
@@ -341,7 +324,8 @@ private:
     std::unique_ptr<ViewRenderer> renderer_;
     std::unique_ptr<ViewController> controller_;
     std::unique_ptr<ViewUi> ui_;
-    std::unique_ptr<FrameLoop> loop_;  // the script clock; edits between frames
+    std::unique_ptr<FrameLoop> loop_;
+    int threads_ = 0;  // the script clock; edits between frames
     std::optional<Script> script_;
     std::string script_path_;
     EditableState initial_;
@@ -447,11 +431,33 @@ void Viewer::handle_events(const std::vector<InputEvent>& events) {
     }
 }
 
+void Viewer::make_pipeline() {
+    loop_.reset();
+    renderer_.reset();
+    pipeline_.reset();
+    pipeline_ = std::make_unique<Pipeline>(scene_, PipelineOptions{width_, height_, threads_});
+    loop_ = std::make_unique<FrameLoop>(*pipeline_);
+    loop_->on_script_error = [this](const std::string& error) {
+        ScriptStatus& s = state_.script;
+        s.error = error;
+        ++s.error_count;
+        if (s.error_count <= 5) state_.message(error + " (edit skipped, rendering goes on)");
+    };
+    renderer_ = std::make_unique<ViewRenderer>(scene_, pipeline_->meshes(), width_, height_);
+}
+
 void Viewer::apply_requests() {
     ViewRequests r = std::move(requests_);
     requests_ = ViewRequests{};
     if (r.select) controller_->select(*r.select, state_);
     if (r.settings) scene_.settings = *r.settings;
+    if (r.indirect) {
+        pipeline_->sync();
+        scene_.settings.indirect.method = *r.indirect;
+        make_pipeline();
+        if (script_) restart_script();
+        state_.message(std::string("indirect method ") + kIndirectMethodNames[size_t(*r.indirect)]);
+    }
     if (r.backend) {
         pipeline_->set_gather_backend(*r.backend);
         state_.message(std::string("gather backend ") + kGatherBackendNames[size_t(*r.backend)]);
@@ -550,6 +556,7 @@ void Viewer::update_stats(const PipelineStats& s, double loop_ms) {
     v.caustic_tiles = s.caustic_tiles_filtered;
     v.converged = pipeline_->converged();
     v.backend = pipeline_->gather_backend();
+    v.indirect = pipeline_->indirect().kind();
 }
 
 void Viewer::count_gathered() {
@@ -713,17 +720,13 @@ int Viewer::run() {
     g_quiet = args_.has("quiet");
     width_ = scene_.camera.width;
     height_ = scene_.camera.height;
-    if (args_.has("size")) parse_size(args_.get("size"), width_, height_);
-    const int frames = args_.get_int("frames", 0, 1, 100000000);
+    args_.get_size("size", width_, height_);
+    const int frames = args_.get_int("frames", 0);
     const bool exit_after_script = args_.has("exit-after-script");
-    const int idle_frames = args_.get_int("idle-frames", 30, 1, 1000000);
-    const int threads = args_.get_int("threads", scene_.settings.threads, 0, 1024);
-    if (args_.has("gather"))
-        scene_.settings.gather.backend =
-            GatherBackend(parse_choice(kGatherBackendNames, args_.get("gather"), "--gather"));
-    if (args_.has("view"))
-        state_.mode = ViewMode(parse_choice(kViewModeNames, args_.get("view"), "--view"));
-    state_.exposure = float(args_.get_double("exposure", 0.0));
+    const int idle_frames = args_.get_int("idle-frames");
+    const int threads = args_.get_int("threads", scene_.settings.threads);
+    state_.mode = ViewMode(args_.get_choice("view"));
+    state_.exposure = float(args_.get_double("exposure"));
     state_.frame_width = width_;
     state_.frame_height = height_;
 
@@ -769,15 +772,8 @@ int Viewer::run() {
     ui_ = std::make_unique<ViewUi>(window_);  // chains the callbacks above
     live_.ui = ui_.get();
 
-    pipeline_ = std::make_unique<Pipeline>(scene_, PipelineOptions{width_, height_, threads});
-    loop_ = std::make_unique<FrameLoop>(*pipeline_);
-    loop_->on_script_error = [this](const std::string& error) {
-        ScriptStatus& s = state_.script;
-        s.error = error;
-        ++s.error_count;
-        if (s.error_count <= 5) state_.message(error + " (edit skipped, rendering goes on)");
-    };
-    renderer_ = std::make_unique<ViewRenderer>(scene_, pipeline_->meshes(), width_, height_);
+    threads_ = threads;
+    make_pipeline();
     controller_ = std::make_unique<ViewController>(scene_, width_, height_);
     initial_ = snapshot(scene_);
     if (scene_.settings.gather.backend == GatherBackend::automatic)
@@ -953,16 +949,8 @@ void ViewState::message(const std::string& text) {
 }
 
 int run_view(const Args& args) {
-    gpu::GlBackend backend;
-    try {
-        backend = gpu::parse_gl_backend(args.get("gl", "window"));
-    } catch (const std::invalid_argument& e) {
-        throw CliError(std::string("afterglow view: --gl: ") + e.what());
-    }
-    if (backend != gpu::GlBackend::window)
-        throw CliError(
-            "afterglow view: --gl must be window (use `afterglow render` for headless frames)");
     Scene scene = load_scene(args.positionals()[0]);
+    args.apply_settings(scene);
     Viewer viewer(args, scene);
     return viewer.run();
 }

@@ -53,6 +53,7 @@ struct ViewStats {
     bool converged = false;
     std::string renderer;
     GatherBackend backend = GatherBackend::gl;
+    IndirectMethodKind indirect = IndirectMethodKind::iim;
 };
 
 struct ScriptStatus {
@@ -96,6 +97,7 @@ struct ViewRequests {
     std::vector<LightEdit> lights;
     std::optional<Settings> settings;  // budgets changed in the panel
     std::optional<GatherBackend> backend;
+    std::optional<IndirectMethodKind> indirect;  // rebuilds the pipeline
 };
 
 }  // namespace ag::cli

@@ -197,6 +197,12 @@ void budgets_section(const ViewState& state, const Scene& scene, ViewRequests& r
     const char* names[] = {"gl", "cpu"};
     if (ImGui::Combo("gather backend", &backend, names, 2))
         requests.backend = backend == 1 ? GatherBackend::cpu : GatherBackend::gl;
+    // Every indirect method the pipeline knows (settings.indirect.method, --indirect).
+    int method = int(state.stats.indirect);
+    if (ImGui::Combo("indirect method", &method, kIndirectMethodNames.data(),
+                     int(kIndirectMethodNames.size())) &&
+        method != int(state.stats.indirect))
+        requests.indirect = IndirectMethodKind(method);
 }
 
 void help_section() {
