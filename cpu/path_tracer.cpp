@@ -44,18 +44,18 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
         // invisible to the camera and to purely specular chains from it, as in the GPU frame.
         if (after_specular && diffuse_seen) {
             const glm::vec3 le = quad_light_radiance(scene_, ray, hit.hit ? hit.t : 1e30f);
-            const Component c = specular_pixel    ? Component::specular
-                                : diffuse_after_x ? Component::indirect
-                                                  : Component::caustics;
+            const FrameTerm c = specular_pixel    ? FrameTerm::specular
+                                : diffuse_after_x ? FrameTerm::indirect
+                                                  : FrameTerm::caustics;
             out[c] += throughput * le;
         }
         if (!hit.hit) break;
 
         const Material& m = scene_.objects[size_t(hit.object)].material;
         if (depth == 0) specular_pixel = m.type != MaterialType::diffuse;
-        const Component here = specular_pixel ? Component::specular
-                               : depth == 0   ? Component::direct
-                                              : Component::indirect;
+        const FrameTerm here = specular_pixel ? FrameTerm::specular
+                               : depth == 0   ? FrameTerm::direct
+                                              : FrameTerm::indirect;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
         if (front) out[here] += throughput * m.emission;
 

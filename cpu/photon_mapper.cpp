@@ -363,7 +363,7 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
         if (!hit.hit) break;
         const Material& m = scene_.objects[size_t(hit.object)].material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
-        const Component seen = depth == 0 ? Component::direct : Component::specular;
+        const FrameTerm seen = depth == 0 ? FrameTerm::direct : FrameTerm::specular;
         if (front) out[seen] += m.emission;
         if (m.type != MaterialType::diffuse) {
             ray = specular_bounce(m, hit, ray.direction, s.get(4 + depth), rays_.epsilon());
@@ -378,11 +378,11 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
         // Cosine-weighted gather: ρ/π · E = ρ/π · π · mean(L) = ρ · mean(L).
         const glm::vec3 indirect = m.albedo * gather(hit.position, hit.normal, key, index);
         if (depth == 0) {
-            out[Component::direct] += direct;
-            out[Component::caustics] += caustics;
-            out[Component::indirect] += indirect;
+            out[FrameTerm::direct] += direct;
+            out[FrameTerm::caustics] += caustics;
+            out[FrameTerm::indirect] += indirect;
         } else {
-            out[Component::specular] += direct + caustics + indirect;
+            out[FrameTerm::specular] += direct + caustics + indirect;
         }
         break;
     }

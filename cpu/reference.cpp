@@ -208,7 +208,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     const size_t tiles = size_t(tiles_x) * size_t(tiles_y);
     const double time_limit = settings.time_limit > 0.0 ? settings.time_limit : 0.0;
     const int spp_limit = settings.spp > 0 ? settings.spp : (time_limit > 0.0 ? INT_MAX : 1);
-    std::vector<std::array<glm::dvec3, kComponentCount>> sum(pixels);
+    std::vector<std::array<glm::dvec3, kFrameTermCount>> sum(pixels);
     std::vector<ComponentRadiance> pass(pixels);
     const double render_start = elapsed();
 
@@ -242,7 +242,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
         });
         if (interrupted) break;
         for (size_t i = 0; i < pixels; ++i)
-            for (int c = 0; c < kComponentCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
+            for (int c = 0; c < kFrameTermCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
         ++done;
     }
 
@@ -253,7 +253,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     for (size_t i = 0; i < pixels; ++i) {
         const int x = int(i % size_t(width)), y = int(i / size_t(width));
         glm::vec3 full(0.0f);
-        for (int c = 0; c < kComponentCount; ++c) {
+        for (int c = 0; c < kFrameTermCount; ++c) {
             const glm::vec3 v = glm::vec3(sum[i][size_t(c)] * scale);
             result.components[size_t(c)].set_rgb(x, y, v);
             full += v;

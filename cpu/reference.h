@@ -11,6 +11,7 @@
 
 #include "cpu/ray_tracer.h"
 #include "cpu/sampling.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/parallel.h"
 #include "shared/qmc.h"
@@ -21,20 +22,13 @@ namespace ag::cpu {
 enum class ReferenceMethod { path_tracing, photon_mapping };
 inline constexpr std::array kReferenceMethodNames = {"pt", "pm"};
 
-// The components of the frame (Larsen eq. 13.2), defined at the first diffuse point x seen from
-// the camera: direct (x's emission and the lights' direct light), caustics (lights → S+ → x),
-// indirect (everything else arriving at x), specular (whole pixels whose camera ray meets a
-// mirror or glass first). They add up to the full image.
-enum class Component { direct, indirect, caustics, specular };
-inline constexpr int kComponentCount = 4;
-inline constexpr std::array kComponentNames = {"direct", "indirect", "caustics", "specular"};
-
-// Radiance of one camera sample, by component.
+// Radiance of one camera sample, by frame term (shared/frame_terms.h: defined at the first
+// diffuse point x seen from the camera).
 struct ComponentRadiance {
-    std::array<glm::vec3, kComponentCount> value{};
+    std::array<glm::vec3, kFrameTermCount> value{};
 
-    glm::vec3& operator[](Component c) { return value[size_t(c)]; }
-    const glm::vec3& operator[](Component c) const { return value[size_t(c)]; }
+    glm::vec3& operator[](FrameTerm c) { return value[size_t(c)]; }
+    const glm::vec3& operator[](FrameTerm c) const { return value[size_t(c)]; }
     glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
 };
 
@@ -68,7 +62,7 @@ using ReferenceProgressFn = std::function<void(const ReferenceProgress&)>;
 
 struct ReferenceResult {
     Image full;                                      // = sum of the components
-    std::array<Image, kComponentCount> components;   // indexed by Component
+    std::array<Image, kFrameTermCount> components;   // indexed by FrameTerm
     int spp = 0;                                     // completed passes (one sample each)
     double seconds = 0.0;                            // wall clock, photon maps included
     double photon_seconds = 0.0;                     // photon tracing and map building (pm)

@@ -69,10 +69,10 @@ uniform int has_caustics;
 uniform vec3 albedo;
 uniform vec3 emission;
 uniform vec2 screen;
-layout(location = 0) out vec4 out_direct;
-layout(location = 1) out vec4 out_indirect;
-layout(location = 2) out vec4 out_specular;
-layout(location = 3) out vec4 out_caustics;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
 void main() {
     vec3 n = normalize(v_normal);
     out_direct = vec4(0.0, 0.0, 0.0, 1.0);
@@ -96,7 +96,7 @@ in vec3 v_normal;
 in vec2 v_uv;
 uniform vec3 albedo;
 uniform int light_index;
-layout(location = 0) out vec4 out_direct;
+layout(location = 0) out vec4 out_direct;  // drawn with the direct term's image as the only buffer
 void main() {
     out_direct = vec4(direct_from(light_index, v_world, normalize(v_normal), albedo), 0.0);
 }
@@ -132,7 +132,7 @@ void main() {
 }
 )";
 
-// Eq. 13.1 on the GPU: the displayed frame is the sum of the four terms.
+// Eq. 13.2 on the GPU: the displayed frame is the sum of the four terms.
 const char* kComposeVertex = R"(
 void main() {
     vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // full-screen triangle
@@ -347,7 +347,7 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
     gl::DepthMask(GL_FALSE);
     gl::Enable(GL_STENCIL_TEST);
     gl::Enable(GL_DEPTH_CLAMP);
-    const GLenum direct_only = GL_COLOR_ATTACHMENT0;
+    const GLenum direct_only = GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect);
     for (size_t i = 0; i < lights.size(); ++i) {
         gl::Clear(GL_STENCIL_BUFFER_BIT);
         if (scene_.settings.direct.shadows) {
@@ -397,11 +397,10 @@ void FrameRenderer::compose() {
     gl::Disable(GL_DEPTH_TEST);
     gl::Disable(GL_BLEND);
     compose_.use();
-    const char* names[4] = {"direct", "indirect", "specular", "caustics"};
-    for (int a = 0; a < 4; ++a) {
-        gl::ActiveTexture(GLenum(GL_TEXTURE0 + a));
-        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(a)].get());
-        compose_.set(names[a], a);
+    for (FrameTerm t : kFrameTerms) {
+        gl::ActiveTexture(GLenum(GL_TEXTURE0 + int(t)));
+        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(t)].get());
+        compose_.set(frame_term_name(t), int(t));
     }
     gl::BindVertexArray(empty_vao_.get());
     gl::DrawArrays(GL_TRIANGLES, 0, 3);

@@ -163,15 +163,15 @@ TEST(Reference, FurnacePathTracerGivesLeOverOneMinusAlbedo) {
     const float albedo = 0.5f, le = 1.0f;
     const ReferenceResult r = render(furnace(albedo, le), pt(256));
     const glm::vec3 full = image_mean(r.full);
-    const glm::vec3 direct = image_mean(r.components[size_t(Component::direct)]);
-    const glm::vec3 indirect = image_mean(r.components[size_t(Component::indirect)]);
+    const glm::vec3 direct = image_mean(r.components[size_t(FrameTerm::direct)]);
+    const glm::vec3 indirect = image_mean(r.components[size_t(FrameTerm::indirect)]);
     for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(full[c], le / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
         EXPECT_NEAR(direct[c], le, 1e-5f);  // x's own emission
         EXPECT_NEAR(indirect[c], le * albedo / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
     }
-    EXPECT_EQ(image_mean(r.components[size_t(Component::caustics)]), glm::vec3(0.0f));
-    EXPECT_EQ(image_mean(r.components[size_t(Component::specular)]), glm::vec3(0.0f));
+    EXPECT_EQ(image_mean(r.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
+    EXPECT_EQ(image_mean(r.components[size_t(FrameTerm::specular)]), glm::vec3(0.0f));
     EXPECT_EQ(r.spp, 256);
 }
 
@@ -188,7 +188,7 @@ TEST(Reference, PointLightDirectMatchesAnalytic) {
     };
     for (const ReferenceSettings& settings : {pt(64), pm(64, 20000, 1)}) {
         const ReferenceResult r = render(scene, settings);
-        const Image& direct = r.components[size_t(Component::direct)];
+        const Image& direct = r.components[size_t(FrameTerm::direct)];
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) {
                 const float expected = pixel_mean(scene.camera, x, y, 0.0f, lit);
@@ -208,7 +208,7 @@ TEST(Reference, QuadLightDirectMatchesAnalytic) {
     const float expected = albedo / kPi * square_irradiance(radiance, 0.5f * side, height);
     for (const ReferenceSettings& settings : {pt(256), pm(16, 20000, 16)}) {
         const ReferenceResult r = render(scene, settings);
-        EXPECT_NEAR(image_mean(r.components[size_t(Component::direct)]).r, expected,
+        EXPECT_NEAR(image_mean(r.components[size_t(FrameTerm::direct)]).r, expected,
                     0.01f * expected);
     }
 }
@@ -248,17 +248,17 @@ TEST(Reference, PointLightCausticsComeFromPhotonMappingOnly) {
     expected_caustic /= float(scene.camera.width * scene.camera.height);
 
     const ReferenceResult path = render(scene, pt(16));
-    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
-    EXPECT_NEAR(image_mean(path.components[size_t(Component::direct)]).r, expected_direct,
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
+    EXPECT_NEAR(image_mean(path.components[size_t(FrameTerm::direct)]).r, expected_direct,
                 0.01f * expected_direct);
 
     ReferenceSettings settings = pm(4, 2000, 1);
     settings.caustic_photons = 1600000;
     settings.caustic_knn = 200;
     const ReferenceResult photons = render(scene, settings);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::direct)]).r, expected_direct,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::direct)]).r, expected_direct,
                 0.01f * expected_direct);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected_caustic,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, expected_caustic,
                 0.03f * expected_caustic);
 }
 
@@ -271,9 +271,9 @@ TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
     const float expected = 0.5f / kPi * square_irradiance(radiance, 0.5f * side, 3.0f);
 
     const ReferenceResult path = render(scene, pt(1024));
-    EXPECT_NEAR(image_mean(path.components[size_t(Component::caustics)]).r, expected,
+    EXPECT_NEAR(image_mean(path.components[size_t(FrameTerm::caustics)]).r, expected,
                 0.03f * expected);
-    EXPECT_EQ(image_mean(path.components[size_t(Component::direct)]),
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::direct)]),
               glm::vec3(0.0f));  // faces away
 
     // One density estimate covers the small patch the camera sees: k = 2000 photons, ~2% noise.
@@ -281,7 +281,7 @@ TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
     settings.caustic_photons = 1600000;
     settings.caustic_knn = 2000;
     const ReferenceResult photons = render(scene, settings);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, expected,
                 0.05f * expected);
 }
 
@@ -293,9 +293,9 @@ TEST(Reference, ComponentsSumToFullAndResultIgnoresThreadCount) {
         const ReferenceResult a = render(small, settings, 1);
         const ReferenceResult b = render(small, settings, 3);
         EXPECT_EQ(a.full.pixels, b.full.pixels);
-        for (int c = 0; c < kComponentCount; ++c)
-            EXPECT_EQ(a.components[size_t(c)].pixels, b.components[size_t(c)].pixels)
-                << kComponentNames[size_t(c)];
+        for (FrameTerm t : kFrameTerms)
+            EXPECT_EQ(a.components[size_t(t)].pixels, b.components[size_t(t)].pixels)
+                << frame_term_name(t);
         for (int y = 0; y < 16; ++y)
             for (int x = 0; x < 16; ++x) {
                 glm::vec3 sum(0.0f);
@@ -329,8 +329,8 @@ TEST(Reference, CornellIndirectPathTracingAgreesWithPhotonMapping) {
     scene.camera.width = scene.camera.height = slow ? 48 : 32;
     const ReferenceResult path = render(scene, pt(slow ? 32768 : 4096));
     const ReferenceResult photons = render(scene, pm(slow ? 128 : 32, slow ? 1000000 : 300000, 64));
-    const Image& a = photons.components[size_t(Component::indirect)];
-    const Image& b = path.components[size_t(Component::indirect)];
+    const Image& a = photons.components[size_t(FrameTerm::indirect)];
+    const Image& b = path.components[size_t(FrameTerm::indirect)];
     const double pixel_rel_mse = compare_images(a, b).rel_mse, block = block_rel_mse(a, b, 2);
     std::printf(
         "Cornell indirect, %dx%d: relMSE(pm, pt) = %.5f per pixel, %.5f on 2x2 blocks (pt %d spp "
@@ -345,8 +345,8 @@ TEST(Reference, CornellIndirectPathTracingAgreesWithPhotonMapping) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(ma[c], mb[c], 0.04f * mb[c]);
     // Photon mapping's caustic component is the light focused by the sphere; the path tracer has
     // none.
-    EXPECT_GT(image_mean(photons.components[size_t(Component::caustics)]).r, 0.0f);
-    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
+    EXPECT_GT(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, 0.0f);
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
 }
 
 }  // namespace ag::cpu

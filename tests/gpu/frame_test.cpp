@@ -62,7 +62,7 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
     FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
     renderer.render(iim.id());
     const FrameImages images = renderer.read_back();
-    const Image& direct = images.aov[size_t(Aov::direct)];
+    const Image& direct = images.aov[size_t(FrameTerm::direct)];
     const glm::ivec2 under = project(scene.camera, {0.0f, 0.0f, 0.0f});
     const glm::ivec2 beside = project(scene.camera, {3.0f, 0.0f, 0.0f});
     EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f)) << "pixel " << under.x << "," << under.y;
@@ -74,7 +74,7 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
     unshadowed.settings.direct.shadows = false;
     FrameRenderer plain(unshadowed, meshes, scene.camera.width, scene.camera.height);
     plain.render(iim.id());
-    EXPECT_GT(plain.read_back().aov[size_t(Aov::direct)].rgb(under.x, under.y).x, 0.1f * expected);
+    EXPECT_GT(plain.read_back().aov[size_t(FrameTerm::direct)].rgb(under.x, under.y).x, 0.1f * expected);
 }
 
 TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
@@ -87,18 +87,19 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     FrameRenderer renderer(scene, meshes, 96, 96);
     renderer.render(iim.id());
     const FrameImages images = renderer.read_back();
-    double terms[4] = {0, 0, 0, 0};
+    std::array<double, kFrameTermCount> terms{};
     for (size_t i = 0; i < images.frame.pixels.size(); ++i) {
         float sum = 0.0f;
-        for (size_t a = 0; a < 4; ++a) {
-            sum += images.aov[a].pixels[i];
-            terms[a] += images.aov[a].pixels[i];
+        for (FrameTerm t : kFrameTerms) {
+            sum += images.aov[size_t(t)].pixels[i];
+            terms[size_t(t)] += images.aov[size_t(t)].pixels[i];
         }
         ASSERT_NEAR(images.frame.pixels[i], sum, 1e-5f * std::max(1.0f, sum)) << "pixel value " << i;
     }
-    EXPECT_GT(terms[size_t(Aov::direct)], 0.0);
-    EXPECT_GT(terms[size_t(Aov::indirect)], 0.0);
-    EXPECT_GT(terms[size_t(Aov::specular)], 0.0);  // the glass sphere
+    EXPECT_GT(terms[size_t(FrameTerm::direct)], 0.0);
+    EXPECT_GT(terms[size_t(FrameTerm::indirect)], 0.0);
+    EXPECT_GT(terms[size_t(FrameTerm::specular)], 0.0);  // the glass sphere
+    EXPECT_EQ(terms[size_t(FrameTerm::caustics)], 0.0);  // none passed to render()
 }
 
 }  // namespace ag::gpu

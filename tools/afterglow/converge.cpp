@@ -11,6 +11,7 @@
 
 #include "cpu/reference.h"
 #include "gpu/gl_context.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/metrics.h"
@@ -96,8 +97,7 @@ std::string component_path(const std::string& exr, const std::string& component)
 int run_converge(const Args& args) {
     const int frames = args.get_int("frames", 120, 1, 1000000);
     const std::string component = args.get("component", "indirect");
-    if (component != "full" && component != "direct" && component != "indirect" && component != "caustics" &&
-        component != "specular")
+    if (component != "full" && !parse_frame_term(component))
         throw CliError("afterglow converge: --component expects full, direct, indirect, caustics or specular, got '" +
                        component + "'");
     const std::string mode = args.get("baseline", "selective");
@@ -160,8 +160,8 @@ int run_converge(const Args& args) {
                       << rs.photons << " photons) into " << reference_path << "\n";
             ThreadPool pool(threads);
             const cpu::ReferenceResult ref = cpu::render_reference(final_state, rs, pool);
-            for (int c = 0; c < cpu::kComponentCount; ++c)
-                write_image(ref.components[size_t(c)], component_path(reference_path, cpu::kComponentNames[size_t(c)]));
+            for (int c = 0; c < kFrameTermCount; ++c)
+                write_image(ref.components[size_t(c)], component_path(reference_path, kFrameTermNames[size_t(c)]));
             write_image(ref.full, reference_path);
         } else {
             std::cerr << "afterglow converge: reference from the cache: " << reference_path << "\n";
@@ -211,10 +211,7 @@ int run_converge(const Args& args) {
         // Metrics are taken outside the timed part.
         const gpu::FrameImages images = pipeline.images();
         const Image& test = component == "full" ? images.frame
-                            : component == "direct"   ? images.aov[size_t(gpu::Aov::direct)]
-                            : component == "indirect" ? images.aov[size_t(gpu::Aov::indirect)]
-                            : component == "caustics" ? images.aov[size_t(gpu::Aov::caustics)]
-                                                      : images.aov[size_t(gpu::Aov::specular)];
+                                                : images.aov[size_t(*parse_frame_term(component))];
         const ImageMetrics m = compare_images(test, reference);
         errors.push_back(m.rel_mse);
         times.push_back(wall);

@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "gpu/gl_context.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/script.h"
@@ -25,7 +26,7 @@ const Command kRenderCommand{
         {"output", "o", "OUT.exr", "the EXR to write; a PNG with the same stem is written beside it"},
         {"frames", "n", "N", "frames to run (default 30)"},
         {"size", "", "WxH", "image size (default: the scene camera's resolution)"},
-        {"aov", "", "", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"},
+        {"aov", "", "", "also write OUT.direct.exr, .indirect, .caustics, .specular (and PNGs)"},
         {"gl", "", "BACKEND", "osmesa (default), egl, auto (EGL on a GPU, else OSMesa)"},
         {"gather", "", "BACKEND", "gl | cpu | auto (measure both, keep the faster): the IIM gather backend "
                                   "(default: the scene's settings.gather.backend)"},
@@ -119,7 +120,7 @@ int run_render(const Args& args) {
     write_image(images.frame, with_suffix(out, "", ".png"), exposure);
     if (args.has("aov"))
         for (size_t a = 0; a < images.aov.size(); ++a) {
-            const std::string suffix = std::string(".") + gpu::kAovNames[a];
+            const std::string suffix = std::string(".") + kFrameTermNames[a];
             write_image(images.aov[a], with_suffix(out, suffix, ".exr"));
             write_image(images.aov[a], with_suffix(out, suffix, ".png"), exposure);
         }
