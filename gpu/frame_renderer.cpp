@@ -10,16 +10,12 @@ namespace ag::gpu {
 
 namespace {
 
-constexpr int kMaxLights = 64;
-
-
 const char* kLightsGlsl = R"(
-const int kMaxLights = 64;
 uniform int light_count;
-uniform vec3 light_position[kMaxLights];
-uniform vec3 light_intensity[kMaxLights];
-uniform vec3 light_normal[kMaxLights];
-uniform int light_one_sided[kMaxLights];
+uniform vec3 light_position[kMaxLightSamples];
+uniform vec3 light_intensity[kMaxLightSamples];
+uniform vec3 light_normal[kMaxLightSamples];
+uniform int light_one_sided[kMaxLightSamples];
 const float kPi = 3.14159265358979;
 // Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d².
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
@@ -34,7 +30,7 @@ vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
 
 const char* kSpecularGlsl = R"(
 uniform samplerCube environment;
-uniform int material;   // 0 diffuse, 1 mirror, 2 glass
+uniform int material;   // kMaterialDiffuse, kMaterialMirror or kMaterialGlass
 uniform float ior;
 uniform vec3 eye;
 float fresnel(float cos_i, float eta) {
@@ -49,7 +45,7 @@ vec3 specular_radiance(vec3 p, vec3 n) {
     vec3 v = normalize(p - eye);
     vec3 nf = dot(v, n) < 0.0 ? n : -n;
     vec3 reflected = texture(environment, reflect(v, nf)).rgb;
-    if (material == 1) return reflected;
+    if (material == kMaterialMirror) return reflected;
     float eta = dot(v, n) < 0.0 ? 1.0 / ior : ior;
     float f = fresnel(-dot(v, nf), eta);
     vec3 t = refract(v, nf, eta);
@@ -79,7 +75,7 @@ void main() {
     out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
     out_specular = vec4(0.0, 0.0, 0.0, 1.0);
     out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
-    if (material != 0) {
+    if (material != kMaterialDiffuse) {
         out_specular.rgb = specular_radiance(v_world, n);
         return;
     }
@@ -133,12 +129,6 @@ void main() {
 )";
 
 // Eq. 13.2 on the GPU: the displayed frame is the sum of the four terms.
-const char* kComposeVertex = R"(
-void main() {
-    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // full-screen triangle
-    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
-}
-)";
 const char* kComposeFragment = R"(
 uniform sampler2D direct, indirect, specular, caustics;
 out vec4 color;
@@ -160,7 +150,7 @@ std::vector<LightSample> light_samples(const Scene& scene) {
             out.push_back({l.position, l.intensity, glm::vec3(0.0f), false});
             continue;
         }
-        const int n = std::max(1, int(std::lround(std::sqrt(double(scene.settings.direct.area_light_samples)))));
+        const int n = quad_light_grid(scene.settings);
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
         // Each cell of area A/n² emits I(ω) = L · (A/n²) · cosθ towards the front.
         const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
@@ -169,12 +159,14 @@ std::vector<LightSample> light_samples(const Scene& scene) {
                 out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 + (float(j) + 0.5f) / float(n) * e3,
                                intensity, l.quad_normal(), true});
     }
-    if (int(out.size()) > kMaxLights) out.resize(kMaxLights);
+    // Never cut: the scene file was checked on load, but settings may have changed since.
+    if (int(out.size()) > kMaxLightSamples) check_light_samples(scene);  // throws InputError
     return out;
 }
 
 FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
+    check_light_samples(scene);
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
@@ -193,7 +185,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("frame: framebuffer incomplete");
 
-    compose_ = Program("frame compose", kComposeVertex, kComposeFragment);
+    compose_ = Program("frame compose", kFullScreenTriangleVertex, kComposeFragment);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());

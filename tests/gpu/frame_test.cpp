@@ -1,4 +1,5 @@
-// The composed frame (Larsen ch. 13): shadow volumes and the AOV sum.
+// The composed frame (Larsen ch. 13): shadow volumes, the sum of the eq. 13.2 terms, and the
+// light-sample limit.
 #include "gpu/frame_renderer.h"
 
 #include <gtest/gtest.h>
@@ -7,6 +8,7 @@
 #include "gpu/lightmap_texture.h"
 #include "shared/camera.h"
 #include "shared/charts.h"
+#include "shared/input_error.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
@@ -100,6 +102,28 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     EXPECT_GT(terms[size_t(FrameTerm::indirect)], 0.0);
     EXPECT_GT(terms[size_t(FrameTerm::specular)], 0.0);  // the glass sphere
     EXPECT_EQ(terms[size_t(FrameTerm::caustics)], 0.0);  // none passed to render()
+}
+
+// Settings changed after loading (flags, the viewer) may ask for more light samples than the frame
+// holds: an InputError naming the scene, never a silently cut light list.
+TEST_F(FrameTest, TooManyLightSamplesAreAnErrorNotACut) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    SceneMeshes meshes(scene);
+    scene.lights.resize(1);
+    scene.lights[0].type = LightType::quad;
+    scene.lights[0].corners = {glm::vec3(0, 1, 0), glm::vec3(1, 1, 0), glm::vec3(1, 1, 1),
+                               glm::vec3(0, 1, 1)};
+    scene.settings.direct.area_light_samples = kMaxLightSamples;  // an 8×8 grid: just fits
+    EXPECT_EQ(int(light_samples(scene).size()), kMaxLightSamples);
+    scene.settings.direct.area_light_samples = 81;
+    try {
+        FrameRenderer renderer(scene, meshes, 8, 8);
+        FAIL() << "81 light samples accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cornell.json: /lights: "), std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(light_samples(scene), InputError);
 }
 
 }  // namespace ag::gpu
