@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -31,9 +32,8 @@ glm::vec3 Light::center() const {
 }
 
 glm::vec3 Light::power() const {
-    constexpr float kPi = 3.14159265358979f;
-    if (type == LightType::point) return 4.0f * kPi * intensity;
-    return kPi * quad_area() * radiance;  // Lambertian emitter: Φ = π L A
+    if (type == LightType::point) return 4.0f * std::numbers::pi_v<float> * intensity;
+    return std::numbers::pi_v<float> * quad_area() * radiance;  // Lambertian emitter: Φ = π L A
 }
 
 int Scene::find_object(const std::string& object_name) const {

@@ -3,6 +3,7 @@
 #include "gpu/frame_renderer.h"
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "gl_fixture.h"
 #include "gpu/lightmap_texture.h"
@@ -69,7 +70,7 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
     const glm::ivec2 beside = project(scene.camera, {3.0f, 0.0f, 0.0f});
     EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f)) << "pixel " << under.x << "," << under.y;
     // Beside: ρ/π · I cosθ / d² with ρ = 0.75, d² = 9 + 25, cosθ = 5/√34.
-    const float d2 = 34.0f, expected = 0.75f / 3.14159265f * 25.0f * (5.0f / std::sqrt(d2)) / d2;
+    const float d2 = 34.0f, expected = 0.75f / std::numbers::pi_v<float> * 25.0f * (5.0f / std::sqrt(d2)) / d2;
     EXPECT_NEAR(direct.rgb(beside.x, beside.y).x, expected, 0.03f * expected);
     // Switching shadows off lights the point under the box too.
     Scene unshadowed = scene;

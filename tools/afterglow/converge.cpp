@@ -9,7 +9,7 @@
 #include <optional>
 #include <sstream>
 
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 #include "gpu/gl_context.h"
 #include "shared/frame_terms.h"
 #include "shared/image.h"

@@ -1,6 +1,6 @@
 // afterglow reference SCENE --method pt|pm -o ref.exr: reference images for the GPU frame (path
 // tracing or traditional photon mapping, Larsen ch. 4 and Fig. 14.3/14.5), split by component.
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 #include <unistd.h>
 

@@ -1,6 +1,7 @@
-#include "cpu/path_tracer.h"
+#include "cpu/reference/path_tracer.h"
 
 #include <algorithm>
+#include <numbers>
 
 #include "shared/camera.h"
 
@@ -63,7 +64,7 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
             // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the
             // photon tracer), so it is black.
             if (!front) break;
-            out[here] += throughput * m.albedo / 3.14159265358979f *
+            out[here] += throughput * m.albedo / std::numbers::pi_v<float> *
                          direct_irradiance(scene_, rays_, hit.position, hit.normal, 1,
                                            s.get(dim + 4), s.get(dim + 5));
             if (depth > 0) diffuse_after_x = true;
