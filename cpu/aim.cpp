@@ -2,13 +2,13 @@
 
 #include <algorithm>
 #include <numeric>
+#include <numbers>
 
 #include "cpu/knn.h"
 
 namespace ag::cpu {
 
 namespace {
-constexpr double kPi = 3.14159265358979323846;
 }
 
 Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
@@ -43,10 +43,10 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         if (n == 0) return;
         // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
         double r2 = double(d2[size_t(n - 1)]);
-        if (r2 <= 0.0) r2 = double(texel) * texel / kPi;
+        if (r2 <= 0.0) r2 = double(texel) * texel / std::numbers::pi;
         glm::dvec3 sum(0.0);
         for (int j = 0; j < n; ++j) sum += glm::dvec3(s.hits[size_t(idx[size_t(j)])].power);
-        e[i] = glm::vec3(sum / (kPi * r2));
+        e[i] = glm::vec3(sum / (std::numbers::pi * r2));
     }, 16);
 
     // Near a surface's edges the kNN disc reaches past the surface and the estimate falls (to
@@ -65,7 +65,7 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
         const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
         irradiance_[a] = e[i];
-        radiance_[a] = albedo / float(kPi) * e[i];
+        radiance_[a] = albedo / float(std::numbers::pi) * e[i];
         if (!dirty_flag_[a]) {
             dirty_flag_[a] = 1;
             dirty_.push_back(int(a));

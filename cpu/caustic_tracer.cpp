@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "cpu/sampling.h"
 #include "shared/qmc.h"
@@ -9,8 +10,6 @@
 namespace ag::cpu {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 constexpr int kMaxSpecularBounces = 12;
 
 
@@ -38,7 +37,7 @@ std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) con
         if (d <= r * 1.0001f) continue;  // the light is inside the bound: no cone (documented)
         const double sin_a = double(r) / double(d), cos_a = std::sqrt(std::max(0.0, 1.0 - sin_a * sin_a));
         const double one_minus_cos = sin_a * sin_a / (1.0 + cos_a);  // no cancellation
-        out.push_back({o, c, one_minus_cos, float(2.0 * 3.14159265358979 * one_minus_cos)});
+        out.push_back({o, c, one_minus_cos, float(2.0 * std::numbers::pi * one_minus_cos)});
     }
     return out;
 }
@@ -78,7 +77,7 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without cancellation.
     const double x = halton.sample(k, 1) * cone->one_minus_cos;
     const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
-    const float phi = 2.0f * kPi * float(halton.sample(k, 2));
+    const float phi = 2.0f * std::numbers::pi_v<float> * float(halton.sample(k, 2));
     glm::vec3 u, v;
     orthonormal_basis(axis, u, v);
     ray.direction = glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));

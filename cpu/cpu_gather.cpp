@@ -13,33 +13,13 @@ namespace ag::cpu {
 
 namespace {
 
-constexpr float kQuarterPi = 0.785398163397448f;
-
-
-// Shirley–Chiu concentric map of the unit square onto the unit disc. Lifted to the hemisphere
-// (z = √(1 - r²)) it gives cosine-weighted directions, and unlike the polar map it keeps the
-// QMC points' strata compact, which matters at a few hundred rays.
-glm::vec2 concentric_disc(glm::vec2 u) {
-    const float a = 2.0f * u.x - 1.0f, b = 2.0f * u.y - 1.0f;
-    if (a == 0.0f && b == 0.0f) return glm::vec2(0.0f);
-    float r, phi;
-    if (std::abs(a) > std::abs(b)) {
-        r = a;
-        phi = kQuarterPi * (b / a);
-    } else {
-        r = b;
-        phi = 2.0f * kQuarterPi - kQuarterPi * (a / b);
-    }
-    return r * glm::vec2(std::cos(phi), std::sin(phi));
-}
-
 // A per-texel toroidal shift in [0, 1)² (Cranley–Patterson rotation): every texel gets its own
 // deterministic randomisation of the same point set, so neighbouring texels do not share the
 // same ray directions (structured error would show as patterns across the IIM).
 glm::vec2 texel_shift(uint32_t seed, int record) {
     const uint32_t h0 = hash_u32(hash_u32(seed ^ 0x6a09e667u) ^ (uint32_t(record) * 0x9e3779b9u));
     const uint32_t h1 = hash_u32(h0 ^ 0xbb67ae85u);
-    return glm::vec2(float(h0 >> 8), float(h1 >> 8)) * (1.0f / 16777216.0f);
+    return glm::vec2(to_unit_float(h0), to_unit_float(h1));
 }
 
 float wrap(float x) { return x >= 1.0f ? x - 1.0f : x; }
@@ -69,9 +49,10 @@ GatherResult CpuGather::gather_texel(int record, const std::vector<glm::vec3>& a
     glm::vec3 sum(0.0f);
     int back_faces = 0;
     for (const glm::vec2& p : points_) {
-        const glm::vec2 d = concentric_disc({wrap(p.x + shift.x), wrap(p.y + shift.y)});
-        const float z = std::sqrt(std::max(0.0f, 1.0f - glm::dot(d, d)));
-        const glm::vec3 direction = d.x * t + d.y * b + z * n;
+        // The concentric map keeps the QMC points' strata compact, which matters at a few hundred
+        // rays.
+        const glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
+        const glm::vec3 direction = d.x * t + d.y * b + d.z * n;
         const RayHit hit = rays_.intersect({origin, direction, 0.0f, 1e30f});
         if (!hit.hit) continue;
         // Mirrors and glass have no AIM: light reaching the texel through them (L D S x paths)

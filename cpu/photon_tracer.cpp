@@ -83,7 +83,7 @@ float PhotonTracer::sample(int light, uint64_t k, int dim) const {
     if (dim < dimensions_) return float(halton_[size_t(light)].sample(k, dim));
     const uint32_t h = hash_u32(hash_u32(uint32_t(k) ^ hash_u32(uint32_t(k >> 32) + 0x9e3779b9u)) +
                                 uint32_t(dim) * 0x85ebca6bu + scene_.settings.seed + uint32_t(light) * 0xc2b2ae35u);
-    return float(h >> 8) * (1.0f / 16777216.0f);
+    return to_unit_float(h);
 }
 
 PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {

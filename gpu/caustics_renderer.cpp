@@ -62,12 +62,6 @@ out vec4 color;
 void main() { color = vec4(v_power, 1.0); }
 )";
 
-const char* kFullScreenVertex = R"(
-void main() {
-    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
-    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
-}
-)";
 const char* kQueryFragment = R"(
 out vec4 color;
 void main() { color = vec4(0.0); }
@@ -134,8 +128,8 @@ CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes
     tiles_y_ = (height + tile_ - 1) / tile_;
     geometry_ = Program("caustics geometry", kGeometryVertex, kGeometryFragment);
     splat_ = Program("caustics splat", kSplatVertex, kSplatFragment);
-    query_ = Program("caustics tile query", kFullScreenVertex, kQueryFragment);
-    filter_ = Program("caustics filter", kFullScreenVertex, kFilterFragment);
+    query_ = Program("caustics tile query", kFullScreenTriangleVertex, kQueryFragment);
+    filter_ = Program("caustics filter", kFullScreenTriangleVertex, kFilterFragment);
     position_ = make_float_texture(width, height);
     surface_ = make_float_texture(width, height);
     splat_texture_ = make_float_texture(width, height, true);

@@ -10,16 +10,12 @@ namespace ag::gpu {
 
 namespace {
 
-constexpr int kMaxLights = 64;
-
-
 const char* kLightsGlsl = R"(
-const int kMaxLights = 64;
 uniform int light_count;
-uniform vec3 light_position[kMaxLights];
-uniform vec3 light_intensity[kMaxLights];
-uniform vec3 light_normal[kMaxLights];
-uniform int light_one_sided[kMaxLights];
+uniform vec3 light_position[kMaxLightSamples];
+uniform vec3 light_intensity[kMaxLightSamples];
+uniform vec3 light_normal[kMaxLightSamples];
+uniform int light_one_sided[kMaxLightSamples];
 const float kPi = 3.14159265358979;
 // Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d².
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
@@ -34,7 +30,7 @@ vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
 
 const char* kSpecularGlsl = R"(
 uniform samplerCube environment;
-uniform int material;   // 0 diffuse, 1 mirror, 2 glass
+uniform int material;   // kMaterialDiffuse, kMaterialMirror or kMaterialGlass
 uniform float ior;
 uniform vec3 eye;
 float fresnel(float cos_i, float eta) {
@@ -49,7 +45,7 @@ vec3 specular_radiance(vec3 p, vec3 n) {
     vec3 v = normalize(p - eye);
     vec3 nf = dot(v, n) < 0.0 ? n : -n;
     vec3 reflected = texture(environment, reflect(v, nf)).rgb;
-    if (material == 1) return reflected;
+    if (material == kMaterialMirror) return reflected;
     float eta = dot(v, n) < 0.0 ? 1.0 / ior : ior;
     float f = fresnel(-dot(v, nf), eta);
     vec3 t = refract(v, nf, eta);
@@ -70,17 +66,17 @@ uniform int has_caustics;
 uniform vec3 albedo;
 uniform vec3 emission;
 uniform vec2 screen;
-layout(location = 0) out vec4 out_direct;
-layout(location = 1) out vec4 out_indirect;
-layout(location = 2) out vec4 out_specular;
-layout(location = 3) out vec4 out_caustics;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
 void main() {
     vec3 n = normalize(v_normal);
     out_direct = vec4(0.0, 0.0, 0.0, 1.0);
     out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
     out_specular = vec4(0.0, 0.0, 0.0, 1.0);
     out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
-    if (material != 0) {
+    if (material != kMaterialDiffuse) {
         out_specular.rgb = specular_radiance(v_world, n);
         return;
     }
@@ -99,7 +95,7 @@ in vec3 v_normal;
 in vec2 v_uv;
 uniform vec3 albedo;
 uniform int light_index;
-layout(location = 0) out vec4 out_direct;
+layout(location = 0) out vec4 out_direct;  // drawn with the direct term's image as the only buffer
 void main() {
     out_direct = vec4(direct_from(light_index, v_world, normalize(v_normal), albedo), 0.0);
 }
@@ -135,13 +131,7 @@ void main() {
 }
 )";
 
-// Eq. 13.1 on the GPU: the displayed frame is the sum of the four terms.
-const char* kComposeVertex = R"(
-void main() {
-    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // full-screen triangle
-    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
-}
-)";
+// Eq. 13.2 on the GPU: the displayed frame is the sum of the four terms.
 const char* kComposeFragment = R"(
 uniform sampler2D direct, indirect, specular, caustics;
 out vec4 color;
@@ -163,7 +153,7 @@ std::vector<LightSample> light_samples(const Scene& scene) {
             out.push_back({l.position, l.intensity, glm::vec3(0.0f), false});
             continue;
         }
-        const int n = std::max(1, int(std::lround(std::sqrt(double(scene.settings.direct.area_light_samples)))));
+        const int n = quad_light_grid(scene.settings);
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
         // Each cell of area A/n² emits I(ω) = L · (A/n²) · cosθ towards the front.
         const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
@@ -172,12 +162,14 @@ std::vector<LightSample> light_samples(const Scene& scene) {
                 out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 + (float(j) + 0.5f) / float(n) * e3,
                                intensity, l.quad_normal(), true});
     }
-    if (int(out.size()) > kMaxLights) out.resize(kMaxLights);
+    // Never cut: the scene file was checked on load, but settings may have changed since.
+    if (int(out.size()) > kMaxLightSamples) check_light_samples(scene);  // throws InputError
     return out;
 }
 
 FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
+    check_light_samples(scene);
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
@@ -196,7 +188,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("frame: framebuffer incomplete");
 
-    compose_ = Program("frame compose", kComposeVertex, kComposeFragment);
+    compose_ = Program("frame compose", kFullScreenTriangleVertex, kComposeFragment);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
@@ -358,7 +350,7 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     gl::DepthMask(GL_FALSE);
     gl::Enable(GL_STENCIL_TEST);
     gl::Enable(GL_DEPTH_CLAMP);
-    const GLenum direct_only = GL_COLOR_ATTACHMENT0;
+    const GLenum direct_only = GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect);
     for (size_t i = 0; i < lights.size(); ++i) {
         gl::Clear(GL_STENCIL_BUFFER_BIT);
         if (scene_.settings.direct.shadows) {
@@ -408,11 +400,10 @@ void FrameRenderer::compose() {
     gl::Disable(GL_DEPTH_TEST);
     gl::Disable(GL_BLEND);
     compose_.use();
-    const char* names[4] = {"direct", "indirect", "specular", "caustics"};
-    for (int a = 0; a < 4; ++a) {
-        gl::ActiveTexture(GLenum(GL_TEXTURE0 + a));
-        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(a)].get());
-        compose_.set(names[a], a);
+    for (FrameTerm t : kFrameTerms) {
+        gl::ActiveTexture(GLenum(GL_TEXTURE0 + int(t)));
+        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(t)].get());
+        compose_.set(frame_term_name(t), int(t));
     }
     gl::BindVertexArray(empty_vao_.get());
     gl::DrawArrays(GL_TRIANGLES, 0, 3);

@@ -1,4 +1,4 @@
-// The composed frame (Larsen ch. 13, eq. 13.1): L = L_indirect + L_caustics + L_specular
+// The composed frame (Larsen ch. 13, eq. 13.2): L = L_indirect + L_caustics + L_specular
 // + Σ_lights L_direct(i)·shadow(i). Each term is rendered into its own float attachment, so the
 // component images (thesis Fig. 13.1) sum exactly to the frame. Direct light is shaded per pixel
 // for every point light (quad lights as a grid of point lights) with hard shadows from stencil
@@ -12,13 +12,12 @@
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
 #include "gpu/shadow_volumes.h"
+#include "shared/frame_terms.h"
+#include "shared/host_device_shared.h"
 #include "shared/image.h"
 #include "shared/scene.h"
 
 namespace ag::gpu {
-
-enum class Aov { direct, indirect, specular, caustics };
-inline constexpr std::array kAovNames = {"direct", "indirect", "specular", "caustics"};
 
 // A point light standing in for a light or a piece of a quad light: intensity I (W/sr) towards
 // directions in front of `normal` (one-sided, scaled by the cosine) or everywhere.
@@ -29,7 +28,8 @@ struct LightSample {
     bool one_sided = false;
 };
 
-// The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples).
+// The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples); at
+// most kMaxLightSamples (scene files needing more are rejected on load; an InputError otherwise).
 std::vector<LightSample> light_samples(const Scene& scene);
 
 // Where an indirect method's term lives (DESIGN.md "Indirect methods on one scene graph"): an
@@ -43,7 +43,7 @@ struct IndirectTerm {
 
 struct FrameImages {
     Image frame;
-    std::array<Image, 4> aov;  // indexed by Aov
+    std::array<Image, kFrameTermCount> aov;  // indexed by FrameTerm
 };
 
 class FrameRenderer {
@@ -60,7 +60,7 @@ public:
     int width() const { return width_; }
     int height() const { return height_; }
     GLuint framebuffer() const { return fbo_.get(); }
-    GLuint aov_texture(Aov a) const { return aov_[size_t(a)].get(); }
+    GLuint aov_texture(FrameTerm t) const { return aov_[size_t(t)].get(); }
     GLuint frame_texture() const { return frame_.get(); }  // the composed L, for display
 
 private:
@@ -74,7 +74,7 @@ private:
     Program gbuffer_, lighting_, volume_, environment_;
     void compose();
 
-    std::array<Texture, 4> aov_;
+    std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
     Texture frame_;
     Framebuffer compose_fbo_;
     VertexArray empty_vao_;

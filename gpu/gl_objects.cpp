@@ -1,5 +1,7 @@
 #include "gpu/gl_objects.h"
 
+#include "shared/host_device_shared.h"
+
 namespace ag::gpu {
 
 Buffer make_buffer() {
@@ -31,7 +33,10 @@ VertexArray make_vertex_array() {
 namespace {
 GLuint compile(const std::string& name, GLenum type, const std::string& source) {
     const GLuint s = gl::CreateShader(type);
-    const std::string full = "#version 450 core\n" + source;
+    // Every shader sees the constants shared with C++; `#line 1` keeps log line numbers those of
+    // `source`.
+    const std::string full =
+        std::string("#version 450 core\n") + kHostDeviceSharedGlsl + "\n#line 1\n" + source;
     const char* text = full.c_str();
     gl::ShaderSource(s, 1, &text, nullptr);
     gl::CompileShader(s);

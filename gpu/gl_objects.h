@@ -60,6 +60,15 @@ Framebuffer make_framebuffer();
 Renderbuffer make_renderbuffer();
 VertexArray make_vertex_array();
 
+// Vertex shader of a full-screen pass: draw 3 vertices with an empty VAO; the triangle covers
+// the viewport, so fragment shaders address pixels by gl_FragCoord.
+inline constexpr const char* kFullScreenTriangleVertex = R"(
+void main() {
+    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);
+    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
+}
+)";
+
 // A linked program with uniform setters. Compile/link errors throw GlError with the log and
 // the shader's name.
 class Program {

@@ -6,12 +6,11 @@
 #include <cmath>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <numbers>
 
 namespace ag::gpu {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 const char* kVertex = R"(
 layout(location = 0) in vec3 position;
@@ -38,7 +37,6 @@ uniform sampler2D charts;
 uniform int use_charts;
 uniform sampler2D weights;
 uniform ivec2 tile_origin;
-uniform int resolution;
 uniform int specular;
 out vec4 color;
 void main() {
@@ -60,7 +58,7 @@ double pixel_weight(double x0, double x1, double y0, double y1) {
         for (int i = 0; i < kSub; ++i) {
             const double x = x0 + (i + 0.5) * (x1 - x0) / kSub, y = y0 + (j + 0.5) * (y1 - y0) / kSub;
             const double d = x * x + y * y + 1.0;
-            sum += 1.0 / (kPi * d * d);
+            sum += 1.0 / (std::numbers::pi * d * d);
         }
     return sum * (x1 - x0) * (y1 - y0) / (kSub * kSub);
 }
@@ -69,7 +67,7 @@ double pixel_weight(double x0, double x1, double y0, double y1) {
 
 double hemi_plane_coverage(float half_width) {
     const double a = half_width, s = a / std::sqrt(1.0 + a * a);
-    return 4.0 / kPi * s * std::atan(s);
+    return 4.0 / std::numbers::pi * s * std::atan(s);
 }
 
 std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCorrection correction) {
@@ -88,22 +86,19 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCo
     } else if (correction == BorderCorrection::stretch) {
         // Gautron: directions beyond the plane are pushed radially (same azimuth) onto the
         // border pixel they would leave through; integrate their cosine-weighted solid angle.
-        constexpr int kTheta = 256, kPhi = 1024;
-        const double theta_edge_min = std::atan(a);  // below this the plane covers every azimuth
+        constexpr int kPhi = 1024;
         for (int k = 0; k < kPhi; ++k) {
-            const double phi = (k + 0.5) * 2.0 * kPi / kPhi;
+            const double phi = (k + 0.5) * 2.0 * std::numbers::pi / kPhi;
             const double cx = std::cos(phi), cy = std::sin(phi);
             // Where the azimuth leaves the square: t = a / max(|cx|, |cy|).
             const double t = a / std::max(std::abs(cx), std::abs(cy));
             const double theta_edge = std::atan(t);
             // Cosine-weighted measure of θ ∈ [θ_edge, π/2] at this azimuth: ∫ cos sin dθ dφ / π.
-            const double measure = 0.5 * std::cos(theta_edge) * std::cos(theta_edge) * (2.0 * kPi / kPhi) / kPi;
+            const double measure = 0.5 * std::cos(theta_edge) * std::cos(theta_edge) * (2.0 * std::numbers::pi / kPhi) / std::numbers::pi;
             const double bx = std::clamp(t * cx, -a, a), by = std::clamp(t * cy, -a, a);
             const int i = std::clamp(int((bx + a) / step), 0, r - 1), j = std::clamp(int((by + a) / step), 0, r - 1);
             w[size_t(j) * r + size_t(i)] += measure;
-            (void)theta_edge_min;
         }
-        (void)kTheta;
     }
     return std::vector<float>(w.begin(), w.end());
 }
@@ -169,7 +164,6 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.set("weights", 1);
     program_.set("charts", 2);
     program_.set("use_charts", chart_texture ? 1 : 0);
-    program_.set("resolution", resolution_);
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;

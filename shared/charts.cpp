@@ -12,6 +12,7 @@
 #include <string>
 #include <unordered_map>
 #include <utility>
+#include <numbers>
 
 #include "shared/input_error.h"
 
@@ -21,7 +22,7 @@ namespace {
 using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 using Tri2 = std::array<glm::dvec2, 3>;
 
-constexpr double kDegree = 3.14159265358979323846 / 180.0;
+constexpr double kDegree = std::numbers::pi / 180.0;
 // Charts keep this many texels between their triangles and their rectangle's edge, so every
 // corner UV lies strictly inside the rectangle.
 constexpr double kChartMargin = 0.01;

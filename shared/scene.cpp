@@ -1,7 +1,14 @@
 #include "shared/scene.h"
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <string>
+
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtx/quaternion.hpp>
+
+#include "shared/input_error.h"
 
 namespace ag {
 
@@ -25,9 +32,8 @@ glm::vec3 Light::center() const {
 }
 
 glm::vec3 Light::power() const {
-    constexpr float kPi = 3.14159265358979f;
-    if (type == LightType::point) return 4.0f * kPi * intensity;
-    return kPi * quad_area() * radiance;  // Lambertian emitter: Φ = π L A
+    if (type == LightType::point) return 4.0f * std::numbers::pi_v<float> * intensity;
+    return std::numbers::pi_v<float> * quad_area() * radiance;  // Lambertian emitter: Φ = π L A
 }
 
 int Scene::find_object(const std::string& object_name) const {
@@ -58,6 +64,34 @@ size_t Scene::triangle_count() const {
     size_t n = 0;
     for (const Object& o : objects) n += o.mesh.triangles.size();
     return n;
+}
+
+int quad_light_grid(const Settings& settings) {
+    return std::max(1, int(std::lround(std::sqrt(double(settings.direct.area_light_samples)))));
+}
+
+int light_sample_count(const Scene& scene) {
+    const int grid = quad_light_grid(scene.settings);
+    int count = 0;
+    for (const Light& l : scene.lights) count += l.type == LightType::point ? 1 : grid * grid;
+    return count;
+}
+
+void check_light_samples(const Scene& scene) {
+    const int count = light_sample_count(scene);
+    if (count <= kMaxLightSamples) return;
+    int quads = 0;
+    for (const Light& l : scene.lights) quads += l.type == LightType::quad ? 1 : 0;
+    const int grid = quad_light_grid(scene.settings);
+    throw_input_error(
+        scene.path, "/lights",
+        std::to_string(scene.lights.size() - size_t(quads)) + " point lights and " +
+            std::to_string(quads) + " quad lights of " + std::to_string(grid) + "×" +
+            std::to_string(grid) + " samples (settings/direct/area_light_samples = " +
+            std::to_string(scene.settings.direct.area_light_samples) + ") make " +
+            std::to_string(count) + " light samples; expected at most " +
+            std::to_string(kMaxLightSamples) +
+            ", what the GPU frame holds (use fewer lights or fewer area_light_samples)");
 }
 
 }  // namespace ag

@@ -11,13 +11,15 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "shared/host_device_shared.h"
 #include "shared/lightmap.h"
 #include "shared/mesh.h"
 #include "shared/settings.h"
 
 namespace ag {
 
-enum class MaterialType { diffuse, mirror, glass };
+// Values shared with the frame shaders' `material` uniform (shared/host_device_shared.h).
+enum class MaterialType { diffuse = kMaterialDiffuse, mirror = kMaterialMirror, glass = kMaterialGlass };
 inline constexpr std::array kMaterialTypeNames = {"diffuse", "mirror", "glass"};
 
 // A material. Diffuse albedo is the Lambertian reflectance ρ (BRDF ρ/π); mirrors and glass are
@@ -138,5 +140,15 @@ struct Scene {
     int find_light(const std::string& light_name) const;    // -1 if absent
     size_t triangle_count() const;
 };
+
+// Side n of the n×n grid of point lights that stands in for a quad light on the GPU
+// (n² ≈ settings.direct.area_light_samples).
+int quad_light_grid(const Settings& settings);
+// Point-light samples the GPU frame needs for every light of the scene, enabled or not (an edit
+// may turn any of them on): 1 per point light, n² per quad light.
+int light_sample_count(const Scene& scene);
+// Throws InputError, naming scene.path, where light_sample_count exceeds kMaxLightSamples: the
+// GPU frame holds no more, and dropping lights silently would change the image.
+void check_light_samples(const Scene& scene);
 
 }  // namespace ag

@@ -133,6 +133,7 @@ public:
         read_camera(in_.require(root, "", "camera", "a camera {eye, target, ...}"));
         read_materials(in_.require(root, "", "materials", "an object of named materials"));
         read_lights(in_.require(root, "", "lights", "an array of lights (may be empty)"));
+        check_light_samples(scene_);
         read_objects(in_.require(root, "", "objects", "an array of objects"));
         if (const Json* v = JsonInput::find(root, "script"))
             scene_.script = existing_file(*v, "/script", "Lua script");

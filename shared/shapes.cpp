@@ -5,11 +5,10 @@
 #include <cmath>
 #include <map>
 #include <utility>
+#include <numbers>
 
 namespace ag {
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 
 // Convex shapes centred at the origin: a front face points away from the centre. Fixing the
 // winding from that saves hand-checking every index table.
@@ -114,10 +113,10 @@ Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude,
     glm::vec2 frequency[kWaves];
     float phase[kWaves], weight[kWaves], weight_sum = 0.0f;
     for (int k = 0; k < kWaves; ++k) {
-        const float angle = rng.uniform(0.0f, 2.0f * kPi);
+        const float angle = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
         const float cycles = rng.uniform(1.5f, 4.0f);
-        frequency[k] = 2.0f * kPi * cycles * glm::vec2(std::cos(angle), std::sin(angle));
-        phase[k] = rng.uniform(0.0f, 2.0f * kPi);
+        frequency[k] = 2.0f * std::numbers::pi_v<float> * cycles * glm::vec2(std::cos(angle), std::sin(angle));
+        phase[k] = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
         weight[k] = rng.uniform(0.5f, 1.0f);
         weight_sum += weight[k];
     }
@@ -125,7 +124,7 @@ Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude,
         float h = 0.0f;
         for (int k = 0; k < kWaves; ++k)
             h += weight[k] * std::sin(frequency[k].x * u + frequency[k].y * v + phase[k]);
-        return amplitude * std::sin(kPi * u) * std::sin(kPi * v) * h / weight_sum;
+        return amplitude * std::sin(std::numbers::pi_v<float> * u) * std::sin(std::numbers::pi_v<float> * v) * h / weight_sum;
     };
 
     Mesh mesh;

@@ -2,6 +2,7 @@
 #include "cpu/aim.h"
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "cpu/photon_simulation.h"
 #include "test_scenes.h"
@@ -29,7 +30,7 @@ TEST(Aim, PlaneUnderPointLightMatchesAnalyticRadiance) {
         if (std::abs(p.x) > 0.5f * half || std::abs(p.z) > 0.5f * half) continue;  // away from edges
         const double d = glm::length(glm::vec3(0, h, 0) - p);
         const double e = intensity * (h / d) / (d * d);  // I cosθ / d²
-        const double expected = albedo / 3.14159265358979 * e;
+        const double expected = albedo / std::numbers::pi * e;
         const glm::vec3 got = aim.radiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)];
         const double rel = std::abs(got.x - expected) / expected;
         worst = std::max(worst, rel);

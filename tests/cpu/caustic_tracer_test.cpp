@@ -4,6 +4,7 @@
 #include <algorithm>
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "test_scenes.h"
 
@@ -108,7 +109,7 @@ TEST(CausticTracer, OnlySpecularPathsAreStoredAndPowerIsConserved) {
         EXPECT_GT(p.normal.y, 0.99f);
         total += p.power.x;
     }
-    const double d = 2000.0, cone = 2.0 * 3.14159265358979 * (1.0 - std::sqrt(1.0 - 1.0 / (d * d)));
+    const double d = 2000.0, cone = 2.0 * std::numbers::pi * (1.0 - std::sqrt(1.0 - 1.0 / (d * d)));
     EXPECT_LE(total, 1e6 * cone * 1.0001);
     EXPECT_GT(total, 0.8 * 1e6 * cone);  // glass passes most light (Fresnel losses ~ 10%)
 }

@@ -10,6 +10,7 @@
 #include <memory>
 #include <numeric>
 #include <random>
+#include <numbers>
 
 #include "cpu/aim.h"
 #include "cpu/photon_simulation.h"
@@ -19,8 +20,6 @@
 namespace ag::cpu {
 
 namespace {
-
-constexpr double kPi = 3.14159265358979323846;
 
 size_t atlas_index(const LightmapAtlas& atlas, const TexelRecord& t) {
     return size_t(t.y) * size_t(atlas.width) + size_t(t.x);
@@ -51,7 +50,7 @@ Object quad_object(const std::string& name, float size, const glm::vec3& transla
     return o;
 }
 
-const glm::quat kFacingDown = glm::angleAxis(float(kPi), glm::vec3(1.0f, 0.0f, 0.0f));
+const glm::quat kFacingDown = glm::angleAxis(float(std::numbers::pi), glm::vec3(1.0f, 0.0f, 0.0f));
 
 Scene finish(Scene s, float texel_size) {
     s.settings.lightmap.texel_size = texel_size;
@@ -65,7 +64,7 @@ Scene finish(Scene s, float texel_size) {
 // odd in each), the classic differential-area-to-rectangle form factor.
 double corner_form_factor(double x, double y) {
     const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
-    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * kPi);
+    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * std::numbers::pi);
 }
 
 // Form factor of a point at (px, pz) to the square [-a, a]² at height h above it.

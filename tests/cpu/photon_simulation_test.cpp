@@ -10,6 +10,7 @@
 #include <utility>
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "cpu/aim.h"
 #include "test_scenes.h"
@@ -419,7 +420,7 @@ TEST(SelectiveTracing, ClosedBoxStoresPhiOverOneMinusRho) {
         sim.trace_all();
         glm::dvec3 total(0.0);
         for (int s = 0; s < int(sim.maps().surface_count()); ++s) total += sim.maps().surface(s).flux;
-        const double phi = 4.0 * 3.14159265358979 * intensity;
+        const double phi = 4.0 * std::numbers::pi * intensity;
         EXPECT_NEAR(total.x / (phi / (1.0 - rho)), 1.0, 0.01) << "rho " << rho;
         std::printf("closed box rho %.1f: stored flux / (phi / (1 - rho)) = %.5f\n", double(rho), total.x / (phi / (1.0 - rho)));
         EXPECT_NEAR(total.y, total.x, 1e-9 * total.x);

@@ -1,6 +1,6 @@
 // Reference renderers (docs/reference.md): known answers first (furnace, analytic direct light and
 // mirror caustics), then path tracing against photon mapping on the Cornell scene.
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 #include <gtest/gtest.h>
 
@@ -8,6 +8,7 @@
 #include <cstdlib>
 #include <functional>
 #include <glm/gtc/quaternion.hpp>
+#include <numbers>
 
 #include "shared/camera.h"
 #include "shared/metrics.h"
@@ -16,8 +17,6 @@
 namespace ag::cpu {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 
 glm::vec3 image_mean(const Image& image) {
     glm::dvec3 sum(0.0);
@@ -61,7 +60,7 @@ Object quad_object(const std::string& name, float size, float height, bool facin
     o.material.type = type;
     o.material.albedo = glm::vec3(albedo);
     o.transform.translation = {0.0f, height, 0.0f};
-    if (facing_down) o.transform.rotation = glm::angleAxis(kPi, glm::vec3(1.0f, 0.0f, 0.0f));
+    if (facing_down) o.transform.rotation = glm::angleAxis(std::numbers::pi_v<float>, glm::vec3(1.0f, 0.0f, 0.0f));
     return o;
 }
 
@@ -138,7 +137,7 @@ float point_lit_radiance(const glm::vec3& p, const glm::vec3& n, const glm::vec3
                          float intensity, float albedo) {
     const glm::vec3 to = light - p;
     const float d2 = glm::dot(to, to);
-    return albedo / kPi * intensity * std::abs(glm::dot(n, to)) / std::sqrt(d2) / d2;
+    return albedo / std::numbers::pi_v<float> * intensity * std::abs(glm::dot(n, to)) / std::sqrt(d2) / d2;
 }
 
 bool slow_tests() {
@@ -163,15 +162,15 @@ TEST(Reference, FurnacePathTracerGivesLeOverOneMinusAlbedo) {
     const float albedo = 0.5f, le = 1.0f;
     const ReferenceResult r = render(furnace(albedo, le), pt(256));
     const glm::vec3 full = image_mean(r.full);
-    const glm::vec3 direct = image_mean(r.components[size_t(Component::direct)]);
-    const glm::vec3 indirect = image_mean(r.components[size_t(Component::indirect)]);
+    const glm::vec3 direct = image_mean(r.components[size_t(FrameTerm::direct)]);
+    const glm::vec3 indirect = image_mean(r.components[size_t(FrameTerm::indirect)]);
     for (int c = 0; c < 3; ++c) {
         EXPECT_NEAR(full[c], le / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
         EXPECT_NEAR(direct[c], le, 1e-5f);  // x's own emission
         EXPECT_NEAR(indirect[c], le * albedo / (1.0f - albedo), 0.01f * le / (1.0f - albedo));
     }
-    EXPECT_EQ(image_mean(r.components[size_t(Component::caustics)]), glm::vec3(0.0f));
-    EXPECT_EQ(image_mean(r.components[size_t(Component::specular)]), glm::vec3(0.0f));
+    EXPECT_EQ(image_mean(r.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
+    EXPECT_EQ(image_mean(r.components[size_t(FrameTerm::specular)]), glm::vec3(0.0f));
     EXPECT_EQ(r.spp, 256);
 }
 
@@ -188,7 +187,7 @@ TEST(Reference, PointLightDirectMatchesAnalytic) {
     };
     for (const ReferenceSettings& settings : {pt(64), pm(64, 20000, 1)}) {
         const ReferenceResult r = render(scene, settings);
-        const Image& direct = r.components[size_t(Component::direct)];
+        const Image& direct = r.components[size_t(FrameTerm::direct)];
         for (int y = 0; y < size; ++y)
             for (int x = 0; x < size; ++x) {
                 const float expected = pixel_mean(scene.camera, x, y, 0.0f, lit);
@@ -205,10 +204,10 @@ TEST(Reference, QuadLightDirectMatchesAnalytic) {
     scene.lights.push_back(quad_light(side, height, radiance));
     // Close above the floor's centre, below the light (lights are invisible to camera rays).
     scene.camera = looking_at({0.0f, 0.5f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 4.0f, 5);
-    const float expected = albedo / kPi * square_irradiance(radiance, 0.5f * side, height);
+    const float expected = albedo / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, height);
     for (const ReferenceSettings& settings : {pt(256), pm(16, 20000, 16)}) {
         const ReferenceResult r = render(scene, settings);
-        EXPECT_NEAR(image_mean(r.components[size_t(Component::direct)]).r, expected,
+        EXPECT_NEAR(image_mean(r.components[size_t(FrameTerm::direct)]).r, expected,
                     0.01f * expected);
     }
 }
@@ -248,17 +247,17 @@ TEST(Reference, PointLightCausticsComeFromPhotonMappingOnly) {
     expected_caustic /= float(scene.camera.width * scene.camera.height);
 
     const ReferenceResult path = render(scene, pt(16));
-    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
-    EXPECT_NEAR(image_mean(path.components[size_t(Component::direct)]).r, expected_direct,
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
+    EXPECT_NEAR(image_mean(path.components[size_t(FrameTerm::direct)]).r, expected_direct,
                 0.01f * expected_direct);
 
     ReferenceSettings settings = pm(4, 2000, 1);
     settings.caustic_photons = 1600000;
     settings.caustic_knn = 200;
     const ReferenceResult photons = render(scene, settings);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::direct)]).r, expected_direct,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::direct)]).r, expected_direct,
                 0.01f * expected_direct);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected_caustic,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, expected_caustic,
                 0.03f * expected_caustic);
 }
 
@@ -268,12 +267,12 @@ TEST(Reference, PointLightCausticsComeFromPhotonMappingOnly) {
 TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
     const float radiance = 2.0f, side = 1.0f;
     const Scene scene = mirror_room(quad_light(side, 1.0f, radiance));
-    const float expected = 0.5f / kPi * square_irradiance(radiance, 0.5f * side, 3.0f);
+    const float expected = 0.5f / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, 3.0f);
 
     const ReferenceResult path = render(scene, pt(1024));
-    EXPECT_NEAR(image_mean(path.components[size_t(Component::caustics)]).r, expected,
+    EXPECT_NEAR(image_mean(path.components[size_t(FrameTerm::caustics)]).r, expected,
                 0.03f * expected);
-    EXPECT_EQ(image_mean(path.components[size_t(Component::direct)]),
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::direct)]),
               glm::vec3(0.0f));  // faces away
 
     // One density estimate covers the small patch the camera sees: k = 2000 photons, ~2% noise.
@@ -281,7 +280,7 @@ TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
     settings.caustic_photons = 1600000;
     settings.caustic_knn = 2000;
     const ReferenceResult photons = render(scene, settings);
-    EXPECT_NEAR(image_mean(photons.components[size_t(Component::caustics)]).r, expected,
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, expected,
                 0.05f * expected);
 }
 
@@ -293,9 +292,9 @@ TEST(Reference, ComponentsSumToFullAndResultIgnoresThreadCount) {
         const ReferenceResult a = render(small, settings, 1);
         const ReferenceResult b = render(small, settings, 3);
         EXPECT_EQ(a.full.pixels, b.full.pixels);
-        for (int c = 0; c < kComponentCount; ++c)
-            EXPECT_EQ(a.components[size_t(c)].pixels, b.components[size_t(c)].pixels)
-                << kComponentNames[size_t(c)];
+        for (FrameTerm t : kFrameTerms)
+            EXPECT_EQ(a.components[size_t(t)].pixels, b.components[size_t(t)].pixels)
+                << frame_term_name(t);
         for (int y = 0; y < 16; ++y)
             for (int x = 0; x < 16; ++x) {
                 glm::vec3 sum(0.0f);
@@ -329,8 +328,8 @@ TEST(Reference, CornellIndirectPathTracingAgreesWithPhotonMapping) {
     scene.camera.width = scene.camera.height = slow ? 48 : 32;
     const ReferenceResult path = render(scene, pt(slow ? 32768 : 4096));
     const ReferenceResult photons = render(scene, pm(slow ? 128 : 32, slow ? 1000000 : 300000, 64));
-    const Image& a = photons.components[size_t(Component::indirect)];
-    const Image& b = path.components[size_t(Component::indirect)];
+    const Image& a = photons.components[size_t(FrameTerm::indirect)];
+    const Image& b = path.components[size_t(FrameTerm::indirect)];
     const double pixel_rel_mse = compare_images(a, b).rel_mse, block = block_rel_mse(a, b, 2);
     std::printf(
         "Cornell indirect, %dx%d: relMSE(pm, pt) = %.5f per pixel, %.5f on 2x2 blocks (pt %d spp "
@@ -345,8 +344,8 @@ TEST(Reference, CornellIndirectPathTracingAgreesWithPhotonMapping) {
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(ma[c], mb[c], 0.04f * mb[c]);
     // Photon mapping's caustic component is the light focused by the sphere; the path tracer has
     // none.
-    EXPECT_GT(image_mean(photons.components[size_t(Component::caustics)]).r, 0.0f);
-    EXPECT_EQ(image_mean(path.components[size_t(Component::caustics)]), glm::vec3(0.0f));
+    EXPECT_GT(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, 0.0f);
+    EXPECT_EQ(image_mean(path.components[size_t(FrameTerm::caustics)]), glm::vec3(0.0f));
 }
 
 }  // namespace ag::cpu

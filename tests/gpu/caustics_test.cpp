@@ -4,6 +4,7 @@
 #include <random>
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "gl_fixture.h"
 #include "shared/charts.h"
@@ -85,7 +86,7 @@ TEST_F(CausticsTest, SummedWorldRadianceHoldsWhenTheCameraZoomsOut) {
         sums[i] = sum;
     }
     // All the flux lands on the floor: ∫ L dA = ρ/π · Φ at any zoom.
-    const double expected = 0.6 / 3.14159265358979 * 1.0;
+    const double expected = 0.6 / std::numbers::pi * 1.0;
     std::printf("∫L dA at x1: %.4f, at x2: %.4f, expected %.4f\n", sums[0], sums[1], expected);
     EXPECT_NEAR(sums[1] / sums[0], 1.0, 0.10);
     EXPECT_NEAR(sums[0] / expected, 1.0, 0.10);

@@ -1,12 +1,15 @@
-// The composed frame (Larsen ch. 13): shadow volumes and the AOV sum.
+// The composed frame (Larsen ch. 13): shadow volumes, the sum of the eq. 13.2 terms, and the
+// light-sample limit.
 #include "gpu/frame_renderer.h"
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "gl_fixture.h"
 #include "gpu/lightmap_texture.h"
 #include "shared/camera.h"
 #include "shared/charts.h"
+#include "shared/input_error.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
@@ -62,19 +65,19 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
     FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
     renderer.render(iim.id());
     const FrameImages images = renderer.read_back();
-    const Image& direct = images.aov[size_t(Aov::direct)];
+    const Image& direct = images.aov[size_t(FrameTerm::direct)];
     const glm::ivec2 under = project(scene.camera, {0.0f, 0.0f, 0.0f});
     const glm::ivec2 beside = project(scene.camera, {3.0f, 0.0f, 0.0f});
     EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f)) << "pixel " << under.x << "," << under.y;
     // Beside: ρ/π · I cosθ / d² with ρ = 0.75, d² = 9 + 25, cosθ = 5/√34.
-    const float d2 = 34.0f, expected = 0.75f / 3.14159265f * 25.0f * (5.0f / std::sqrt(d2)) / d2;
+    const float d2 = 34.0f, expected = 0.75f / std::numbers::pi_v<float> * 25.0f * (5.0f / std::sqrt(d2)) / d2;
     EXPECT_NEAR(direct.rgb(beside.x, beside.y).x, expected, 0.03f * expected);
     // Switching shadows off lights the point under the box too.
     Scene unshadowed = scene;
     unshadowed.settings.direct.shadows = false;
     FrameRenderer plain(unshadowed, meshes, scene.camera.width, scene.camera.height);
     plain.render(iim.id());
-    EXPECT_GT(plain.read_back().aov[size_t(Aov::direct)].rgb(under.x, under.y).x, 0.1f * expected);
+    EXPECT_GT(plain.read_back().aov[size_t(FrameTerm::direct)].rgb(under.x, under.y).x, 0.1f * expected);
 }
 
 TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
@@ -87,18 +90,41 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     FrameRenderer renderer(scene, meshes, 96, 96);
     renderer.render(iim.id());
     const FrameImages images = renderer.read_back();
-    double terms[4] = {0, 0, 0, 0};
+    std::array<double, kFrameTermCount> terms{};
     for (size_t i = 0; i < images.frame.pixels.size(); ++i) {
         float sum = 0.0f;
-        for (size_t a = 0; a < 4; ++a) {
-            sum += images.aov[a].pixels[i];
-            terms[a] += images.aov[a].pixels[i];
+        for (FrameTerm t : kFrameTerms) {
+            sum += images.aov[size_t(t)].pixels[i];
+            terms[size_t(t)] += images.aov[size_t(t)].pixels[i];
         }
         ASSERT_NEAR(images.frame.pixels[i], sum, 1e-5f * std::max(1.0f, sum)) << "pixel value " << i;
     }
-    EXPECT_GT(terms[size_t(Aov::direct)], 0.0);
-    EXPECT_GT(terms[size_t(Aov::indirect)], 0.0);
-    EXPECT_GT(terms[size_t(Aov::specular)], 0.0);  // the glass sphere
+    EXPECT_GT(terms[size_t(FrameTerm::direct)], 0.0);
+    EXPECT_GT(terms[size_t(FrameTerm::indirect)], 0.0);
+    EXPECT_GT(terms[size_t(FrameTerm::specular)], 0.0);  // the glass sphere
+    EXPECT_EQ(terms[size_t(FrameTerm::caustics)], 0.0);  // none passed to render()
+}
+
+// Settings changed after loading (flags, the viewer) may ask for more light samples than the frame
+// holds: an InputError naming the scene, never a silently cut light list.
+TEST_F(FrameTest, TooManyLightSamplesAreAnErrorNotACut) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    SceneMeshes meshes(scene);
+    scene.lights.resize(1);
+    scene.lights[0].type = LightType::quad;
+    scene.lights[0].corners = {glm::vec3(0, 1, 0), glm::vec3(1, 1, 0), glm::vec3(1, 1, 1),
+                               glm::vec3(0, 1, 1)};
+    scene.settings.direct.area_light_samples = kMaxLightSamples;  // an 8×8 grid: just fits
+    EXPECT_EQ(int(light_samples(scene).size()), kMaxLightSamples);
+    scene.settings.direct.area_light_samples = 81;
+    try {
+        FrameRenderer renderer(scene, meshes, 8, 8);
+        FAIL() << "81 light samples accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("cornell.json: /lights: "), std::string::npos)
+            << e.what();
+    }
+    EXPECT_THROW(light_samples(scene), InputError);
 }
 
 }  // namespace ag::gpu

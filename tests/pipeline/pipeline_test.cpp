@@ -55,7 +55,7 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     }
     const gpu::FrameImages after = pipeline.images();
     for (size_t a = 0; a < after.aov.size(); ++a)
-        EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << gpu::kAovNames[a];
+        EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << kFrameTermNames[a];
     EXPECT_EQ(before.frame.pixels, after.frame.pixels);
 }
 
@@ -210,7 +210,7 @@ TEST_F(PipelineTest, AScreenSpaceTermComposesLikeTheLightmap) {
     lightmap.update_all(std::vector<glm::vec3>(
         size_t(scene.atlas.width) * size_t(scene.atlas.height), value));
     renderer.render(gpu::IndirectTerm{lightmap.id(), gpu::IndirectSpace::lightmap});
-    const Image in_lightmap = renderer.read_back().aov[size_t(gpu::Aov::indirect)];
+    const Image in_lightmap = renderer.read_back().aov[size_t(FrameTerm::indirect)];
 
     gpu::Texture screen = gpu::make_texture();
     std::vector<float> rgba(size_t(w) * size_t(h) * 4);
@@ -221,7 +221,7 @@ TEST_F(PipelineTest, AScreenSpaceTermComposesLikeTheLightmap) {
     gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
     gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     renderer.render(gpu::IndirectTerm{screen.get(), gpu::IndirectSpace::screen});
-    const Image in_screen = renderer.read_back().aov[size_t(gpu::Aov::indirect)];
+    const Image in_screen = renderer.read_back().aov[size_t(FrameTerm::indirect)];
 
     ASSERT_EQ(in_screen.pixels.size(), in_lightmap.pixels.size());
     int lit = 0;

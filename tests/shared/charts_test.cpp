@@ -12,13 +12,12 @@
 #include <cstdio>
 #include <map>
 #include <set>
+#include <numbers>
 
 #include "shared/shapes.h"
 
 namespace ag {
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 
 // A box whose faces do not share vertices (as exported with per-face normals): surfaces must
 // still be found across its edges by welding equal positions.
@@ -36,7 +35,7 @@ Mesh make_face_split_box(const glm::vec3& size) {
 // Two unit quads sharing the edge x = 0 (along Z): one in the XZ plane facing +Y, one rotated
 // up about that edge by `fold_deg` (0 = flat, 90 = a right-angle corner).
 Mesh make_folded_quads(float fold_deg) {
-    const float a = fold_deg * kPi / 180.0f;
+    const float a = fold_deg * std::numbers::pi_v<float> / 180.0f;
     Mesh mesh;
     mesh.positions = {{0, 0, 0},
                       {0, 0, 1},
@@ -54,7 +53,7 @@ Mesh make_spiral_ramp(float turns, int segments_per_turn, float rise_per_turn) {
     Mesh mesh;
     const int segments = int(turns * float(segments_per_turn));
     for (int i = 0; i <= segments; ++i) {
-        const float a = 2.0f * kPi * float(i) / float(segments_per_turn);
+        const float a = 2.0f * std::numbers::pi_v<float> * float(i) / float(segments_per_turn);
         const float y = rise_per_turn * float(i) / float(segments_per_turn);
         mesh.positions.push_back({1.0f * std::cos(a), y, 1.0f * std::sin(a)});
         mesh.positions.push_back({2.0f * std::cos(a), y, 2.0f * std::sin(a)});
@@ -248,7 +247,7 @@ TEST(Charts, CoverEveryTriangleExactlyOnce) {
 TEST(Charts, NormalsStayWithinTheCone) {
     for (const auto& [name, scene] : invariant_scenes()) {
         SCOPED_TRACE(name);
-        const float cos_cone = std::cos(scene.settings.lightmap.chart_cone * kPi / 180.0f);
+        const float cos_cone = std::cos(scene.settings.lightmap.chart_cone * std::numbers::pi_v<float> / 180.0f);
         for (const Chart& chart : scene.atlas.charts) {
             EXPECT_NEAR(glm::length(chart.axis), 1.0f, 1e-5f);
             EXPECT_NEAR(glm::dot(glm::cross(chart.u_axis, chart.v_axis), chart.axis), 1.0f, 1e-5f);

@@ -1,6 +1,7 @@
 #include "shared/scene_edit.h"
 
 #include <gtest/gtest.h>
+#include <numbers>
 
 #include "shared/input_error.h"
 
@@ -83,8 +84,8 @@ TEST(SceneEdit, QuadLightMovesAsAWholeAndColourGoesToRadiance) {
     EXPECT_NEAR(s.lights[1].quad_area(), 4.0f, 1e-6f);
     set_light_color(s, 1, {2, 2, 2});
     EXPECT_EQ(s.lights[1].radiance, glm::vec3(2.0f));
-    EXPECT_NEAR(s.lights[1].power().x, 3.14159265f * 4.0f * 2.0f, 1e-4f);
-    EXPECT_NEAR(s.lights[0].power().x, 4.0f * 3.14159265f * 10.0f, 1e-3f);
+    EXPECT_NEAR(s.lights[1].power().x, std::numbers::pi_v<float> * 4.0f * 2.0f, 1e-4f);
+    EXPECT_NEAR(s.lights[0].power().x, 4.0f * std::numbers::pi_v<float> * 10.0f, 1e-3f);
 }
 
 TEST(SceneEdit, BadEditsAreInputErrorsAndChangeNothing) {

@@ -385,6 +385,22 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
     EXPECT_GE(messages.size(), 12u);
 }
 
+TEST_F(SceneFile, MoreLightSamplesThanTheGpuFrameHoldsAreRejected) {
+    // An 8×8 grid for the quad light: exactly kMaxLightSamples alone, one too many with the lamp,
+    // disabled or not (a script may turn it on). Never cut silently.
+    Json j = base_scene();
+    j["settings"]["direct"]["area_light_samples"] = 64;
+    Json quad_only = j;
+    quad_only["lights"].erase(0);
+    EXPECT_EQ(load_error("at_limit.json", quad_only.dump(2)), "");
+    EXPECT_EQ(light_sample_count(load_scene((dir_ / "at_limit.json").string())), kMaxLightSamples);
+    j["lights"][0]["enabled"] = false;
+    const std::string err = load_error("too_many.json", j.dump(2));
+    EXPECT_NE(err.find("too_many.json: /lights: "), std::string::npos) << err;
+    EXPECT_NE(err.find("make 65 light samples; expected at most 64"), std::string::npos) << err;
+    EXPECT_NE(err.find("area_light_samples = 64"), std::string::npos) << err;
+}
+
 TEST_F(SceneFile, DuplicateJsonKeysAreRejected) {
     const std::string err = load_error(
         "dup.json", R"({"camera": {"eye": [0, 0, 1], "eye": [0, 0, 2], "target": [0, 0, 0]}})");

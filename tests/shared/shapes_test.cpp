@@ -6,11 +6,10 @@
 #include <cmath>
 #include <map>
 #include <utility>
+#include <numbers>
 
 namespace ag {
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 
 // Every face of a convex shape centred at the origin faces away from the centre.
 void expect_outward(const Mesh& mesh) {
@@ -57,7 +56,7 @@ TEST(Shapes, SphereTriangleCountAndAreaApproachTheSphere) {
         expect_closed_and_consistent(sphere);
     }
     // An inscribed polyhedron falls short of 4πr² by O(4^-s).
-    const float exact = 4.0f * kPi * 4.0f;
+    const float exact = 4.0f * std::numbers::pi_v<float> * 4.0f;
     EXPECT_LT(mesh_area(make_sphere(2.0f, 0)), 0.8f * exact);
     EXPECT_NEAR(mesh_area(make_sphere(2.0f, 3)), exact, 0.01f * exact);
     EXPECT_NEAR(mesh_area(make_sphere(2.0f, 5)), exact, 0.001f * exact);

@@ -9,8 +9,9 @@
 #include <optional>
 #include <sstream>
 
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 #include "gpu/gl_context.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/metrics.h"
@@ -37,8 +38,13 @@ const Command kConvergeCommand{
              "reference image (its .COMPONENT.exr beside it is used for --component)"),
         integer("frames,n", "N", "frames to run", 1, 1000000, 120),
         size_option("image size", "96x96"),
-        choice("component", "NAME", "the component compared:",
-               {"full", "direct", "indirect", "caustics", "specular"}, "indirect"),
+        choice("component", "NAME", "the component compared (a frame term, or full):",
+               [] {
+                   std::vector<std::string> names{"full"};
+                   names.insert(names.end(), kFrameTermNames.begin(), kFrameTermNames.end());
+                   return names;
+               }(),
+               "indirect"),
         choice("baseline", "MODE", "full recomputes everything every frame:", {"selective", "full"},
                "selective"),
         text("csv", "FILE.csv", "where to write the per-frame record (default out/NAME.MODE.csv)"),
@@ -143,8 +149,8 @@ int run_converge(const Args& args) {
                       << rs.photons << " photons) into " << reference_path << "\n";
             ThreadPool pool(threads);
             const cpu::ReferenceResult ref = cpu::render_reference(final_state, rs, pool);
-            for (int c = 0; c < cpu::kComponentCount; ++c)
-                write_image(ref.components[size_t(c)], component_path(reference_path, cpu::kComponentNames[size_t(c)]));
+            for (int c = 0; c < kFrameTermCount; ++c)
+                write_image(ref.components[size_t(c)], component_path(reference_path, kFrameTermNames[size_t(c)]));
             write_image(ref.full, reference_path);
         } else {
             std::cerr << "afterglow converge: reference from the cache: " << reference_path << "\n";
@@ -179,10 +185,7 @@ int run_converge(const Args& args) {
         // Metrics are taken outside the timed part.
         const gpu::FrameImages images = pipeline.images();
         const Image& test = component == "full" ? images.frame
-                            : component == "direct"   ? images.aov[size_t(gpu::Aov::direct)]
-                            : component == "indirect" ? images.aov[size_t(gpu::Aov::indirect)]
-                            : component == "caustics" ? images.aov[size_t(gpu::Aov::caustics)]
-                                                      : images.aov[size_t(gpu::Aov::specular)];
+                                                : images.aov[size_t(*parse_frame_term(component))];
         const ImageMetrics m = compare_images(test, reference);
         const bool edited = loop.edited();
         errors.push_back(m.rel_mse);

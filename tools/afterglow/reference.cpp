@@ -1,6 +1,6 @@
 // afterglow reference SCENE --method pt|pm -o ref.exr: reference images for the GPU frame (path
 // tracing or traditional photon mapping, Larsen ch. 4 and Fig. 14.3/14.5), split by component.
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 #include <unistd.h>
 
@@ -119,9 +119,9 @@ int run_reference(const Args& args) {
 
     const std::string stem = out.substr(0, out.size() - 4);
     write_image(result.full, out);
-    for (int c = 0; c < cpu::kComponentCount; ++c)
+    for (int c = 0; c < kFrameTermCount; ++c)
         write_image(result.components[size_t(c)],
-                    stem + "." + cpu::kComponentNames[size_t(c)] + ".exr");
+                    stem + "." + kFrameTermNames[size_t(c)] + ".exr");
     write_image(result.full, stem + ".png", 0.0f);
 
     std::cout << "reference " << method << ": " << scene.camera.width << " x "

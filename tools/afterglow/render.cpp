@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "gpu/gl_context.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/script.h"
@@ -26,7 +27,7 @@ const Command kRenderCommand{
              "the EXR to write; a PNG with the same stem is written beside it"),
         integer("frames,n", "N", "frames to run", 1, 1000000, 30),
         size_option("image size (default: the scene camera's resolution)"),
-        flag("aov", "also write OUT.direct.exr, .indirect, .specular, .caustics (and PNGs)"),
+        flag("aov", "also write OUT.direct.exr, .indirect, .caustics, .specular (and PNGs)"),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
         gather_option(),
@@ -91,7 +92,7 @@ int run_render(const Args& args) {
     write_image(images.frame, with_suffix(out, "", ".png"), exposure);
     if (args.has("aov"))
         for (size_t a = 0; a < images.aov.size(); ++a) {
-            const std::string suffix = std::string(".") + gpu::kAovNames[a];
+            const std::string suffix = std::string(".") + kFrameTermNames[a];
             write_image(images.aov[a], with_suffix(out, suffix, ".exr"));
             write_image(images.aov[a], with_suffix(out, suffix, ".png"), exposure);
         }

@@ -824,16 +824,16 @@ int Viewer::run() {
                 source = pipeline_->renderer().frame_texture();
                 break;
             case ViewMode::direct:
-                source = pipeline_->renderer().aov_texture(gpu::Aov::direct);
+                source = pipeline_->renderer().aov_texture(FrameTerm::direct);
                 break;
             case ViewMode::indirect:
-                source = pipeline_->renderer().aov_texture(gpu::Aov::indirect);
+                source = pipeline_->renderer().aov_texture(FrameTerm::indirect);
                 break;
             case ViewMode::caustics:
-                source = pipeline_->renderer().aov_texture(gpu::Aov::caustics);
+                source = pipeline_->renderer().aov_texture(FrameTerm::caustics);
                 break;
             case ViewMode::specular:
-                source = pipeline_->renderer().aov_texture(gpu::Aov::specular);
+                source = pipeline_->renderer().aov_texture(FrameTerm::specular);
                 break;
             case ViewMode::aim:
                 source = pipeline_->aim_texture();

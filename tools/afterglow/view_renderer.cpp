@@ -4,13 +4,11 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "shared/camera.h"
+#include "shared/host_device_shared.h"
 
 namespace ag::cli {
 
 namespace {
-
-constexpr int kIdTextureWidth = 4096;  // surface ids of all triangles, row by row
-
 
 // mode 0: an atlas (AIM radiance or IIM) on the scene, plus emission; 1: surfaces in unique
 // colours; 2: a flat tint (the selection).
@@ -38,7 +36,7 @@ void main() {
         return;
     }
     int t = triangle_offset + gl_PrimitiveID;
-    float id = texelFetch(surface_ids, ivec2(t % 4096, t / 4096), 0).r;
+    float id = texelFetch(surface_ids, ivec2(t % kIdTextureWidth, t / kIdTextureWidth), 0).r;
     // Golden-ratio hues: neighbouring ids get far-apart colours.
     vec3 c = hsv(fract(id * 0.618034 + 0.1), 0.6 + 0.3 * fract(id * 0.377), 0.9);
     float shade = 0.35 + 0.65 * abs(dot(normalize(v_normal), normalize(eye - v_world)));
@@ -46,12 +44,6 @@ void main() {
 }
 )";
 
-const char* kFullScreenVertex = R"(
-void main() {
-    vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2);  // full-screen triangle
-    gl_Position = vec4(2.0 * p - 1.0, 0.0, 1.0);
-}
-)";
 const char* kCopyFragment = R"(
 uniform sampler2D source;
 out vec4 color;
@@ -106,9 +98,9 @@ ViewRenderer::ViewRenderer(const Scene& scene, const gpu::SceneMeshes& meshes, i
                            int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     scene_program_ = gpu::Program("view scene", gpu::kSceneVertex, kSceneFragment);
-    copy_program_ = gpu::Program("view copy", kFullScreenVertex, kCopyFragment);
+    copy_program_ = gpu::Program("view copy", gpu::kFullScreenTriangleVertex, kCopyFragment);
     points_program_ = gpu::Program("view points", kPointsVertex, kPointsFragment);
-    present_program_ = gpu::Program("view present", kFullScreenVertex, kPresentFragment);
+    present_program_ = gpu::Program("view present", gpu::kFullScreenTriangleVertex, kPresentFragment);
 
     display_ = gpu::make_float_texture(width, height);
     gpu::gl::BindTexture(GL_TEXTURE_2D, display_.get());

@@ -1,4 +1,4 @@
-// The viewport of `afterglow view`: shows the composed frame or one term of eq. 13.1 (the
+// The viewport of `afterglow view`: shows the composed frame or one term of eq. 13.2 (the
 // pipeline's AOV textures), or draws diagnostic views of its own (AIM or IIM on the scene,
 // surfaces in unique colours), with points over it (photons, gather centres, lights) and the
 // selection tinted; then puts the result in the window with exposure and the sRGB curve.

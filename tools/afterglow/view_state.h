@@ -9,14 +9,27 @@
 #include <string>
 #include <vector>
 
+#include "shared/frame_terms.h"
 #include "shared/settings.h"
 
 namespace ag::cli {
 
-// What the viewport shows: the composed frame, one term of eq. 13.1, or a diagnostic view.
-enum class ViewMode { frame, direct, indirect, caustics, specular, aim, iim, surfaces };
-inline constexpr std::array kViewModeNames = {"frame",    "direct", "indirect", "caustics",
-                                              "specular", "aim",    "iim",      "surfaces"};
+// What the viewport shows: the composed frame, one term of eq. 13.2 (in FrameTerm order, named
+// from kFrameTermNames), or a diagnostic view.
+enum class ViewMode {
+    frame,
+    direct = 1 + kFrameTermDirect,
+    indirect = 1 + kFrameTermIndirect,
+    caustics = 1 + kFrameTermCaustics,
+    specular = 1 + kFrameTermSpecular,
+    aim = 1 + kFrameTermCount,
+    iim,
+    surfaces
+};
+inline constexpr std::array kViewModeNames = {
+    "frame",           kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2],
+    kFrameTermNames[3], "aim",             "iim",              "surfaces"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::surfaces) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };

@@ -1,4 +1,4 @@
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 #include <algorithm>
 #include <atomic>
@@ -9,88 +9,16 @@
 #include <mutex>
 #include <stdexcept>
 
-#include "cpu/path_tracer.h"
-#include "cpu/photon_mapper.h"
+#include "cpu/reference/path_tracer.h"
+#include "cpu/reference/photon_mapper.h"
 
 namespace ag::cpu {
 
 namespace {
 
-constexpr float kPi = 3.14159265358979f;
-constexpr float kOneBelowOne = 0x1.fffffep-1f;
 constexpr int kTileSize = 16;
 
-
-float to_unit(uint64_t h) { return float(h >> 40) * (1.0f / 16777216.0f); }
-
 }  // namespace
-
-
-glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u) {
-    const float a = 2.0f * u.x - 1.0f, b = 2.0f * u.y - 1.0f;
-    if (a == 0.0f && b == 0.0f) return {0.0f, 0.0f, 1.0f};
-    float r, phi;
-    if (std::abs(a) > std::abs(b)) {
-        r = a;
-        phi = 0.25f * kPi * (b / a);
-    } else {
-        r = b;
-        phi = 0.5f * kPi - 0.25f * kPi * (a / b);
-    }
-    const float x = r * std::cos(phi), y = r * std::sin(phi);
-    return {x, y, std::sqrt(std::max(0.0f, 1.0f - x * x - y * y))};
-}
-
-glm::vec2 cosine_hemisphere_to_square(const glm::vec3& d) {
-    const float r = std::sqrt(d.x * d.x + d.y * d.y);
-    if (r == 0.0f) return {0.5f, 0.5f};
-    float phi = std::atan2(d.y, d.x);  // (−π, π], folded to [−π/4, 7π/4)
-    if (phi < -0.25f * kPi) phi += 2.0f * kPi;
-    float a, b;
-    if (phi < 0.25f * kPi) {
-        a = r;
-        b = phi * (4.0f / kPi) * a;
-    } else if (phi < 0.75f * kPi) {
-        b = r;
-        a = (0.5f * kPi - phi) * (4.0f / kPi) * b;
-    } else if (phi < 1.25f * kPi) {
-        a = -r;
-        b = (phi - kPi) * (4.0f / kPi) * a;
-    } else {
-        b = -r;
-        a = (1.5f * kPi - phi) * (4.0f / kPi) * b;
-    }
-    return glm::clamp(0.5f * glm::vec2(a + 1.0f, b + 1.0f), glm::vec2(0.0f),
-                      glm::vec2(kOneBelowOne));
-}
-
-uint64_t mix64(uint64_t x) {
-    x += 0x9e3779b97f4a7c15ull;
-    x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ull;
-    x = (x ^ (x >> 27)) * 0x94d049bb133111ebull;
-    return x ^ (x >> 31);
-}
-
-float hashed_uniform(uint64_t a, uint64_t b) { return to_unit(mix64(mix64(a) ^ b)); }
-
-uint64_t pixel_key(uint32_t seed, int x, int y) {
-    return mix64(mix64(seed) ^ ((uint64_t(uint32_t(y)) << 32) | uint64_t(uint32_t(x))));
-}
-
-float Sampler::get(int dim) const {
-    const uint64_t h = mix64(key_ ^ mix64(uint64_t(dim) + 0x632be59bd9b4e019ull));
-    if (dim < halton_.dimensions()) {
-        // Cranley–Patterson rotation: every pixel gets its own shifted copy of the sequence.
-        double u = halton_.sample(index_, dim) + double(h >> 11) * 0x1.0p-53;
-        if (u >= 1.0) u -= 1.0;
-        return std::min(float(u), kOneBelowOne);
-    }
-    return to_unit(mix64(h ^ mix64(index_)));
-}
-
-
-
-
 
 glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
                             const glm::vec3& n, int quad_samples, float u1, float u2) {
@@ -208,7 +136,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     const size_t tiles = size_t(tiles_x) * size_t(tiles_y);
     const double time_limit = settings.time_limit > 0.0 ? settings.time_limit : 0.0;
     const int spp_limit = settings.spp > 0 ? settings.spp : (time_limit > 0.0 ? INT_MAX : 1);
-    std::vector<std::array<glm::dvec3, kComponentCount>> sum(pixels);
+    std::vector<std::array<glm::dvec3, kFrameTermCount>> sum(pixels);
     std::vector<ComponentRadiance> pass(pixels);
     const double render_start = elapsed();
 
@@ -242,7 +170,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
         });
         if (interrupted) break;
         for (size_t i = 0; i < pixels; ++i)
-            for (int c = 0; c < kComponentCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
+            for (int c = 0; c < kFrameTermCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
         ++done;
     }
 
@@ -253,7 +181,7 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     for (size_t i = 0; i < pixels; ++i) {
         const int x = int(i % size_t(width)), y = int(i / size_t(width));
         glm::vec3 full(0.0f);
-        for (int c = 0; c < kComponentCount; ++c) {
+        for (int c = 0; c < kFrameTermCount; ++c) {
             const glm::vec3 v = glm::vec3(sum[i][size_t(c)] * scale);
             result.components[size_t(c)].set_rgb(x, y, v);
             full += v;

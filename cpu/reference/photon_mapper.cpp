@@ -1,9 +1,10 @@
-#include "cpu/photon_mapper.h"
+#include "cpu/reference/photon_mapper.h"
 
 #include <algorithm>
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <numbers>
 
 #include "shared/camera.h"
 #include "shared/metrics.h"
@@ -11,8 +12,6 @@
 namespace ag::cpu {
 
 namespace {
-
-constexpr float kPi = 3.14159265358979f;
 constexpr int kChunk = 2048;         // photons per work item
 constexpr int kQmcBounces = 16;      // photon bounces with Halton numbers
 constexpr float kNormalCos = 0.5f;   // photons on surfaces turned further away are not counted
@@ -204,7 +203,7 @@ void PhotonMapper::emit_caustic(int light, int count, int first, int n,
             const float d = glm::length(to), r = specular_bounds_[k].radius;
             axis[k] = d > 0.0f ? to / d : glm::vec3(0.0f, 0.0f, 1.0f);
             cos_max[k] = d <= r ? -1.0f : std::sqrt(std::max(0.0f, 1.0f - (r * r) / (d * d)));
-            total += 2.0f * kPi * (1.0f - cos_max[k]);
+            total += 2.0f * std::numbers::pi_v<float> * (1.0f - cos_max[k]);
             cumulative[k] = total;
         }
         const float pick = s.get(0) * total;
@@ -242,7 +241,7 @@ glm::vec3 PhotonMapper::estimate(const PhotonMap& map, const glm::vec3& p, const
         const size_t j = size_t(indices[size_t(i)]);
         if (dist2[size_t(i)] <= r2 && glm::dot(map.normal[j], n) > kNormalCos) sum += map.power[j];
     }
-    return sum / (kPi * r2);
+    return sum / (std::numbers::pi_v<float> * r2);
 }
 
 glm::vec3 PhotonMapper::global_irradiance(const glm::vec3& p, const glm::vec3& n) const {
@@ -275,7 +274,9 @@ glm::vec3 PhotonMapper::gather_ray(Ray ray, uint64_t key) const {
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
         if (front) radiance += m.emission;
         if (m.type == MaterialType::diffuse) {
-            if (front) radiance += m.albedo / kPi * cached_irradiance(hit.position, hit.normal);
+            if (front)
+                radiance += m.albedo / std::numbers::pi_v<float> *
+                            cached_irradiance(hit.position, hit.normal);
             break;
         }
         ray = specular_bounce(m, hit, ray.direction, hashed_uniform(key, uint64_t(depth)),
@@ -363,14 +364,14 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
         if (!hit.hit) break;
         const Material& m = scene_.objects[size_t(hit.object)].material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
-        const Component seen = depth == 0 ? Component::direct : Component::specular;
+        const FrameTerm seen = depth == 0 ? FrameTerm::direct : FrameTerm::specular;
         if (front) out[seen] += m.emission;
         if (m.type != MaterialType::diffuse) {
             ray = specular_bounce(m, hit, ray.direction, s.get(4 + depth), rays_.epsilon());
             continue;
         }
         if (!front) break;
-        const glm::vec3 brdf = m.albedo / kPi;
+        const glm::vec3 brdf = m.albedo / std::numbers::pi_v<float>;
         const glm::vec3 direct =
             brdf * direct_irradiance(scene_, rays_, hit.position, hit.normal,
                                      settings_.area_light_samples, s.get(2), s.get(3));
@@ -378,11 +379,11 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
         // Cosine-weighted gather: ρ/π · E = ρ/π · π · mean(L) = ρ · mean(L).
         const glm::vec3 indirect = m.albedo * gather(hit.position, hit.normal, key, index);
         if (depth == 0) {
-            out[Component::direct] += direct;
-            out[Component::caustics] += caustics;
-            out[Component::indirect] += indirect;
+            out[FrameTerm::direct] += direct;
+            out[FrameTerm::caustics] += caustics;
+            out[FrameTerm::indirect] += indirect;
         } else {
-            out[Component::specular] += direct + caustics + indirect;
+            out[FrameTerm::specular] += direct + caustics + indirect;
         }
         break;
     }

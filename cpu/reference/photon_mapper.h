@@ -8,7 +8,7 @@
 #include <vector>
 
 #include "cpu/knn.h"
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 namespace ag::cpu {
 

@@ -2,7 +2,7 @@
 // unbiased answer for everything except caustics of point lights, which it cannot sample.
 #pragma once
 
-#include "cpu/reference.h"
+#include "cpu/reference/reference.h"
 
 namespace ag::cpu {
 

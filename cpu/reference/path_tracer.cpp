@@ -1,6 +1,7 @@
-#include "cpu/path_tracer.h"
+#include "cpu/reference/path_tracer.h"
 
 #include <algorithm>
+#include <numbers>
 
 #include "shared/camera.h"
 
@@ -44,18 +45,18 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
         // invisible to the camera and to purely specular chains from it, as in the GPU frame.
         if (after_specular && diffuse_seen) {
             const glm::vec3 le = quad_light_radiance(scene_, ray, hit.hit ? hit.t : 1e30f);
-            const Component c = specular_pixel    ? Component::specular
-                                : diffuse_after_x ? Component::indirect
-                                                  : Component::caustics;
+            const FrameTerm c = specular_pixel    ? FrameTerm::specular
+                                : diffuse_after_x ? FrameTerm::indirect
+                                                  : FrameTerm::caustics;
             out[c] += throughput * le;
         }
         if (!hit.hit) break;
 
         const Material& m = scene_.objects[size_t(hit.object)].material;
         if (depth == 0) specular_pixel = m.type != MaterialType::diffuse;
-        const Component here = specular_pixel ? Component::specular
-                               : depth == 0   ? Component::direct
-                                              : Component::indirect;
+        const FrameTerm here = specular_pixel ? FrameTerm::specular
+                               : depth == 0   ? FrameTerm::direct
+                                              : FrameTerm::indirect;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
         if (front) out[here] += throughput * m.emission;
 
@@ -63,7 +64,7 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
             // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the
             // photon tracer), so it is black.
             if (!front) break;
-            out[here] += throughput * m.albedo / 3.14159265358979f *
+            out[here] += throughput * m.albedo / std::numbers::pi_v<float> *
                          direct_irradiance(scene_, rays_, hit.position, hit.normal, 1,
                                            s.get(dim + 4), s.get(dim + 5));
             if (depth > 0) diffuse_after_x = true;

@@ -1,6 +1,6 @@
 // Reference renderers for the GPU frame (Larsen ch. 4, Fig. 14.3 and 14.5): a path tracer and
 // traditional photon mapping, both split into the frame's components (eq. 13.2, docs/reference.md)
-// and both progressive, multi-threaded and deterministic. Also the sampling pieces they share.
+// and both progressive, multi-threaded and deterministic. Also the direct light they share.
 #pragma once
 
 #include <array>
@@ -11,6 +11,7 @@
 
 #include "cpu/ray_tracer.h"
 #include "cpu/sampling.h"
+#include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/parallel.h"
 #include "shared/qmc.h"
@@ -21,20 +22,13 @@ namespace ag::cpu {
 enum class ReferenceMethod { path_tracing, photon_mapping };
 inline constexpr std::array kReferenceMethodNames = {"pt", "pm"};
 
-// The components of the frame (Larsen eq. 13.2), defined at the first diffuse point x seen from
-// the camera: direct (x's emission and the lights' direct light), caustics (lights → S+ → x),
-// indirect (everything else arriving at x), specular (whole pixels whose camera ray meets a
-// mirror or glass first). They add up to the full image.
-enum class Component { direct, indirect, caustics, specular };
-inline constexpr int kComponentCount = 4;
-inline constexpr std::array kComponentNames = {"direct", "indirect", "caustics", "specular"};
-
-// Radiance of one camera sample, by component.
+// Radiance of one camera sample, by frame term (shared/frame_terms.h: defined at the first
+// diffuse point x seen from the camera).
 struct ComponentRadiance {
-    std::array<glm::vec3, kComponentCount> value{};
+    std::array<glm::vec3, kFrameTermCount> value{};
 
-    glm::vec3& operator[](Component c) { return value[size_t(c)]; }
-    const glm::vec3& operator[](Component c) const { return value[size_t(c)]; }
+    glm::vec3& operator[](FrameTerm c) { return value[size_t(c)]; }
+    const glm::vec3& operator[](FrameTerm c) const { return value[size_t(c)]; }
     glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
 };
 
@@ -68,7 +62,7 @@ using ReferenceProgressFn = std::function<void(const ReferenceProgress&)>;
 
 struct ReferenceResult {
     Image full;                                      // = sum of the components
-    std::array<Image, kComponentCount> components;   // indexed by Component
+    std::array<Image, kFrameTermCount> components;   // indexed by FrameTerm
     int spp = 0;                                     // completed passes (one sample each)
     double seconds = 0.0;                            // wall clock, photon maps included
     double photon_seconds = 0.0;                     // photon tracing and map building (pm)
@@ -80,35 +74,6 @@ struct ReferenceResult {
 // whole passes are kept (an interrupted pass is dropped).
 ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& settings,
                                  ThreadPool& pool, const ReferenceProgressFn& progress = {});
-
-// --- Sampling pieces shared by the path tracer, the photon mapper and their photon tracing ---
-
-// Number `dim` of sample `index` of a sequence: a scrambled Halton point with a Cranley–Patterson
-// rotation drawn from `key` (one key per pixel or light), hashed numbers past the Halton's
-// dimensions. A pure function of (halton, key, index, dim).
-class Sampler {
-public:
-    Sampler(const Halton& halton, uint64_t key, uint64_t index)
-        : halton_(halton), key_(key), index_(index) {}
-    float get(int dim) const;
-    uint64_t key() const { return key_; }
-    uint64_t index() const { return index_; }
-
-private:
-    const Halton& halton_;
-    uint64_t key_, index_;
-};
-
-uint64_t mix64(uint64_t x);                       // SplitMix64 finaliser
-float hashed_uniform(uint64_t a, uint64_t b);     // [0, 1) from two words
-uint64_t pixel_key(uint32_t seed, int x, int y);  // a pixel's Sampler key
-
-// Shirley–Chiu concentric map between the unit square and the cosine-weighted hemisphere about
-// +z (area-preserving, so uniform squares give cosine-weighted directions, and compact regions of
-// the hemisphere stay compact in the square: what lets a histogram guide final-gather rays).
-glm::vec3 square_to_cosine_hemisphere(const glm::vec2& u);
-glm::vec2 cosine_hemisphere_to_square(const glm::vec3& d);  // d.z ≥ 0; inverse of the above
-
 
 // Irradiance E at the front side (p, n) straight from the scene's enabled lights: point lights
 // with a hard shadow (I cos / d²), quad lights by `quad_samples` shadow rays on a rotated 2D
