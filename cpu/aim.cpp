@@ -1,15 +1,14 @@
 #include "cpu/aim.h"
 
 #include <algorithm>
-#include <numeric>
 #include <numbers>
+#include <numeric>
 
 #include "cpu/knn.h"
 
 namespace ag::cpu {
 
-namespace {
-}
+namespace {}
 
 Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     surface_texels_.resize(scene_.surfaces.size());
@@ -25,7 +24,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     SurfaceHits& s = maps.surface(surface);
     const std::vector<int>& texels = surface_texels_[size_t(surface)];
     const Object& object = scene_.objects[size_t(scene_.surfaces[size_t(surface)].object)];
-    const glm::vec3 albedo = object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
+    const glm::vec3 albedo =
+        object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
 
     std::vector<glm::vec3> points(s.hits.size());
     for (size_t i = 0; i < s.hits.size(); ++i) points[i] = s.hits[i].position;
@@ -35,19 +35,22 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     const float texel = scene_.atlas.texel_size;
 
     std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f));
-    pool_.parallel_for(texels.size(), [&](size_t i) {
-        const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
-        thread_local std::vector<int> idx;
-        thread_local std::vector<float> d2;
-        const int n = index.query(t.position, k, idx, d2);
-        if (n == 0) return;
-        // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
-        double r2 = double(d2[size_t(n - 1)]);
-        if (r2 <= 0.0) r2 = double(texel) * texel / std::numbers::pi;
-        glm::dvec3 sum(0.0);
-        for (int j = 0; j < n; ++j) sum += glm::dvec3(s.hits[size_t(idx[size_t(j)])].power);
-        e[i] = glm::vec3(sum / (std::numbers::pi * r2));
-    }, 16);
+    pool_.parallel_for(
+        texels.size(),
+        [&](size_t i) {
+            const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
+            thread_local std::vector<int> idx;
+            thread_local std::vector<float> d2;
+            const int n = index.query(t.position, k, idx, d2);
+            if (n == 0) return;
+            // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
+            double r2 = double(d2[size_t(n - 1)]);
+            if (r2 <= 0.0) r2 = double(texel) * texel / std::numbers::pi;
+            glm::dvec3 sum(0.0);
+            for (int j = 0; j < n; ++j) sum += glm::dvec3(s.hits[size_t(idx[size_t(j)])].power);
+            e[i] = glm::vec3(sum / (std::numbers::pi * r2));
+        },
+        16);
 
     // Near a surface's edges the kNN disc reaches past the surface and the estimate falls (to
     // about ½ on an edge, ¼ in a corner); with a few texels per wall most texels sit there.
@@ -87,11 +90,14 @@ int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {
     }
     // Largest Δf / A first (Larsen ch. 10); ties by surface id for determinism.
     std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) {
-        const double ka = maps.surface(a).delta_f / std::max(1e-30f, scene_.surfaces[size_t(a)].area);
-        const double kb = maps.surface(b).delta_f / std::max(1e-30f, scene_.surfaces[size_t(b)].area);
+        const double ka =
+            maps.surface(a).delta_f / std::max(1e-30f, scene_.surfaces[size_t(a)].area);
+        const double kb =
+            maps.surface(b).delta_f / std::max(1e-30f, scene_.surfaces[size_t(b)].area);
         return ka > kb;
     });
-    const int budget = std::min<int>(int(candidates.size()), scene_.settings.aim.surfaces_per_frame);
+    const int budget =
+        std::min<int>(int(candidates.size()), scene_.settings.aim.surfaces_per_frame);
     int texels = 0;
     for (int i = 0; i < budget; ++i) texels += rebuild_surface(maps, candidates[size_t(i)]);
     if (surfaces_rebuilt) *surfaces_rebuilt = budget;

@@ -4,9 +4,8 @@
 // order of Δf / area, above a threshold, under a per-frame budget.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "cpu/photon_map.h"
 #include "shared/parallel.h"

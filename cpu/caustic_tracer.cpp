@@ -12,15 +12,15 @@ namespace ag::cpu {
 namespace {
 constexpr int kMaxSpecularBounces = 12;
 
-
-
 }  // namespace
 
 CausticTracer::CausticTracer(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     rays_ = std::make_unique<RayTracer>(scene_);
-    photons_.assign(scene_.lights.size() * size_t(scene_.settings.caustics.photons), CausticPhoton{});
+    photons_.assign(scene_.lights.size() * size_t(scene_.settings.caustics.photons),
+                    CausticPhoton{});
     for (size_t l = 0; l < scene_.lights.size(); ++l)
-        halton_.emplace_back(5 + kMaxSpecularBounces, hash_u32(scene_.settings.seed * 31337u + uint32_t(l)) | 1u);
+        halton_.emplace_back(5 + kMaxSpecularBounces,
+                             hash_u32(scene_.settings.seed * 31337u + uint32_t(l)) | 1u);
 }
 
 std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) const {
@@ -35,7 +35,8 @@ std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) con
         const glm::vec3 c = obj.transform.apply_point(c_local);
         const float d = glm::length(c - from);
         if (d <= r * 1.0001f) continue;  // the light is inside the bound: no cone (documented)
-        const double sin_a = double(r) / double(d), cos_a = std::sqrt(std::max(0.0, 1.0 - sin_a * sin_a));
+        const double sin_a = double(r) / double(d),
+                     cos_a = std::sqrt(std::max(0.0, 1.0 - sin_a * sin_a));
         const double one_minus_cos = sin_a * sin_a / (1.0 + cos_a);  // no cancellation
         out.push_back({o, c, one_minus_cos, float(2.0 * std::numbers::pi * one_minus_cos)});
     }
@@ -70,11 +71,12 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     const int n = scene_.settings.caustics.photons;
     if (l.type == LightType::quad) {
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
-        ray.origin = l.corners[0] + float(halton.sample(k, 3)) * e1 + float(halton.sample(k, 4)) * e3 +
-                     rays_->epsilon() * l.quad_normal();
+        ray.origin = l.corners[0] + float(halton.sample(k, 3)) * e1 +
+                     float(halton.sample(k, 4)) * e3 + rays_->epsilon() * l.quad_normal();
     }
     const glm::vec3 axis = glm::normalize(cone->centre - ray.origin);
-    // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without cancellation.
+    // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without
+    // cancellation.
     const double x = halton.sample(k, 1) * cone->one_minus_cos;
     const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
     const float phi = 2.0f * std::numbers::pi_v<float> * float(halton.sample(k, 2));
@@ -105,9 +107,10 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
         }
         if (bounce == 0) hit_specular = true;
         specular_seen = true;
-        const float fresnel_u = m.type == MaterialType::glass
-                            ? float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1)))
-                            : 0.0f;
+        const float fresnel_u =
+            m.type == MaterialType::glass
+                ? float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1)))
+                : 0.0f;
         ray = specular_bounce(m, hit, ray.direction, fresnel_u, eps);
     }
     return {};
@@ -122,12 +125,16 @@ CausticStats CausticTracer::trace_slice(int slice, int slices) {
     std::vector<std::vector<Cone>> light_cones;  // the specular objects as seen from each light now
     for (const Light& l : scene_.lights) light_cones.push_back(cones(l.center()));
     std::vector<char> specular(jobs.size(), 0);
-    pool_.parallel_for(jobs.size(), [&](size_t j) {
-        bool hit = false;
-        const int light = jobs[j] / n;
-        photons_[size_t(jobs[j])] = trace_photon(light, jobs[j] % n, light_cones[size_t(light)], hit);
-        specular[j] = hit;
-    }, 64);
+    pool_.parallel_for(
+        jobs.size(),
+        [&](size_t j) {
+            bool hit = false;
+            const int light = jobs[j] / n;
+            photons_[size_t(jobs[j])] =
+                trace_photon(light, jobs[j] % n, light_cones[size_t(light)], hit);
+            specular[j] = hit;
+        },
+        64);
     CausticStats stats;
     stats.traced = int(jobs.size());
     for (size_t j = 0; j < jobs.size(); ++j) {

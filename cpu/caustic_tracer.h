@@ -6,9 +6,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "cpu/ray_tracer.h"
 #include "shared/parallel.h"
@@ -25,9 +24,9 @@ struct CausticPhoton {
 };
 
 struct CausticStats {
-    int traced = 0;           // photons emitted this frame
-    int hit_specular = 0;     // of those, how many reached a specular object first
-    int stored = 0;           // and how many were stored (an L S+ D path)
+    int traced = 0;        // photons emitted this frame
+    int hit_specular = 0;  // of those, how many reached a specular object first
+    int stored = 0;        // and how many were stored (an L S+ D path)
 };
 
 class CausticTracer {
@@ -53,7 +52,8 @@ private:
     };
     std::vector<Cone> cones(const glm::vec3& from) const;
     CausticStats trace_slice(int slice, int slices);
-    CausticPhoton trace_photon(int light, int index, const std::vector<Cone>& cones, bool& hit_specular) const;
+    CausticPhoton trace_photon(int light, int index, const std::vector<Cone>& cones,
+                               bool& hit_specular) const;
 
     const Scene& scene_;
     ThreadPool& pool_;

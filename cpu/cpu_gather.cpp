@@ -1,11 +1,10 @@
 #include "cpu/cpu_gather.h"
 
-#include "cpu/sampling.h"
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
 
+#include "cpu/sampling.h"
 #include "shared/lightmap_sample.h"
 #include "shared/qmc.h"
 
@@ -31,7 +30,10 @@ CpuGather::CpuGather(const Scene& scene, const RayTracer& rays, ThreadPool& pool
     : scene_(scene), rays_(rays), pool_(pool), aim_(aim) {}
 
 CpuGather::CpuGather(const Scene& scene, ThreadPool& pool, const std::vector<glm::vec3>* aim)
-    : scene_(scene), own_rays_(std::make_unique<RayTracer>(scene)), rays_(*own_rays_), pool_(pool),
+    : scene_(scene),
+      own_rays_(std::make_unique<RayTracer>(scene)),
+      rays_(*own_rays_),
+      pool_(pool),
       aim_(aim) {}
 
 CpuGather::~CpuGather() = default;
@@ -98,7 +100,8 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
 
     stats_.texels = int(texels.size());
     stats_.invalid = 0;
-    for (const GatherResult& r : results) stats_.invalid += r.back_fraction > kBackFaceInvalidFraction;
+    for (const GatherResult& r : results)
+        stats_.invalid += r.back_fraction > kBackFaceInvalidFraction;
     stats_.rays = uint64_t(texels.size()) * uint64_t(count);
     return results;
 }

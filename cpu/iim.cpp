@@ -116,8 +116,8 @@ const std::vector<int>& Iim::blend(uint64_t frame, int blend_frames) {
     // Two IIM buffers, blended over `blend_frames` so new gathers never pop.
     std::vector<int> still;
     for (int a : blending_) {
-        const float t = std::min(
-            1.0f, float(int(frame) - blend_start_[size_t(a)] + 1) / float(std::max(1, blend_frames)));
+        const float t = std::min(1.0f, float(int(frame) - blend_start_[size_t(a)] + 1) /
+                                           float(std::max(1, blend_frames)));
         shown_[size_t(a)] = glm::mix(from_[size_t(a)], to_[size_t(a)], t);
         if (t < 1.0f)
             still.push_back(a);

@@ -7,9 +7,8 @@
 
 #include <cstdint>
 #include <deque>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "cpu/photon_map.h"
 #include "shared/gather.h"
@@ -62,7 +61,7 @@ private:
     std::deque<int> pending_;  // texel records, FIFO, each at most once
     std::vector<char> is_pending_;
     std::vector<int> last_gathered_;
-    std::vector<char> valid_;                     // per record: last gather saw few back faces
+    std::vector<char> valid_;                         // per record: last gather saw few back faces
     std::vector<glm::vec3> raw_, from_, to_, shown_;  // atlas-sized
     std::vector<int> blend_start_;  // per atlas texel: frame the new value arrived, −1 = done
     std::vector<int> blending_;     // atlas texels currently blending

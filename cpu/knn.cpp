@@ -17,7 +17,8 @@ KnnIndex& KnnIndex::operator=(KnnIndex&&) noexcept = default;
 void KnnIndex::build(const std::vector<glm::vec3>& points) {
     points_.resize(points.size() * 3);
     for (size_t i = 0; i < points.size(); ++i)
-        points_[3 * i] = points[i].x, points_[3 * i + 1] = points[i].y, points_[3 * i + 2] = points[i].z;
+        points_[3 * i] = points[i].x, points_[3 * i + 1] = points[i].y,
+                    points_[3 * i + 2] = points[i].z;
     impl_->index.reset();
     if (points.empty()) return;
     const flann::Matrix<float> data(points_.data(), points.size(), 3);
@@ -26,7 +27,8 @@ void KnnIndex::build(const std::vector<glm::vec3>& points) {
     impl_->index->buildIndex();
 }
 
-int KnnIndex::query(const glm::vec3& p, int k, std::vector<int>& indices, std::vector<float>& dist2) const {
+int KnnIndex::query(const glm::vec3& p, int k, std::vector<int>& indices,
+                    std::vector<float>& dist2) const {
     const int n = std::min<int>(k, int(points_.size() / 3));
     indices.resize(size_t(std::max(n, 0)));
     dist2.resize(size_t(std::max(n, 0)));

@@ -2,10 +2,9 @@
 // FLANN's single kd-tree behind a small interface: all FLANN use lives in knn.cpp.
 #pragma once
 
+#include <glm/glm.hpp>
 #include <memory>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace ag::cpu {
 
@@ -22,7 +21,8 @@ public:
 
     // The min(k, size) nearest points to `p`, nearest first: indices into the built points and
     // squared distances. Returns how many were found. Thread-safe after build().
-    int query(const glm::vec3& p, int k, std::vector<int>& indices, std::vector<float>& dist2) const;
+    int query(const glm::vec3& p, int k, std::vector<int>& indices,
+              std::vector<float>& dist2) const;
 
 private:
     struct Impl;

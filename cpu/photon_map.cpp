@@ -39,7 +39,8 @@ void PhotonMaps::clear_group(int light, int g) {
     group.traced = false;
 }
 
-void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* photons, size_t count) {
+void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* photons,
+                           size_t count) {
     clear_group(light, g);
     PhotonGroup& group = groups_[size_t(light)][size_t(g)];
     group.photon_begin.reserve(count + 1);

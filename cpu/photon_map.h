@@ -4,9 +4,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "cpu/photon_tracer.h"
 
@@ -16,7 +15,7 @@ struct PhotonHit {
     glm::vec3 position{0.0f};  // object space of the surface's object
     glm::vec3 power{0.0f};     // incident flux, W
     uint32_t light = 0, group = 0;
-    uint32_t vertex = 0;       // index into the owning group's path vertices
+    uint32_t vertex = 0;  // index into the owning group's path vertices
     uint8_t bounce = 0;
 };
 
@@ -29,11 +28,11 @@ struct PathVertex {
 };
 
 struct PhotonGroup {
-    std::vector<PathVertex> vertices;       // all photons' paths, back to back
-    std::vector<uint32_t> photon_begin;     // P + 1 offsets into vertices
-    int verify_cursor = 0;                  // next photon to verify (round robin)
-    bool queued = false;                    // waiting for a full retrace
-    bool traced = false;                    // holds hits of the current light state
+    std::vector<PathVertex> vertices;    // all photons' paths, back to back
+    std::vector<uint32_t> photon_begin;  // P + 1 offsets into vertices
+    int verify_cursor = 0;               // next photon to verify (round robin)
+    bool queued = false;                 // waiting for a full retrace
+    bool traced = false;                 // holds hits of the current light state
 };
 
 struct SurfaceHits {

@@ -2,9 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <set>
-
 #include <glm/gtc/quaternion.hpp>
+#include <set>
 
 #include "shared/scene_edit.h"
 
@@ -50,14 +49,16 @@ Placement make_placement(const Transform& t, const Bounds& local) {
     p.translation = t.translation;
     p.local = local;
     for (int c = 0; c < 8; ++c)
-        p.world.add(t.apply_point({c & 1 ? local.max.x : local.min.x, c & 2 ? local.max.y : local.min.y,
-                                   c & 4 ? local.max.z : local.min.z}));
+        p.world.add(
+            t.apply_point({c & 1 ? local.max.x : local.min.x, c & 2 ? local.max.y : local.min.y,
+                           c & 4 ? local.max.z : local.min.z}));
     return p;
 }
 
 }  // namespace
 
-PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
+PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool)
+    : scene_(scene), pool_(pool) {
     rays_ = std::make_unique<RayTracer>(scene_);
     tracer_ = std::make_unique<PhotonTracer>(scene_, *rays_);
     const int groups = scene_.settings.photons.groups;
@@ -83,7 +84,9 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool) : scene
 
 double PhotonSimulation::group_flux(int light, int group) const {
     const PhotonGroup& g = maps_.group(light, group);
-    if (!g.traced) return double(scene_.settings.photons.photons_per_group) * energy(tracer_->photon_power(light));
+    if (!g.traced)
+        return double(scene_.settings.photons.photons_per_group) *
+               energy(tracer_->photon_power(light));
     double flux = 0.0;
     for (const PathVertex& v : g.vertices)
         if (v.hit >= 0) flux += energy(maps_.surface(v.surface).hits[size_t(v.hit)].power);
@@ -116,7 +119,8 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                 std::set<std::pair<int, int>> touched;
                 for (int s = 0; s < int(scene_.surfaces.size()); ++s) {
                     if (scene_.surfaces[size_t(s)].object != c.index) continue;
-                    for (const PhotonHit& h : maps_.surface(s).hits) touched.emplace(int(h.light), int(h.group));
+                    for (const PhotonHit& h : maps_.surface(s).hits)
+                        touched.emplace(int(h.light), int(h.group));
                 }
                 for (const auto& [l, g] : touched) invalidate(l, g, stats);
                 break;
@@ -132,12 +136,16 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                 bool rescalable = true;
                 glm::vec3 ratio(1.0f);
                 for (int k = 0; k < 3; ++k) {
-                    if (old_power[k] > 0.0f) ratio[k] = new_power[k] / old_power[k];
-                    else if (new_power[k] > 0.0f) rescalable = false;  // nothing to scale from
+                    if (old_power[k] > 0.0f)
+                        ratio[k] = new_power[k] / old_power[k];
+                    else if (new_power[k] > 0.0f)
+                        rescalable = false;  // nothing to scale from
                 }
                 for (int g = 0; g < groups; ++g) {
-                    if (!rescalable) invalidate(c.index, g, stats);
-                    else if (maps_.group(c.index, g).traced) maps_.rescale_group(c.index, g, ratio);
+                    if (!rescalable)
+                        invalidate(c.index, g, stats);
+                    else if (maps_.group(c.index, g).traced)
+                        maps_.rescale_group(c.index, g, ratio);
                 }
                 break;
             }
@@ -158,14 +166,17 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                 break;
         }
     }
-    if (!scene_.changes.empty()) seen_sequence_ = std::max(seen_sequence_, scene_.changes.back().sequence);
+    if (!scene_.changes.empty())
+        seen_sequence_ = std::max(seen_sequence_, scene_.changes.back().sequence);
     // Paths were traced with every object where placed_ says; several edits of one object since
     // the last frame count as one move from there to where it is now.
     std::vector<std::pair<int, Transform>> placements;  // (object, transform before)
     for (int o = 0; o < int(moved.size()); ++o) {
         const Transform& now = scene_.objects[size_t(o)].transform;
         Transform& before = placed_[size_t(o)];
-        if (!moved[size_t(o)] || (before.translation == now.translation && before.rotation == now.rotation)) continue;
+        if (!moved[size_t(o)] ||
+            (before.translation == now.translation && before.rotation == now.rotation))
+            continue;
         placements.emplace_back(o, before);
         before = now;
     }
@@ -194,7 +205,8 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
     stats.objects_moved = int(moved.size());
     const auto crosses = [&](const glm::vec3& a, const glm::vec3& d, bool ray) {
         for (const Placement& p : placements)
-            if (segment_meets_box(p.to_local * (a - p.translation), p.to_local * d, ray, p.local)) return true;
+            if (segment_meets_box(p.to_local * (a - p.translation), p.to_local * d, ray, p.local))
+                return true;
         return false;
     };
 
@@ -202,39 +214,42 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
     const size_t count = scene_.lights.size() * size_t(groups);
     std::vector<uint8_t> hit(count, 0);
     std::vector<uint64_t> tested(count, 0);
-    pool_.parallel_for(count, [&](size_t i) {
-        const int l = int(i / size_t(groups)), g = int(i % size_t(groups));
-        const PhotonGroup& group = maps_.group(l, g);
-        if (!group.traced || group.queued) return;
-        const GroupSegments& seg = segments_[i];
-        // Broad phase: the group's segments' bounds against each placement's world AABB.
-        bool near = false;
-        for (const Placement& p : placements) near = near || boxes_overlap(seg.bounds, p.world);
-        if (!near && !seg.escapes) return;
-        // Narrow phase: each segment against each placement's oriented box.
-        uint64_t n = 0;
-        for (size_t k = 0; k + 1 < group.photon_begin.size() && !hit[i]; ++k) {
-            glm::vec3 a = seg.ends[k].origin;
-            if (near) {
-                for (uint32_t v = group.photon_begin[k]; v < group.photon_begin[k + 1]; ++v) {
-                    const glm::vec3 b = group.vertices[v].position;
-                    ++n;
-                    if (crosses(a, b - a, false)) {
-                        hit[i] = 1;
-                        break;
+    pool_.parallel_for(
+        count,
+        [&](size_t i) {
+            const int l = int(i / size_t(groups)), g = int(i % size_t(groups));
+            const PhotonGroup& group = maps_.group(l, g);
+            if (!group.traced || group.queued) return;
+            const GroupSegments& seg = segments_[i];
+            // Broad phase: the group's segments' bounds against each placement's world AABB.
+            bool near = false;
+            for (const Placement& p : placements) near = near || boxes_overlap(seg.bounds, p.world);
+            if (!near && !seg.escapes) return;
+            // Narrow phase: each segment against each placement's oriented box.
+            uint64_t n = 0;
+            for (size_t k = 0; k + 1 < group.photon_begin.size() && !hit[i]; ++k) {
+                glm::vec3 a = seg.ends[k].origin;
+                if (near) {
+                    for (uint32_t v = group.photon_begin[k]; v < group.photon_begin[k + 1]; ++v) {
+                        const glm::vec3 b = group.vertices[v].position;
+                        ++n;
+                        if (crosses(a, b - a, false)) {
+                            hit[i] = 1;
+                            break;
+                        }
+                        a = b;
                     }
-                    a = b;
+                } else if (group.photon_begin[k + 1] > group.photon_begin[k]) {
+                    a = group.vertices[group.photon_begin[k + 1] - 1].position;
                 }
-            } else if (group.photon_begin[k + 1] > group.photon_begin[k]) {
-                a = group.vertices[group.photon_begin[k + 1] - 1].position;
+                if (!hit[i] && seg.ends[k].escape != glm::vec3(0.0f)) {
+                    ++n;
+                    if (crosses(a, seg.ends[k].escape, true)) hit[i] = 1;
+                }
             }
-            if (!hit[i] && seg.ends[k].escape != glm::vec3(0.0f)) {
-                ++n;
-                if (crosses(a, seg.ends[k].escape, true)) hit[i] = 1;
-            }
-        }
-        tested[i] = n;
-    }, 4);
+            tested[i] = n;
+        },
+        4);
     // Invalidate in group order on this thread: the queue is the same for any thread count.
     for (size_t i = 0; i < count; ++i) {
         stats.query_segments_tested += tested[i];
@@ -243,11 +258,14 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
         invalidate(int(i / size_t(groups)), int(i % size_t(groups)), stats);
         stats.groups_invalidated_by_query += stats.groups_invalidated - before;
     }
-    stats.query_ms += std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    stats.query_ms +=
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 
-bool PhotonSimulation::same_path(const PhotonGroup& group, int photon, const std::vector<TracedVertex>& path) const {
-    const uint32_t begin = group.photon_begin[size_t(photon)], end = group.photon_begin[size_t(photon) + 1];
+bool PhotonSimulation::same_path(const PhotonGroup& group, int photon,
+                                 const std::vector<TracedVertex>& path) const {
+    const uint32_t begin = group.photon_begin[size_t(photon)],
+                   end = group.photon_begin[size_t(photon) + 1];
     if (end - begin != path.size()) return false;
     const float tol2 = tolerance_ * tolerance_;
     for (uint32_t i = begin; i < end; ++i) {
@@ -267,17 +285,22 @@ void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& gr
     const size_t jobs = groups.size() * size_t(per_group);
     if (traced_.size() < jobs) traced_.resize(jobs);
     if (traced_ends_.size() < jobs) traced_ends_.resize(jobs);
-    pool_.parallel_for(jobs, [&](size_t job) {
-        const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
-        traced_[job].clear();  // keeps its capacity from earlier frames
-        traced_ends_[job] = tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
-    }, 8);
+    pool_.parallel_for(
+        jobs,
+        [&](size_t job) {
+            const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
+            traced_[job].clear();  // keeps its capacity from earlier frames
+            traced_ends_[job] =
+                tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
+        },
+        8);
     // Merge in group order on this thread: the maps end up identical for any thread count.
     for (size_t gi = 0; gi < groups.size(); ++gi) {
         const auto [l, g] = groups[gi];
         maps_.set_group(l, g, &traced_[gi * size_t(per_group)], size_t(per_group));
         maps_.group(l, g).queued = false;
-        GroupSegments& seg = segments_[size_t(l) * size_t(scene_.settings.photons.groups) + size_t(g)];
+        GroupSegments& seg =
+            segments_[size_t(l) * size_t(scene_.settings.photons.groups) + size_t(g)];
         seg = GroupSegments{};
         seg.ends.assign(traced_ends_.begin() + std::ptrdiff_t(gi * size_t(per_group)),
                         traced_ends_.begin() + std::ptrdiff_t((gi + 1) * size_t(per_group)));
@@ -306,21 +329,27 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     const PhotonSettings& settings = scene_.settings.photons;
 
     // Verification: re-trace the next photon(s) of every traced group and compare paths.
-    struct Job { int light, group, photon; };
+    struct Job {
+        int light, group, photon;
+    };
     std::vector<Job> jobs;
     for (int l = 0; l < int(scene_.lights.size()); ++l) {
         if (!scene_.lights[size_t(l)].enabled) continue;
         for (int g = 0; g < settings.groups; ++g) {
             PhotonGroup& group = maps_.group(l, g);
             if (!group.traced || group.queued) continue;
-            for (int v = 0; v < std::min(settings.verify_per_frame, settings.photons_per_group); ++v) {
+            for (int v = 0; v < std::min(settings.verify_per_frame, settings.photons_per_group);
+                 ++v) {
                 jobs.push_back({l, g, group.verify_cursor});
                 group.verify_cursor = (group.verify_cursor + 1) % settings.photons_per_group;
             }
         }
     }
     std::vector<std::vector<TracedVertex>> paths(jobs.size());
-    pool_.parallel_for(jobs.size(), [&](size_t i) { tracer_->trace(jobs[i].light, jobs[i].group, jobs[i].photon, paths[i]); }, 16);
+    pool_.parallel_for(
+        jobs.size(),
+        [&](size_t i) { tracer_->trace(jobs[i].light, jobs[i].group, jobs[i].photon, paths[i]); },
+        16);
     stats.photons_verified = int(jobs.size());
     for (size_t i = 0; i < jobs.size(); ++i)
         if (!same_path(maps_.group(jobs[i].light, jobs[i].group), jobs[i].photon, paths[i]))
@@ -348,8 +377,10 @@ void PhotonSimulation::trace_all() {
     queue_.clear();
     for (int l = 0; l < int(scene_.lights.size()); ++l)
         for (int g = 0; g < scene_.settings.photons.groups; ++g) {
-            if (scene_.lights[size_t(l)].enabled) all.emplace_back(l, g);
-            else maps_.clear_group(l, g);
+            if (scene_.lights[size_t(l)].enabled)
+                all.emplace_back(l, g);
+            else
+                maps_.clear_group(l, g);
             maps_.group(l, g).queued = false;
         }
     retrace_groups(all);
@@ -359,9 +390,12 @@ LightGroupState PhotonSimulation::light_state(int light) const {
     LightGroupState s;
     for (int g = 0; g < scene_.settings.photons.groups; ++g) {
         const PhotonGroup& group = maps_.group(light, g);
-        if (group.queued) ++s.queued;
-        else if (group.traced) ++s.valid;
-        else ++s.invalid;
+        if (group.queued)
+            ++s.queued;
+        else if (group.traced)
+            ++s.valid;
+        else
+            ++s.invalid;
     }
     return s;
 }

@@ -23,15 +23,15 @@ namespace ag::cpu {
 struct PhotonFrameStats {
     uint64_t frame = 0;
     int photons_verified = 0;
-    int groups_invalidated = 0;   // by all causes: query, verification, light and albedo edits
+    int groups_invalidated = 0;  // by all causes: query, verification, light and albedo edits
     int groups_invalidated_by_query = 0;  // paths crossing a moved object's old or new placement
     int objects_moved = 0;                // objects whose placement the query tested
     uint64_t query_segments_tested = 0;   // path segments tested exactly (narrow phase)
     double query_ms = 0.0;                // wall time of the moved-object query
     int photons_retraced = 0;
     int groups_retraced = 0;
-    int groups_queued = 0;        // still waiting after this frame
-    int aim_texels_rebuilt = 0;   // filled in by the AIM stage
+    int groups_queued = 0;       // still waiting after this frame
+    int aim_texels_rebuilt = 0;  // filled in by the AIM stage
     int aim_surfaces_rebuilt = 0;
 };
 
@@ -74,7 +74,8 @@ public:
     uint64_t invalidations(int light) const { return invalidations_[size_t(light)]; }
 
 private:
-    // A group's place in the retrace queue: largest flux first, then (light, group) for a fixed order.
+    // A group's place in the retrace queue: largest flux first, then (light, group) for a fixed
+    // order.
     struct QueuedGroup {
         double flux = 0.0;
         int light = 0, group = 0;
@@ -85,19 +86,21 @@ private:
     };
     // What edit queries need of a group's stored paths beyond its vertices.
     struct GroupSegments {
-        Bounds bounds;                   // every finite segment, emission origins included
-        std::vector<PathEnds> ends;      // per photon
-        bool escapes = false;            // some photon's last ray left the scene (unbounded)
+        Bounds bounds;               // every finite segment, emission origins included
+        std::vector<PathEnds> ends;  // per photon
+        bool escapes = false;        // some photon's last ray left the scene (unbounded)
     };
 
     void apply_changes(PhotonFrameStats& stats);
     // Invalidates every traced group with a path segment crossing a moved object at its transform
     // before (given) or now (the object's bounds in its own frame, padded: conservative).
-    void invalidate_crossing(const std::vector<std::pair<int, Transform>>& moved, PhotonFrameStats& stats);
+    void invalidate_crossing(const std::vector<std::pair<int, Transform>>& moved,
+                             PhotonFrameStats& stats);
     double group_flux(int light, int group) const;
     void invalidate(int light, int group, PhotonFrameStats& stats);
     void retrace_groups(const std::vector<std::pair<int, int>>& groups);
-    bool same_path(const PhotonGroup& group, int photon, const std::vector<TracedVertex>& path) const;
+    bool same_path(const PhotonGroup& group, int photon,
+                   const std::vector<TracedVertex>& path) const;
 
     const Scene& scene_;
     ThreadPool& pool_;
@@ -105,16 +108,16 @@ private:
     std::unique_ptr<PhotonTracer> tracer_;
     PhotonMaps maps_;
     std::set<QueuedGroup> queue_;
-    std::vector<std::pair<int, int>> invalidated_;   // during the last frame
+    std::vector<std::pair<int, int>> invalidated_;  // during the last frame
     std::vector<GroupSegments> segments_;           // [light * groups + group]
-    std::vector<Transform> placed_;                 // per object: the transform the paths were traced in
-    std::vector<Bounds> object_bounds_;             // per object, in its own frame
+    std::vector<Transform> placed_;      // per object: the transform the paths were traced in
+    std::vector<Bounds> object_bounds_;  // per object, in its own frame
     bool query_on_ = true;
     uint64_t seen_sequence_ = 0;
     uint64_t frame_ = 0;
-    float tolerance_ = 0.0f;                 // world units
-    std::vector<glm::vec3> traced_power_;    // per light: photon power the stored hits carry
-    std::vector<uint64_t> invalidations_;    // per light
+    float tolerance_ = 0.0f;               // world units
+    std::vector<glm::vec3> traced_power_;  // per light: photon power the stored hits carry
+    std::vector<uint64_t> invalidations_;  // per light
     std::vector<std::vector<TracedVertex>> traced_;  // re-used path buffers, one per photon job
     std::vector<PathEnds> traced_ends_;              // their ends
 };

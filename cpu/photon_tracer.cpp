@@ -1,9 +1,9 @@
 #include "cpu/photon_tracer.h"
 
-#include "cpu/sampling.h"
-
 #include <algorithm>
 #include <cmath>
+
+#include "cpu/sampling.h"
 
 namespace ag::cpu {
 
@@ -37,7 +37,9 @@ glm::vec2 hilbert_point(double t) {
     return {(float(x) + 0.5f) / float(kSide), (float(y) + 0.5f) / float(kSide)};
 }
 
-PhotonTracer::PhotonTracer(const Scene& scene, const RayTracer& rays) : scene_(scene), rays_(rays) { refresh(); }
+PhotonTracer::PhotonTracer(const Scene& scene, const RayTracer& rays) : scene_(scene), rays_(rays) {
+    refresh();
+}
 
 void PhotonTracer::refresh() {
     const PhotonSettings& s = scene_.settings.photons;
@@ -48,12 +50,14 @@ void PhotonTracer::refresh() {
     // roulette, and their stratification no longer matters) use hashed numbers.
     dimensions_ = 3 + 3 * std::min(max_bounces_, kQmcBounces);
     const size_t table_size = size_t(groups_) * size_t(per_group_) * kTabulated;
-    if (halton_.size() != scene_.lights.size() || (!halton_.empty() && halton_[0].dimensions() != dimensions_) ||
+    if (halton_.size() != scene_.lights.size() ||
+        (!halton_.empty() && halton_[0].dimensions() != dimensions_) ||
         (!tables_.empty() && tables_[0].size() != table_size)) {
         halton_.clear();
         tables_.clear();
         for (size_t l = 0; l < scene_.lights.size(); ++l) {
-            halton_.emplace_back(dimensions_, hash_u32(scene_.settings.seed * 7919u + uint32_t(l)) | 1u);
+            halton_.emplace_back(dimensions_,
+                                 hash_u32(scene_.settings.seed * 7919u + uint32_t(l)) | 1u);
             // Every photon is re-traced again and again with the same numbers: tabulate the
             // emission point and the first bounces' numbers once (a light's photons are fixed).
             const Halton& h = halton_.back();
@@ -62,10 +66,12 @@ void PhotonTracer::refresh() {
                 for (int i = 0; i < per_group_; ++i) {
                     const uint64_t k = uint64_t(g) * uint64_t(per_group_) + uint64_t(i);
                     float* row = &table[k * kTabulated];
-                    const glm::vec2 point = hilbert_point((double(g) + h.sample(uint64_t(i), 0)) / double(groups_));
+                    const glm::vec2 point =
+                        hilbert_point((double(g) + h.sample(uint64_t(i), 0)) / double(groups_));
                     row[0] = point.x;
                     row[1] = point.y;
-                    for (int d = 1; d + 1 < kTabulated && d < dimensions_; ++d) row[d + 1] = float(h.sample(k, d));
+                    for (int d = 1; d + 1 < kTabulated && d < dimensions_; ++d)
+                        row[d + 1] = float(h.sample(k, d));
                 }
             tables_.push_back(std::move(table));
         }
@@ -79,14 +85,17 @@ glm::vec3 PhotonTracer::photon_power(int light) const {
 }
 
 float PhotonTracer::sample(int light, uint64_t k, int dim) const {
-    if (dim + 1 < kTabulated && dim < dimensions_) return tables_[size_t(light)][k * kTabulated + size_t(dim) + 1];
+    if (dim + 1 < kTabulated && dim < dimensions_)
+        return tables_[size_t(light)][k * kTabulated + size_t(dim) + 1];
     if (dim < dimensions_) return float(halton_[size_t(light)].sample(k, dim));
     const uint32_t h = hash_u32(hash_u32(uint32_t(k) ^ hash_u32(uint32_t(k >> 32) + 0x9e3779b9u)) +
-                                uint32_t(dim) * 0x85ebca6bu + scene_.settings.seed + uint32_t(light) * 0xc2b2ae35u);
+                                uint32_t(dim) * 0x85ebca6bu + scene_.settings.seed +
+                                uint32_t(light) * 0xc2b2ae35u);
     return to_unit_float(h);
 }
 
-PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out) const {
+PathEnds PhotonTracer::trace(int light, int group, int index,
+                             std::vector<TracedVertex>& out) const {
     const Light& l = scene_.lights[size_t(light)];
     const uint64_t k = uint64_t(group) * uint64_t(per_group_) + uint64_t(index);
     // Group g owns stratum [g/G, (g+1)/G) of the Hilbert parameter; photon i takes the i-th
@@ -101,7 +110,8 @@ PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<Traced
     } else {
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
         const glm::vec3 n = l.quad_normal();
-        ray.origin = l.corners[0] + sample(light, k, 1) * e1 + sample(light, k, 2) * e3 + rays_.epsilon() * n;
+        ray.origin = l.corners[0] + sample(light, k, 1) * e1 + sample(light, k, 2) * e3 +
+                     rays_.epsilon() * n;
         ray.direction = cosine_direction(n, s.x, s.y);
     }
     glm::vec3 power = photon_power(light);
@@ -126,7 +136,8 @@ PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<Traced
         v.object = hit.object;
         v.surface = scene_.triangle_surface[size_t(hit.object)][size_t(hit.triangle)];
         v.position = hit.position;
-        v.local_position = glm::conjugate(object.transform.rotation) * (hit.position - object.transform.translation);
+        v.local_position = glm::conjugate(object.transform.rotation) *
+                           (hit.position - object.transform.translation);
         v.power = power;
         v.bounce = uint8_t(std::min(bounce, 255));
         const int dim = 3 + 3 * bounce;
@@ -142,7 +153,8 @@ PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<Traced
             if (p <= 0.0f || sample(light, k, dim) >= p) return ends;
             power *= m.albedo / p;
             ray.origin = hit.position + eps * facing;
-            ray.direction = cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));
+            ray.direction =
+                cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));
         } else {  // mirror or glass: reflect, or refract by Fresnel, without storing
             out.push_back(v);
             const float u = m.type == MaterialType::glass ? sample(light, k, dim) : 0.0f;

@@ -5,9 +5,8 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "cpu/ray_tracer.h"
 #include "shared/qmc.h"
@@ -19,18 +18,19 @@ namespace ag::cpu {
 struct TracedVertex {
     int object = -1;
     int surface = -1;
-    glm::vec3 position{0.0f};         // world space (path comparison)
-    glm::vec3 local_position{0.0f};   // object space (photon maps live in object space)
-    glm::vec3 power{0.0f};            // incident flux carried by the photon, W
-    uint8_t bounce = 0;               // 0: straight from the light
-    bool stored = false;              // deposited as a photon hit (front side of a diffuse surface)
+    glm::vec3 position{0.0f};        // world space (path comparison)
+    glm::vec3 local_position{0.0f};  // object space (photon maps live in object space)
+    glm::vec3 power{0.0f};           // incident flux carried by the photon, W
+    uint8_t bounce = 0;              // 0: straight from the light
+    bool stored = false;             // deposited as a photon hit (front side of a diffuse surface)
 };
 
 // Where a traced path starts and whether its last ray left the scene: with the stored vertices
 // these give every segment the photon travelled, which edit queries test against moved objects.
 struct PathEnds {
     glm::vec3 origin{0.0f};  // the emission ray's origin
-    glm::vec3 escape{0.0f};  // direction of a last ray that hit nothing; zero if the path ended on a hit
+    glm::vec3 escape{
+        0.0f};  // direction of a last ray that hit nothing; zero if the path ended on a hit
 };
 
 // Maps t ∈ [0,1) along a Hilbert curve to the unit square. The curve preserves area, so an

@@ -1,40 +1,50 @@
 #include "cpu/ray_tracer.h"
 
+#include <embree3/rtcore.h>
+
 #include <atomic>
+#include <glm/gtc/type_ptr.hpp>
 #include <stdexcept>
 #include <string>
-
-#include <embree3/rtcore.h>
-#include <glm/gtc/type_ptr.hpp>
 
 namespace ag::cpu {
 
 namespace {
 
 // RAII handles for Embree objects.
-struct DeviceDeleter { void operator()(RTCDeviceTy* d) const { rtcReleaseDevice(d); } };
-struct SceneDeleter { void operator()(RTCSceneTy* s) const { rtcReleaseScene(s); } };
+struct DeviceDeleter {
+    void operator()(RTCDeviceTy* d) const { rtcReleaseDevice(d); }
+};
+struct SceneDeleter {
+    void operator()(RTCSceneTy* s) const { rtcReleaseScene(s); }
+};
 using DevicePtr = std::unique_ptr<RTCDeviceTy, DeviceDeleter>;
 using ScenePtr = std::unique_ptr<RTCSceneTy, SceneDeleter>;
 
 void check(RTCDevice device, const char* what) {
     const RTCError e = rtcGetDeviceError(device);
-    if (e != RTC_ERROR_NONE) throw std::runtime_error(std::string("Embree error ") + std::to_string(int(e)) + " in " + what);
+    if (e != RTC_ERROR_NONE)
+        throw std::runtime_error(std::string("Embree error ") + std::to_string(int(e)) + " in " +
+                                 what);
 }
 
 // Attaches `mesh` as a triangle geometry with the given vertex transform; returns the geomID.
-unsigned attach_mesh(RTCDevice device, RTCScene scene, const Mesh& mesh, const Transform* transform) {
+unsigned attach_mesh(RTCDevice device, RTCScene scene, const Mesh& mesh,
+                     const Transform* transform) {
     RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
-    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
-                                                          3 * sizeof(float), mesh.positions.size()));
+    auto* v = static_cast<float*>(rtcSetNewGeometryBuffer(
+        g, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float), mesh.positions.size()));
     for (size_t i = 0; i < mesh.positions.size(); ++i) {
-        const glm::vec3 p = transform ? transform->apply_point(mesh.positions[i]) : mesh.positions[i];
+        const glm::vec3 p =
+            transform ? transform->apply_point(mesh.positions[i]) : mesh.positions[i];
         v[3 * i] = p.x, v[3 * i + 1] = p.y, v[3 * i + 2] = p.z;
     }
-    auto* idx = static_cast<unsigned*>(rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               3 * sizeof(unsigned), mesh.triangles.size()));
+    auto* idx = static_cast<unsigned*>(
+        rtcSetNewGeometryBuffer(g, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned),
+                                mesh.triangles.size()));
     for (size_t i = 0; i < mesh.triangles.size(); ++i)
-        idx[3 * i] = mesh.triangles[i].x, idx[3 * i + 1] = mesh.triangles[i].y, idx[3 * i + 2] = mesh.triangles[i].z;
+        idx[3 * i] = mesh.triangles[i].x, idx[3 * i + 1] = mesh.triangles[i].y,
+                idx[3 * i + 2] = mesh.triangles[i].z;
     rtcCommitGeometry(g);
     const unsigned id = rtcAttachGeometry(scene, g);
     rtcReleaseGeometry(g);
@@ -51,8 +61,8 @@ void set_instance_transform(RTCGeometry instance, const Transform& t) {
 
 struct RayTracer::Impl {
     DevicePtr device;
-    ScenePtr top;                       // static-scene instance + one instance per dynamic object
-    ScenePtr static_scene;              // all static objects, world space
+    ScenePtr top;                         // static-scene instance + one instance per dynamic object
+    ScenePtr static_scene;                // all static objects, world space
     std::vector<ScenePtr> object_scenes;  // per dynamic object, object space (null for static)
     std::vector<int> static_geom_object;  // static geomID -> object index
     std::vector<int> instance_object;     // top-level instID -> object index (-1 = static scene)
@@ -94,7 +104,8 @@ struct RayTracer::Impl {
         add_instance(static_scene.get(), -1, Transform{});
         for (size_t i = 0; i < scene.objects.size(); ++i)
             if (scene.objects[i].dynamic)
-                object_instance[i] = add_instance(object_scenes[i].get(), int(i), scene.objects[i].transform);
+                object_instance[i] =
+                    add_instance(object_scenes[i].get(), int(i), scene.objects[i].transform);
         rtcCommitScene(top.get());
         check(device.get(), "top-level BVH build");
     }
@@ -117,7 +128,8 @@ RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     impl_->build_static(scene);
     impl_->build_top(scene);
     impl_->transforms.resize(scene.objects.size());
-    for (size_t i = 0; i < scene.objects.size(); ++i) impl_->transforms[i] = scene.objects[i].transform;
+    for (size_t i = 0; i < scene.objects.size(); ++i)
+        impl_->transforms[i] = scene.objects[i].transform;
 }
 
 RayTracer::~RayTracer() = default;

@@ -111,9 +111,11 @@ Framebuffer framebuffer_with(const std::vector<GLuint>& colors, GLuint depth_ste
     Framebuffer f = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, f.get());
     for (size_t i = 0; i < colors.size(); ++i)
-        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, colors[i], 0);
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D,
+                                 colors[i], 0);
     if (depth_stencil)
-        gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil);
+        gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                                    depth_stencil);
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("caustics: framebuffer incomplete");
     return f;
@@ -121,7 +123,8 @@ Framebuffer framebuffer_with(const std::vector<GLuint>& colors, GLuint depth_ste
 
 }  // namespace
 
-CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
+CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width,
+                                   int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     tile_ = scene.settings.caustics.tile_size;
     tiles_x_ = (width + tile_ - 1) / tile_;
@@ -147,7 +150,8 @@ CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes
     gl::EnableVertexAttribArray(0);
     gl::VertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), nullptr);
     gl::EnableVertexAttribArray(1);
-    gl::VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float), reinterpret_cast<void*>(3 * sizeof(float)));
+    gl::VertexAttribPointer(1, 3, GL_FLOAT, GL_FALSE, 6 * sizeof(float),
+                            reinterpret_cast<void*>(3 * sizeof(float)));
     empty_vao_ = make_vertex_array();
     gl::BindVertexArray(0);
     queries_.resize(size_t(tiles_x_) * size_t(tiles_y_));
@@ -160,25 +164,29 @@ CausticsRenderer::~CausticsRenderer() {
     if (!queries_.empty()) gl::DeleteQueries(GLsizei(queries_.size()), queries_.data());
 }
 
-void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& powers, bool cull) {
+void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
+                              const std::vector<glm::vec3>& powers, bool cull) {
     Camera camera = scene_.camera;
     camera.width = width_;
     camera.height = height_;
     const Bounds bounds = scene_.world_bounds();
     const float diagonal = scene_.diagonal();
     const float far_plane = glm::length(camera.eye - bounds.center()) + 2.0f * diagonal;
-    const glm::mat4 vp = projection_matrix(camera, 1e-3f * diagonal, far_plane) * view_matrix(camera);
+    const glm::mat4 vp =
+        projection_matrix(camera, 1e-3f * diagonal, far_plane) * view_matrix(camera);
 
     // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas.
     begin_scene_pass(geometry_fbo_.get(), 2, width_, height_, glm::vec4(0.0f));
     geometry_.use();
     geometry_.set("view_projection", vp);
     geometry_.set("eye", camera.eye);
-    geometry_.set("pixel_at_unit_distance", 2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
+    geometry_.set("pixel_at_unit_distance",
+                  2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
     for (size_t o = 0; o < scene_.objects.size(); ++o) {
         const Object& obj = scene_.objects[o];
         geometry_.set("model", model_matrix(obj));
-        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? obj.material.albedo : glm::vec3(0.0f));
+        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? obj.material.albedo
+                                                                           : glm::vec3(0.0f));
         meshes_.draw(o);
     }
 
@@ -186,7 +194,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
     std::vector<float> data;
     data.reserve(positions.size() * 6);
     for (size_t i = 0; i < positions.size(); ++i)
-        data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x, powers[i].y, powers[i].z});
+        data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x,
+                                 powers[i].y, powers[i].z});
     gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
     const GLenum one = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &one);
@@ -205,7 +214,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
         splat_.set("pull", 2e-3f);  // 2e-4 lost a quarter of the photons to depth precision
         gl::BindVertexArray(photon_vao_.get());
         gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
-        gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(), GL_STREAM_DRAW);
+        gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(),
+                       GL_STREAM_DRAW);
         gl::DrawArrays(GL_POINTS, 0, GLsizei(positions.size()));
     }
     gl::Disable(GL_BLEND);
@@ -238,7 +248,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
                 for (int dy = -1; dy <= 1; ++dy)
                     for (int dx = -1; dx <= 1; ++dx) {
                         const int x = tx + dx, y = ty + dy;
-                        if (x >= 0 && y >= 0 && x < tiles_x_ && y < tiles_y_) keep[size_t(y * tiles_x_ + x)] = 1;
+                        if (x >= 0 && y >= 0 && x < tiles_x_ && y < tiles_y_)
+                            keep[size_t(y * tiles_x_ + x)] = 1;
                     }
             }
     }
@@ -290,7 +301,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions, const std
 }
 
 std::vector<glm::vec3> CausticsRenderer::read_radiance() const {
-    const std::vector<float> rgba = read_rgba(result_fbo_.get(), GL_COLOR_ATTACHMENT0, 0, 0, width_, height_);
+    const std::vector<float> rgba =
+        read_rgba(result_fbo_.get(), GL_COLOR_ATTACHMENT0, 0, 0, width_, height_);
     std::vector<glm::vec3> out(size_t(width_) * size_t(height_));
     for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x) {
@@ -301,10 +313,13 @@ std::vector<glm::vec3> CausticsRenderer::read_radiance() const {
 }
 
 std::vector<float> CausticsRenderer::read_pixel_area() const {
-    const std::vector<float> rgba = read_rgba(geometry_fbo_.get(), GL_COLOR_ATTACHMENT1, 0, 0, width_, height_);
+    const std::vector<float> rgba =
+        read_rgba(geometry_fbo_.get(), GL_COLOR_ATTACHMENT1, 0, 0, width_, height_);
     std::vector<float> out(size_t(width_) * size_t(height_));
     for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x) out[size_t(y) * size_t(width_) + size_t(x)] = rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4 + 3];
+        for (int x = 0; x < width_; ++x)
+            out[size_t(y) * size_t(width_) + size_t(x)] =
+                rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4 + 3];
     return out;
 }
 

@@ -5,9 +5,8 @@
 // the world area of the pixel (eq. 12.2) so the caustic keeps its brightness under zoom and tilt.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
@@ -25,7 +24,8 @@ public:
     // Renders L_caustics for the scene's camera (resized to width × height) from photons
     // (world positions and flux in W). `cull` filters only tiles that hold photons (and their
     // neighbours); without it every tile is filtered (same image).
-    void render(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& powers, bool cull = true);
+    void render(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& powers,
+                bool cull = true);
 
     GLuint texture() const { return result_.get(); }  // caustic radiance, screen-sized RGBA32F
     int tiles_total() const { return tiles_x_ * tiles_y_; }

@@ -29,28 +29,34 @@ public:
     explicit EglContext(bool require_hardware) {
         backend_ = GlBackend::egl;
         const char* client_ext = eglQueryString(EGL_NO_DISPLAY, EGL_EXTENSIONS);
-        auto get_platform_display =
-            reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(eglGetProcAddress("eglGetPlatformDisplayEXT"));
+        auto get_platform_display = reinterpret_cast<PFNEGLGETPLATFORMDISPLAYEXTPROC>(
+            eglGetProcAddress("eglGetPlatformDisplayEXT"));
         if (has_extension(client_ext, "EGL_EXT_platform_device") && get_platform_display) {
-            auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(eglGetProcAddress("eglQueryDevicesEXT"));
-            auto query_device_string =
-                reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(eglGetProcAddress("eglQueryDeviceStringEXT"));
+            auto query_devices = reinterpret_cast<PFNEGLQUERYDEVICESEXTPROC>(
+                eglGetProcAddress("eglQueryDevicesEXT"));
+            auto query_device_string = reinterpret_cast<PFNEGLQUERYDEVICESTRINGEXTPROC>(
+                eglGetProcAddress("eglQueryDeviceStringEXT"));
             EGLDeviceEXT devices[16];
             EGLint count = 0;
             if (query_devices && query_devices(16, devices, &count))
                 for (EGLint i = 0; i < count && display_ == EGL_NO_DISPLAY; ++i) {
-                    const char* ext = query_device_string ? query_device_string(devices[i], EGL_EXTENSIONS) : nullptr;
+                    const char* ext = query_device_string
+                                          ? query_device_string(devices[i], EGL_EXTENSIONS)
+                                          : nullptr;
                     // Mesa's software device advertises EGL_MESA_device_software.
-                    if (require_hardware && has_extension(ext, "EGL_MESA_device_software")) continue;
-                    EGLDisplay d = get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
+                    if (require_hardware && has_extension(ext, "EGL_MESA_device_software"))
+                        continue;
+                    EGLDisplay d =
+                        get_platform_display(EGL_PLATFORM_DEVICE_EXT, devices[i], nullptr);
                     if (d != EGL_NO_DISPLAY && try_initialize(d)) display_ = d;
                 }
         }
         if (display_ == EGL_NO_DISPLAY && require_hardware)
             throw_gl_error("EGL: no hardware GPU device found (EGL_EXT_platform_device)");
-        if (display_ == EGL_NO_DISPLAY && has_extension(client_ext, "EGL_MESA_platform_surfaceless") &&
-            get_platform_display) {
-            EGLDisplay d = get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
+        if (display_ == EGL_NO_DISPLAY &&
+            has_extension(client_ext, "EGL_MESA_platform_surfaceless") && get_platform_display) {
+            EGLDisplay d =
+                get_platform_display(EGL_PLATFORM_SURFACELESS_MESA, EGL_DEFAULT_DISPLAY, nullptr);
             if (d != EGL_NO_DISPLAY && try_initialize(d)) display_ = d;
         }
         if (display_ == EGL_NO_DISPLAY) throw_gl_error("EGL: no display could be initialised");
@@ -59,10 +65,15 @@ public:
         EGLConfig config = nullptr;
         EGLint configs = 0;
         eglChooseConfig(display_, config_attribs, &config, 1, &configs);
-        const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION, 4, EGL_CONTEXT_MINOR_VERSION, 5,
-                                          EGL_CONTEXT_OPENGL_PROFILE_MASK, EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
+        const EGLint context_attribs[] = {EGL_CONTEXT_MAJOR_VERSION,
+                                          4,
+                                          EGL_CONTEXT_MINOR_VERSION,
+                                          5,
+                                          EGL_CONTEXT_OPENGL_PROFILE_MASK,
+                                          EGL_CONTEXT_OPENGL_CORE_PROFILE_BIT,
                                           EGL_NONE};
-        context_ = eglCreateContext(display_, configs > 0 ? config : EGL_NO_CONFIG_KHR, EGL_NO_CONTEXT, context_attribs);
+        context_ = eglCreateContext(display_, configs > 0 ? config : EGL_NO_CONFIG_KHR,
+                                    EGL_NO_CONTEXT, context_attribs);
         if (context_ == EGL_NO_CONTEXT) throw_gl_error("EGL: cannot create a GL 4.5 core context");
         make_current();
     }

@@ -16,11 +16,23 @@ class OsmesaContext final : public GlContext {
 public:
     OsmesaContext() {
         backend_ = GlBackend::osmesa;
-        const int attribs[] = {OSMESA_FORMAT, OSMESA_RGBA, OSMESA_DEPTH_BITS, 24, OSMESA_STENCIL_BITS, 8,
-                               OSMESA_PROFILE, OSMESA_CORE_PROFILE, OSMESA_CONTEXT_MAJOR_VERSION, 4,
-                               OSMESA_CONTEXT_MINOR_VERSION, 5, 0};
+        const int attribs[] = {OSMESA_FORMAT,
+                               OSMESA_RGBA,
+                               OSMESA_DEPTH_BITS,
+                               24,
+                               OSMESA_STENCIL_BITS,
+                               8,
+                               OSMESA_PROFILE,
+                               OSMESA_CORE_PROFILE,
+                               OSMESA_CONTEXT_MAJOR_VERSION,
+                               4,
+                               OSMESA_CONTEXT_MINOR_VERSION,
+                               5,
+                               0};
         context_ = OSMesaCreateContextAttribs(attribs, nullptr);
-        if (!context_) throw_gl_error("OSMesa: cannot create a GL 4.5 core context (is libosmesa6 installed?)");
+        if (!context_)
+            throw_gl_error(
+                "OSMesa: cannot create a GL 4.5 core context (is libosmesa6 installed?)");
         buffer_.resize(4 * 4 * 4);  // we draw into framebuffer objects; the default one is a stub
         make_current();
     }

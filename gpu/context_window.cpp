@@ -16,7 +16,10 @@ class WindowContext final : public GlContext {
 public:
     WindowContext(int width, int height, const std::string& title) {
         backend_ = GlBackend::window;
-        if (!glfwInit()) throw_gl_error("window: GLFW cannot start (no DISPLAY? run under xvfb-run -a; headless commands take --gl osmesa)");
+        if (!glfwInit())
+            throw_gl_error(
+                "window: GLFW cannot start (no DISPLAY? run under xvfb-run -a; headless commands "
+                "take --gl osmesa)");
         glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 4);
         glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 5);
         glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);

@@ -1,7 +1,6 @@
 #include "gpu/frame_renderer.h"
 
 #include <cmath>
-
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "shared/camera.h"
@@ -142,7 +141,6 @@ void main() {
 }
 )";
 
-
 }  // namespace
 
 std::vector<LightSample> light_samples(const Scene& scene) {
@@ -159,7 +157,8 @@ std::vector<LightSample> light_samples(const Scene& scene) {
         const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
         for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)
-                out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 + (float(j) + 0.5f) / float(n) * e3,
+                out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 +
+                                   (float(j) + 0.5f) / float(n) * e3,
                                intensity, l.quad_normal(), true});
     }
     // Never cut: the scene file was checked on load, but settings may have changed since.
@@ -179,12 +178,14 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     for (size_t i = 0; i < aov_.size(); ++i) {
         aov_[i] = make_float_texture(width, height);
-        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D, aov_[i].get(), 0);
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D,
+                                 aov_[i].get(), 0);
     }
     depth_stencil_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height);
-    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER, depth_stencil_.get());
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                                depth_stencil_.get());
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("frame: framebuffer incomplete");
 
@@ -213,7 +214,8 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
         cube_maps_[o] = make_texture();
         gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o].get());
         for (int f = 0; f < 6; ++f)
-            gl::TexImage2D(GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f), 0, GL_RGBA16F, cube, cube, 0, GL_RGBA, GL_FLOAT, nullptr);
+            gl::TexImage2D(GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f), 0, GL_RGBA16F, cube, cube, 0,
+                           GL_RGBA, GL_FLOAT, nullptr);
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
@@ -229,7 +231,8 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     check_gl("FrameRenderer");
 }
 
-void FrameRenderer::set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const {
+void FrameRenderer::set_light_uniforms(const Program& p,
+                                       const std::vector<LightSample>& lights) const {
     p.set("light_count", int(lights.size()));
     for (size_t i = 0; i < lights.size(); ++i) {
         const std::string k = "[" + std::to_string(i) + "]";
@@ -245,7 +248,8 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     const float far_plane = 4.0f * scene_.diagonal();
     // Face order +X −X +Y −Y +Z −Z with the GL cube-map conventions for up vectors.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
-    const glm::vec3 ups[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
+    const glm::vec3 ups[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1},
+                              {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
     const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, near_, far_plane);
     environment_.use();
     environment_.set("iim", 0);
@@ -253,7 +257,8 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, iim);
     gl::BindFramebuffer(GL_FRAMEBUFFER, cube_fbo_.get());
-    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, cube_depth_.get());
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+                                cube_depth_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &draw);
     gl::Viewport(0, 0, size, size);
@@ -263,13 +268,16 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     gl::Disable(GL_STENCIL_TEST);
     for (size_t s = 0; s < scene_.objects.size(); ++s) {
         if (!cube_maps_[s]) continue;
-        const glm::vec3 centre = scene_.objects[s].transform.apply_point(mesh_bounds(scene_.objects[s].mesh).center());
+        const glm::vec3 centre =
+            scene_.objects[s].transform.apply_point(mesh_bounds(scene_.objects[s].mesh).center());
         for (int f = 0; f < 6; ++f) {
-            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f),
+            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0,
+                                     GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f),
                                      cube_maps_[s].get(), 0);
             gl::ClearColor(0, 0, 0, 1);
             gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-            environment_.set("view_projection", projection * glm::lookAt(centre, centre + dirs[f], ups[f]));
+            environment_.set("view_projection",
+                             projection * glm::lookAt(centre, centre + dirs[f], ups[f]));
             for (size_t o = 0; o < scene_.objects.size(); ++o) {
                 if (o == s) continue;  // an object does not see itself in its own cube map
                 const Object& obj = scene_.objects[o];
@@ -284,13 +292,16 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     check_gl("FrameRenderer::render_cube_maps");
 }
 
-void FrameRenderer::draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection) {
+void FrameRenderer::draw_shadow_volumes(const LightSample& light,
+                                        const glm::mat4& view_projection) {
     std::vector<glm::vec4> triangles;
     for (size_t o = 0; o < scene_.objects.size(); ++o)
-        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]), light.position, triangles);
+        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]), light.position,
+                             triangles);
     if (triangles.empty()) return;
     gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
-    gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)), triangles.data(), GL_STREAM_DRAW);
+    gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)),
+                   triangles.data(), GL_STREAM_DRAW);
     volume_.use();
     volume_.set("view_projection", view_projection);
     gl::BindVertexArray(volume_vao_.get());
@@ -316,7 +327,8 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
         glm::infinitePerspective(glm::radians(camera.fov_y), float(width_) / float(height_), near_);
     const glm::mat4 view_projection = projection * view_matrix(camera);
 
-    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                           GL_COLOR_ATTACHMENT3};
     begin_scene_pass(fbo_.get(), 4, width_, height_, glm::vec4(0, 0, 0, 1));
 
     // 1. G-buffer: depth, emission, indirect, specular, caustics.
@@ -417,14 +429,16 @@ FrameImages FrameRenderer::read_back() const {
         Image img(width_, height_);
         for (int y = 0; y < height_; ++y)
             for (int x = 0; x < width_; ++x) {
-                const float* p = &rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4];  // GL rows bottom-up
+                const float* p = &rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) *
+                                       4];  // GL rows bottom-up
                 img.set_rgb(x, y, {p[0], p[1], p[2]});
             }
         return img;
     };
     FrameImages out;
     out.frame = to_image(compose_fbo_.get(), GL_COLOR_ATTACHMENT0);
-    for (size_t a = 0; a < aov_.size(); ++a) out.aov[a] = to_image(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + a));
+    for (size_t a = 0; a < aov_.size(); ++a)
+        out.aov[a] = to_image(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + a));
     return out;
 }
 

@@ -5,9 +5,8 @@
 // shadow volumes; indirect light is IIM × albedo; mirrors and glass look up a dynamic cube map.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"

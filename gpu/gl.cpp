@@ -7,8 +7,8 @@ AG_GL_FUNCTIONS(AG_GL_DEFINE)
 #undef AG_GL_DEFINE
 
 void load(GetProc get_proc) {
-#define AG_GL_LOAD(type, name)                                                       \
-    name = reinterpret_cast<type>(get_proc("gl" #name));                            \
+#define AG_GL_LOAD(type, name)                           \
+    name = reinterpret_cast<type>(get_proc("gl" #name)); \
     if (!name) throw GlError("OpenGL entry point gl" #name " is missing from the context");
     AG_GL_FUNCTIONS(AG_GL_LOAD)
 #undef AG_GL_LOAD
@@ -20,11 +20,12 @@ namespace ag::gpu {
 
 void check_gl(const char* where) {
     const GLenum e = gl::GetError();
-    if (e != GL_NO_ERROR) throw GlError(std::string("OpenGL error 0x") + [&] {
-        char buf[16];
-        std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
-        return std::string(buf);
-    }() + " in " + where);
+    if (e != GL_NO_ERROR)
+        throw GlError(std::string("OpenGL error 0x") + [&] {
+            char buf[16];
+            std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
+            return std::string(buf);
+        }() + " in " + where);
 }
 
 }  // namespace ag::gpu

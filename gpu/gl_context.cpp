@@ -19,15 +19,21 @@ std::string GlContext::version() const {
 GlBackend parse_gl_backend(const std::string& name) {
     for (size_t i = 0; i < kGlBackendNames.size(); ++i)
         if (name == kGlBackendNames[i]) return GlBackend(i);
-    throw std::invalid_argument("unknown GL backend '" + name + "' (expected auto, osmesa, egl or window)");
+    throw std::invalid_argument("unknown GL backend '" + name +
+                                "' (expected auto, osmesa, egl or window)");
 }
 
-std::unique_ptr<GlContext> make_gl_context(GlBackend backend, int width, int height, const std::string& title) {
+std::unique_ptr<GlContext> make_gl_context(GlBackend backend, int width, int height,
+                                           const std::string& title) {
     switch (backend) {
-        case GlBackend::osmesa: return detail::make_osmesa_context();
-        case GlBackend::egl: return detail::make_egl_context(false);
-        case GlBackend::window: return detail::make_window_context(width, height, title);
-        case GlBackend::automatic: break;
+        case GlBackend::osmesa:
+            return detail::make_osmesa_context();
+        case GlBackend::egl:
+            return detail::make_egl_context(false);
+        case GlBackend::window:
+            return detail::make_window_context(width, height, title);
+        case GlBackend::automatic:
+            break;
     }
     try {
         return detail::make_egl_context(true);  // a real GPU, if there is one

@@ -1,6 +1,7 @@
 // OpenGL 4.5 core contexts. One GL code path, three backends chosen at run time: OSMesa (default,
 // headless, Mesa llvmpipe, no GPU), EGL (headless on a GPU through the device platform, or
-// surfaceless Mesa) and a GLFW window (the viewer). `automatic` tries EGL on a real GPU, then OSMesa.
+// surfaceless Mesa) and a GLFW window (the viewer). `automatic` tries EGL on a real GPU, then
+// OSMesa.
 #pragma once
 
 #include <array>

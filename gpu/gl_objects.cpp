@@ -46,7 +46,8 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
         char log[4096];
         gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
         gl::DeleteShader(s);
-        throw GlError("shader '" + name + (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
+        throw GlError("shader '" + name +
+                      (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
                       " does not compile:\n" + log);
     }
     return s;
@@ -83,7 +84,8 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
             gl::TexImage2D(GL_TEXTURE_2D, level, GL_RGBA32F, w, h, 0, GL_RGBA, GL_FLOAT, nullptr);
         }
     }
-    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, mip ? GL_NEAREST_MIPMAP_NEAREST : GL_NEAREST);
+    gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER,
+                      mip ? GL_NEAREST_MIPMAP_NEAREST : GL_NEAREST);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
@@ -91,9 +93,11 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
     return t;
 }
 
-void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height, const glm::vec4& clear) {
+void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
+                      const glm::vec4& clear) {
     gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3};
+    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                           GL_COLOR_ATTACHMENT3};
     gl::DrawBuffers(buffers, all);
     gl::Viewport(0, 0, width, height);
     gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
@@ -110,7 +114,8 @@ void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height, co
     gl::Disable(GL_CULL_FACE);
 }
 
-std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height) {
+std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width,
+                             int height) {
     std::vector<float> out(size_t(width) * size_t(height) * 4);
     gl::BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
     gl::ReadBuffer(attachment);

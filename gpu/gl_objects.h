@@ -1,11 +1,10 @@
 // RAII handles for GL objects and small helpers (programs, float textures, framebuffers).
 #pragma once
 
+#include <glm/glm.hpp>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 #include "gpu/gl.h"
 
@@ -81,8 +80,12 @@ public:
     void set(const char* u, float v) const { gl::Uniform1f(location(u), v); }
     void set(const char* u, const glm::vec2& v) const { gl::Uniform2f(location(u), v.x, v.y); }
     void set(const char* u, const glm::vec3& v) const { gl::Uniform3f(location(u), v.x, v.y, v.z); }
-    void set(const char* u, const glm::vec4& v) const { gl::Uniform4f(location(u), v.x, v.y, v.z, v.w); }
-    void set(const char* u, const glm::mat4& m) const { gl::UniformMatrix4fv(location(u), 1, GL_FALSE, &m[0][0]); }
+    void set(const char* u, const glm::vec4& v) const {
+        gl::Uniform4f(location(u), v.x, v.y, v.z, v.w);
+    }
+    void set(const char* u, const glm::mat4& m) const {
+        gl::UniformMatrix4fv(location(u), 1, GL_FALSE, &m[0][0]);
+    }
 
 private:
     Handle<detail::delete_program> id_;
@@ -94,9 +97,11 @@ Texture make_float_texture(int width, int height, bool mip = false, const float*
 // Starts a scene pass into `framebuffer`: color attachments 0..buffers-1 drawn, full viewport,
 // every mask on, colour/depth/stencil cleared (to `clear`, 1, 0), depth test LESS, no blending,
 // stencil test or culling.
-void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height, const glm::vec4& clear);
+void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
+                      const glm::vec4& clear);
 
 // Reads an RGBA32F framebuffer attachment back (rows bottom-up, as GL stores them).
-std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width, int height);
+std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width,
+                             int height);
 
 }  // namespace ag::gpu

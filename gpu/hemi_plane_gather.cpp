@@ -1,12 +1,11 @@
 #include "gpu/hemi_plane_gather.h"
 
-#include "gpu/lightmap_texture.h"
-
 #include <algorithm>
 #include <cmath>
-
 #include <glm/gtc/matrix_transform.hpp>
 #include <numbers>
+
+#include "gpu/lightmap_texture.h"
 
 namespace ag::gpu {
 
@@ -56,7 +55,8 @@ double pixel_weight(double x0, double x1, double y0, double y1) {
     double sum = 0.0;
     for (int j = 0; j < kSub; ++j)
         for (int i = 0; i < kSub; ++i) {
-            const double x = x0 + (i + 0.5) * (x1 - x0) / kSub, y = y0 + (j + 0.5) * (y1 - y0) / kSub;
+            const double x = x0 + (i + 0.5) * (x1 - x0) / kSub,
+                         y = y0 + (j + 0.5) * (y1 - y0) / kSub;
             const double d = x * x + y * y + 1.0;
             sum += 1.0 / (std::numbers::pi * d * d);
         }
@@ -70,7 +70,8 @@ double hemi_plane_coverage(float half_width) {
     return 4.0 / std::numbers::pi * s * std::atan(s);
 }
 
-std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCorrection correction) {
+std::vector<float> hemi_plane_weights(int resolution, float half_width,
+                                      BorderCorrection correction) {
     const int r = resolution;
     const double a = half_width, step = 2.0 * a / r;
     std::vector<double> w(size_t(r) * size_t(r));
@@ -94,9 +95,11 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCo
             const double t = a / std::max(std::abs(cx), std::abs(cy));
             const double theta_edge = std::atan(t);
             // Cosine-weighted measure of θ ∈ [θ_edge, π/2] at this azimuth: ∫ cos sin dθ dφ / π.
-            const double measure = 0.5 * std::cos(theta_edge) * std::cos(theta_edge) * (2.0 * std::numbers::pi / kPhi) / std::numbers::pi;
+            const double measure = 0.5 * std::cos(theta_edge) * std::cos(theta_edge) *
+                                   (2.0 * std::numbers::pi / kPhi) / std::numbers::pi;
             const double bx = std::clamp(t * cx, -a, a), by = std::clamp(t * cy, -a, a);
-            const int i = std::clamp(int((bx + a) / step), 0, r - 1), j = std::clamp(int((by + a) / step), 0, r - 1);
+            const int i = std::clamp(int((bx + a) / step), 0, r - 1),
+                      j = std::clamp(int((by + a) / step), 0, r - 1);
             w[size_t(j) * r + size_t(i)] += measure;
         }
     }
@@ -114,8 +117,9 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     const int size = tiles_x_ * resolution_;
     program_ = Program("hemi-plane gather", kVertex, kFragment);
     color_ = make_float_texture(size, size, true);
-    const std::vector<float> w = hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
-                                                    scene.settings.gather.border_correction);
+    const std::vector<float> w =
+        hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
+                           scene.settings.gather.border_correction);
     std::vector<float> rgba(w.size() * 4, 0.0f);
     for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
     weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
@@ -133,15 +137,18 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
 }
 
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels) {
-    if (!aim_) throw GlError("HemiPlaneGather: gather(texels) needs the AIM texture given at construction");
+    if (!aim_)
+        throw GlError(
+            "HemiPlaneGather: gather(texels) needs the AIM texture given at construction");
     return gather(texels, aim_->id(), aim_->charts());
 }
 
-std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels, GLuint aim_texture,
-                                                  GLuint chart_texture) {
+std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels,
+                                                  GLuint aim_texture, GLuint chart_texture) {
     std::vector<GatherResult> out(texels.size());
     const int size = tiles_x_ * resolution_;
-    const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
+    const int per_pass =
+        max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
     const float a = scene_.settings.gather.plane_half_width;
     const float diagonal = scene_.diagonal();
     // A gather at the edge of a wall sees the adjacent wall at distances far below the texel
@@ -169,7 +176,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     reverse[2][2] = -1.0f;
     reverse[3][2] = 1.0f;  // z' = w − z
     const glm::mat4 projection =
-        reverse * glm::frustumRH_ZO(-a * near_plane, a * near_plane, -a * near_plane, a * near_plane, near_plane, far_plane);
+        reverse * glm::frustumRH_ZO(-a * near_plane, a * near_plane, -a * near_plane,
+                                    a * near_plane, near_plane, far_plane);
 
     for (size_t first = 0; first < texels.size(); first += size_t(per_pass)) {
         const size_t count = std::min(texels.size() - first, size_t(per_pass));
@@ -190,7 +198,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
             const glm::vec3 n = glm::normalize(owner.transform.apply_vector(t.normal));
             const glm::vec3 p = owner.transform.apply_point(t.position) + offset * n;
             const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-            const glm::mat4 view = glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
+            const glm::mat4 view =
+                glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
             const glm::mat4 vp = projection * view;
             const int tx = int(k) % tiles_x_, ty = int(k) / tiles_x_;
             gl::Viewport(tx * resolution_, ty * resolution_, resolution_, resolution_);
@@ -198,7 +207,8 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
             program_.set("view_projection", vp);
             for (size_t o = 0; o < scene_.objects.size(); ++o) {
                 program_.set("model", model_matrix(scene_.objects[o]));
-                program_.set("specular", scene_.objects[o].material.type == MaterialType::diffuse ? 0 : 1);
+                program_.set("specular",
+                             scene_.objects[o].material.type == MaterialType::diffuse ? 0 : 1);
                 meshes_.draw(o);
             }
         }

@@ -6,9 +6,8 @@
 // Larsen's renormalisation or Gautron's border stretch (Gautron 2006, Table 4.1).
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "gpu/gl_objects.h"
 #include "gpu/lightmap_texture.h"
@@ -21,7 +20,8 @@ namespace ag::gpu {
 // Per-pixel weights of an R×R hemi-plane of half-width a (at unit distance), row-major from the
 // plane's (−a, −a) corner. Exact per pixel (integrated, not point-sampled); `correction` adds the
 // missing hemisphere as in settings. Sum: coverage for none, 1 for renormalize and stretch.
-std::vector<float> hemi_plane_weights(int resolution, float half_width, BorderCorrection correction);
+std::vector<float> hemi_plane_weights(int resolution, float half_width,
+                                      BorderCorrection correction);
 
 // Cosine-weighted fraction of the hemisphere a square of half-width a at unit distance covers:
 // (4/π)·s·atan(s), s = a/√(1+a²).

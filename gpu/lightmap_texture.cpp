@@ -4,7 +4,6 @@
 
 namespace ag::gpu {
 
-
 LightmapTexture::LightmapTexture(const LightmapAtlas& atlas) : atlas_(atlas) {
     const int w = std::max(1, atlas.width), h = std::max(1, atlas.height);
     rgba_.assign(size_t(w) * size_t(h) * 4, 0.0f);
@@ -13,7 +12,8 @@ LightmapTexture::LightmapTexture(const LightmapAtlas& atlas) : atlas_(atlas) {
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
     std::vector<float> charts(size_t(w) * size_t(h) * 4, -1.0f);
-    for (const TexelRecord& t : atlas.texels) charts[(size_t(t.y) * size_t(w) + size_t(t.x)) * 4] = float(t.chart);
+    for (const TexelRecord& t : atlas.texels)
+        charts[(size_t(t.y) * size_t(w) + size_t(t.x)) * 4] = float(t.chart);
     charts_ = make_float_texture(w, h, false, charts.data());
     gutter_of_.resize(size_t(w) * size_t(h));
     sources_of_.resize(size_t(w) * size_t(h));
@@ -42,7 +42,8 @@ void LightmapTexture::update_all(const std::vector<glm::vec3>& values) {
     update(values, all);
 }
 
-void LightmapTexture::update(const std::vector<glm::vec3>& values, const std::vector<int>& changed) {
+void LightmapTexture::update(const std::vector<glm::vec3>& values,
+                             const std::vector<int>& changed) {
     if (changed.empty()) return;
     const int w = atlas_.width;
     int x0 = w, y0 = atlas_.height, x1 = -1, y1 = -1;
@@ -57,7 +58,9 @@ void LightmapTexture::update(const std::vector<glm::vec3>& values, const std::ve
     for (int i : changed)
         for (int g : gutter_of_[size_t(i)]) {
             glm::vec3 sum(0.0f);
-            for (int s : sources_of_[size_t(g)]) sum += glm::vec3(rgba_[4 * size_t(s)], rgba_[4 * size_t(s) + 1], rgba_[4 * size_t(s) + 2]);
+            for (int s : sources_of_[size_t(g)])
+                sum += glm::vec3(rgba_[4 * size_t(s)], rgba_[4 * size_t(s) + 1],
+                                 rgba_[4 * size_t(s) + 2]);
             sum /= float(sources_of_[size_t(g)].size());
             for (int c = 0; c < 3; ++c) rgba_[4 * size_t(g) + size_t(c)] = sum[c];
             touch(g);
@@ -66,7 +69,8 @@ void LightmapTexture::update(const std::vector<glm::vec3>& values, const std::ve
     gl::BindTexture(GL_TEXTURE_2D, texture_.get());
     gl::PixelStorei(GL_UNPACK_ALIGNMENT, 4);
     for (int y = y0; y <= y1; ++y)
-        gl::TexSubImage2D(GL_TEXTURE_2D, 0, x0, y, x1 - x0 + 1, 1, GL_RGBA, GL_FLOAT, &rgba_[(size_t(y) * size_t(w) + size_t(x0)) * 4]);
+        gl::TexSubImage2D(GL_TEXTURE_2D, 0, x0, y, x1 - x0 + 1, 1, GL_RGBA, GL_FLOAT,
+                          &rgba_[(size_t(y) * size_t(w) + size_t(x0)) * 4]);
     uploaded_ += size_t(x1 - x0 + 1) * size_t(y1 - y0 + 1);
     check_gl("LightmapTexture::update");
 }

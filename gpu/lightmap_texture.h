@@ -3,9 +3,8 @@
 // the rectangle around changed texels is uploaded.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "gpu/gl_objects.h"
 #include "shared/lightmap.h"

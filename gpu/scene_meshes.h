@@ -3,9 +3,8 @@
 // transform. Uploaded once; rigid edits only change the model matrix.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "gpu/gl_objects.h"
 #include "shared/scene.h"

@@ -15,14 +15,16 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
         if (added) c.positions.push_back(p);
         remap[i] = it->second;
     }
-    for (const glm::uvec3& t : mesh.triangles) c.triangles.push_back({remap[t.x], remap[t.y], remap[t.z]});
+    for (const glm::uvec3& t : mesh.triangles)
+        c.triangles.push_back({remap[t.x], remap[t.y], remap[t.z]});
     // Directed edge (a, b) -> (triangle, edge slot). A closed, consistently wound mesh has every
     // directed edge once and its reverse once.
     std::map<std::pair<unsigned, unsigned>, std::pair<int, int>> edges;
     for (int t = 0; t < int(c.triangles.size()); ++t)
         for (int k = 0; k < 3; ++k) {
             const unsigned a = c.triangles[size_t(t)][k], b = c.triangles[size_t(t)][(k + 1) % 3];
-            if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second) return ShadowCaster{};
+            if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
+                return ShadowCaster{};
         }
     // Small holes (a quad's outline, a box without its bottom) are closed by fans for the shadow
     // volume only, so thin panels and open boxes still cast shadows. Large boundaries (a floor's
@@ -35,7 +37,8 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
     constexpr size_t kMaxHole = 16;
     while (!boundary_next.empty()) {
         std::vector<unsigned> loop{boundary_next.begin()->first};
-        for (unsigned v = boundary_next.begin()->second; v != loop.front(); v = boundary_next.at(v)) {
+        for (unsigned v = boundary_next.begin()->second; v != loop.front();
+             v = boundary_next.at(v)) {
             if (!boundary_next.count(v) || loop.size() > kMaxHole) return ShadowCaster{};
             loop.push_back(v);
         }
@@ -46,7 +49,8 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
             c.triangles.push_back({loop[0], loop[i + 1], loop[i]});
             for (int k = 0; k < 3; ++k) {
                 const unsigned a = c.triangles.back()[k], b = c.triangles.back()[(k + 1) % 3];
-                if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second) return ShadowCaster{};
+                if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
+                    return ShadowCaster{};
             }
         }
     }
@@ -60,11 +64,12 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
     return c;
 }
 
-void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model, const glm::vec3& light,
-                          std::vector<glm::vec4>& out) {
+void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
+                          const glm::vec3& light, std::vector<glm::vec4>& out) {
     if (!caster.closed) return;
     std::vector<glm::vec3> p(caster.positions.size());
-    for (size_t i = 0; i < p.size(); ++i) p[i] = glm::vec3(model * glm::vec4(caster.positions[i], 1.0f));
+    for (size_t i = 0; i < p.size(); ++i)
+        p[i] = glm::vec3(model * glm::vec4(caster.positions[i], 1.0f));
     std::vector<char> lit(caster.triangles.size());
     for (size_t t = 0; t < caster.triangles.size(); ++t) {
         const glm::uvec3 tri = caster.triangles[t];

@@ -3,9 +3,8 @@
 // the CPU from edge adjacency each frame (objects and lights move).
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "shared/mesh.h"
 
@@ -16,16 +15,16 @@ namespace ag::gpu {
 // larger holes or non-manifold edges is not a caster (`closed` false).
 struct ShadowCaster {
     bool closed = false;
-    std::vector<glm::vec3> positions;     // welded
-    std::vector<glm::uvec3> triangles;    // into positions
-    std::vector<glm::ivec3> neighbours;   // per triangle edge (k, k+1): the adjacent triangle
+    std::vector<glm::vec3> positions;    // welded
+    std::vector<glm::uvec3> triangles;   // into positions
+    std::vector<glm::ivec3> neighbours;  // per triangle edge (k, k+1): the adjacent triangle
 };
 
 ShadowCaster make_shadow_caster(const Mesh& mesh);
 
 // Appends the volume of `caster` (transformed by `model`) for a point light at `light` as
 // homogeneous world-space triangles (w = 0 at infinity), consistently wound outwards.
-void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model, const glm::vec3& light,
-                          std::vector<glm::vec4>& out);
+void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
+                          const glm::vec3& light, std::vector<glm::vec4>& out);
 
 }  // namespace ag::gpu

@@ -1,16 +1,17 @@
 #include "shared/camera.h"
 
 #include <cmath>
-
 #include <glm/gtc/matrix_transform.hpp>
 
 namespace ag {
 
-glm::mat4 view_matrix(const Camera& camera) { return glm::lookAt(camera.eye, camera.target, camera.up); }
+glm::mat4 view_matrix(const Camera& camera) {
+    return glm::lookAt(camera.eye, camera.target, camera.up);
+}
 
 glm::mat4 projection_matrix(const Camera& camera, float near_plane, float far_plane) {
-    return glm::perspective(glm::radians(camera.fov_y), float(camera.width) / float(camera.height), near_plane,
-                            far_plane);
+    return glm::perspective(glm::radians(camera.fov_y), float(camera.width) / float(camera.height),
+                            near_plane, far_plane);
 }
 
 glm::vec3 camera_ray_direction(const Camera& camera, float px, float py) {

@@ -9,8 +9,9 @@
 
 namespace ag {
 
-glm::mat4 view_matrix(const Camera& camera);                          // world -> eye (GL, looks down −z)
-glm::mat4 projection_matrix(const Camera& camera, float near_plane, float far_plane);  // GL clip space
+glm::mat4 view_matrix(const Camera& camera);  // world -> eye (GL, looks down −z)
+glm::mat4 projection_matrix(const Camera& camera, float near_plane,
+                            float far_plane);  // GL clip space
 
 // World-space ray through image position (px, py) in pixels (px + 0.5 is a pixel centre).
 // Returns the unit direction; the origin is camera.eye.

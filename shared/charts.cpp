@@ -8,11 +8,11 @@
 #include <cmath>
 #include <cstdint>
 #include <limits>
+#include <numbers>
 #include <numeric>
 #include <string>
 #include <unordered_map>
 #include <utility>
-#include <numbers>
 
 #include "shared/input_error.h"
 

@@ -4,9 +4,8 @@
 // (valid or not, repaired from neighbours, blended in) is decided once, by cpu::Iim.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 #include "shared/settings.h"
 

@@ -1,5 +1,6 @@
 #include "shared/image.h"
 
+#include <OpenImageIO/imageio.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -8,8 +9,6 @@
 #include <filesystem>
 #include <fstream>
 #include <stdexcept>
-
-#include <OpenImageIO/imageio.h>
 
 #include "shared/input_error.h"
 
@@ -30,15 +29,16 @@ namespace {
 
 std::string lower_extension(const std::string& path) {
     std::string ext = fs::path(path).extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return char(std::tolower(c)); });
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return char(std::tolower(c)); });
     return ext;
 }
 
 // A temporary name beside `path` with the same extension (OIIO picks the format by extension).
 std::string temporary_beside(const std::string& path) {
     const fs::path p(path);
-    const std::string name = "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) +
-                             p.extension().string();
+    const std::string name =
+        "." + p.stem().string() + ".tmp" + std::to_string(::getpid()) + p.extension().string();
     return (p.parent_path() / name).string();
 }
 
@@ -47,7 +47,8 @@ void commit_temporary(const std::string& tmp, const std::string& path) {
     fs::rename(tmp, path, ec);
     if (ec) {
         fs::remove(tmp, ec);
-        throw std::runtime_error(path + ": cannot move the written image into place: " + ec.message());
+        throw std::runtime_error(path +
+                                 ": cannot move the written image into place: " + ec.message());
     }
 }
 
@@ -69,17 +70,21 @@ void write_file_atomically(const std::string& path, const std::string& bytes) {
 }
 
 void write_image(const Image& image, const std::string& path, float exposure_ev) {
-    if (image.width <= 0 || image.height <= 0 || image.pixels.size() != size_t(image.width) * image.height * image.channels)
+    if (image.width <= 0 || image.height <= 0 ||
+        image.pixels.size() != size_t(image.width) * image.height * image.channels)
         throw std::runtime_error(path + ": refusing to write an empty or malformed image");
     const std::string ext = lower_extension(path);
     const bool eight_bit = ext == ".png" || ext == ".jpg" || ext == ".jpeg";
     const std::string tmp = temporary_beside(path);
 
     auto out = OIIO::ImageOutput::create(path);
-    if (!out) throw std::runtime_error(path + ": no image writer for this extension (" + OIIO::geterror() + ")");
+    if (!out)
+        throw std::runtime_error(path + ": no image writer for this extension (" +
+                                 OIIO::geterror() + ")");
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                         eight_bit ? OIIO::TypeDesc::UINT8
-                                   : (ext == ".exr" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT));
+                         eight_bit
+                             ? OIIO::TypeDesc::UINT8
+                             : (ext == ".exr" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT));
     bool ok = false;
     if (eight_bit) {
         spec.attribute("oiio:ColorSpace", "sRGB");
@@ -87,7 +92,8 @@ void write_image(const Image& image, const std::string& path, float exposure_ev)
         std::vector<unsigned char> bytes(image.pixels.size());
         for (size_t i = 0; i < bytes.size(); ++i) {
             const bool alpha = image.channels == 4 && i % 4 == 3;
-            const float v = alpha ? std::clamp(image.pixels[i], 0.0f, 1.0f) : srgb_encode(image.pixels[i] * scale);
+            const float v = alpha ? std::clamp(image.pixels[i], 0.0f, 1.0f)
+                                  : srgb_encode(image.pixels[i] * scale);
             bytes[i] = (unsigned char)std::lround(v * 255.0f);
         }
         ok = out->open(tmp, spec) && out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
@@ -110,12 +116,14 @@ Image read_image(const std::string& path) {
     if (!in) throw_input_error(path, "", "cannot read image: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
     Image image(spec.width, spec.height, spec.nchannels);
-    if (image.pixels.empty() || !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+    if (image.pixels.empty() ||
+        !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
         throw_input_error(path, "", "cannot decode image: " + in->geterror());
     const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
     if (srgb)
         for (size_t i = 0; i < image.pixels.size(); ++i)
-            if (!(image.channels == 4 && i % 4 == 3)) image.pixels[i] = srgb_decode(image.pixels[i]);
+            if (!(image.channels == 4 && i % 4 == 3))
+                image.pixels[i] = srgb_decode(image.pixels[i]);
     in->close();
     return image;
 }

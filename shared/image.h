@@ -3,10 +3,9 @@
 // rename: an interrupted run never leaves a truncated image. The only place that includes OIIO.
 #pragma once
 
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace ag {
 
@@ -15,11 +14,20 @@ struct Image {
     std::vector<float> pixels;  // row-major, top row first, `channels` floats per pixel
 
     Image() = default;
-    Image(int w, int h, int c = 3) : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
+    Image(int w, int h, int c = 3)
+        : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
     float* at(int x, int y) { return &pixels[(size_t(y) * width + x) * channels]; }
     const float* at(int x, int y) const { return &pixels[(size_t(y) * width + x) * channels]; }
-    glm::vec3 rgb(int x, int y) const { const float* p = at(x, y); return {p[0], p[1], p[2]}; }
-    void set_rgb(int x, int y, const glm::vec3& c) { float* p = at(x, y); p[0] = c.r; p[1] = c.g; p[2] = c.b; }
+    glm::vec3 rgb(int x, int y) const {
+        const float* p = at(x, y);
+        return {p[0], p[1], p[2]};
+    }
+    void set_rgb(int x, int y, const glm::vec3& c) {
+        float* p = at(x, y);
+        p[0] = c.r;
+        p[1] = c.g;
+        p[2] = c.b;
+    }
 };
 
 float srgb_encode(float linear);  // [0,1] linear → [0,1] sRGB

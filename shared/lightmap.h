@@ -2,9 +2,8 @@
 // between cpu/ (AIM fill, CPU gather) and gpu/ (IIM gather, frame); Larsen ch. 8, 10, 11.
 #pragma once
 
-#include <vector>
-
 #include <glm/glm.hpp>
+#include <vector>
 
 namespace ag {
 
@@ -18,9 +17,9 @@ struct Chart {
     glm::vec3 axis{0.0f};        // projection direction: the chart's mean normal
     glm::vec3 u_axis{0.0f};      // unit; texel coordinate = dot(p, u_axis) / texel_size - u0 + x
     glm::vec3 v_axis{0.0f};
-    glm::vec2 origin{0.0f};      // (u, v) in object units of the chart's lower-left corner
-    int x = 0, y = 0;            // atlas position of the first texel
-    int width = 0, height = 0;   // in texels
+    glm::vec2 origin{0.0f};     // (u, v) in object units of the chart's lower-left corner
+    int x = 0, y = 0;           // atlas position of the first texel
+    int width = 0, height = 0;  // in texels
 };
 
 // What one atlas texel stands for. Position and normal are in the object's space, so rigid
@@ -29,8 +28,8 @@ struct TexelRecord {
     int object = -1;
     int surface = -1;
     int chart = -1;
-    int triangle = -1;       // triangle that holds `position`
-    int x = 0, y = 0;        // atlas texel coordinates
+    int triangle = -1;         // triangle that holds `position`
+    int x = 0, y = 0;          // atlas texel coordinates
     glm::vec3 position{0.0f};  // texel centre, snapped inside a chart triangle
     glm::vec3 normal{0.0f};    // unit face normal there
     float area = 0.0f;         // world area of the chart triangles the texel covers
@@ -47,7 +46,9 @@ struct LightmapAtlas {
     // Texel (x, y) spans [x, x+1) × [y, y+1); GL coordinates are these divided by width/height.
     std::vector<std::vector<glm::vec2>> corner_uvs;
 
-    int texel_at(int tx, int ty) const { return texel_index[size_t(ty) * size_t(width) + size_t(tx)]; }
+    int texel_at(int tx, int ty) const {
+        return texel_index[size_t(ty) * size_t(width) + size_t(tx)];
+    }
 };
 
 }  // namespace ag

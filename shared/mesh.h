@@ -2,10 +2,9 @@
 // OpenMesh is used only for preprocessing (files, connectivity), in mesh_io.cpp and charts.cpp.
 #pragma once
 
+#include <glm/glm.hpp>
 #include <string>
 #include <vector>
-
-#include <glm/glm.hpp>
 
 namespace ag {
 
@@ -17,7 +16,10 @@ struct Mesh {
 struct Bounds {
     glm::vec3 min{1e30f};
     glm::vec3 max{-1e30f};
-    void add(const glm::vec3& p) { min = glm::min(min, p); max = glm::max(max, p); }
+    void add(const glm::vec3& p) {
+        min = glm::min(min, p);
+        max = glm::max(max, p);
+    }
     bool empty() const { return min.x > max.x; }
     glm::vec3 center() const { return 0.5f * (min + max); }
     glm::vec3 extent() const { return max - min; }

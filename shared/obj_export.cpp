@@ -23,17 +23,19 @@ void export_obj(const Scene& scene, const std::string& obj_path) {
 
     std::ostringstream obj, mtl;
     obj.precision(9);
-    obj << "# Afterglow scene '" << scene.name << "' from " << scene.path << ", world space, unit: "
-        << scene.length_unit << "\n";
+    obj << "# Afterglow scene '" << scene.name << "' from " << scene.path
+        << ", world space, unit: " << scene.length_unit << "\n";
     obj << "mtllib " << mtl_name << "\n";
     for (const Light& l : scene.lights) {
         if (l.type == LightType::point)
             obj << "# point light '" << l.name << "' position " << triple(l.position)
-                << " intensity " << triple(l.intensity) << " W/sr" << (l.enabled ? "" : " (off)") << "\n";
+                << " intensity " << triple(l.intensity) << " W/sr" << (l.enabled ? "" : " (off)")
+                << "\n";
         else
             obj << "# quad light '" << l.name << "' corners " << triple(l.corners[0]) << " | "
-                << triple(l.corners[1]) << " | " << triple(l.corners[2]) << " | " << triple(l.corners[3])
-                << " radiance " << triple(l.radiance) << (l.enabled ? "" : " (off)") << "\n";
+                << triple(l.corners[1]) << " | " << triple(l.corners[2]) << " | "
+                << triple(l.corners[3]) << " radiance " << triple(l.radiance)
+                << (l.enabled ? "" : " (off)") << "\n";
     }
 
     size_t base = 1;  // OBJ indices are 1-based and global
@@ -55,7 +57,8 @@ void export_obj(const Scene& scene, const std::string& obj_path) {
         mtl << "\n";
 
         obj << "o " << o.name << "\nusemtl " << o.name << "\n";
-        for (const glm::vec3& v : o.mesh.positions) obj << "v " << triple(o.transform.apply_point(v)) << "\n";
+        for (const glm::vec3& v : o.mesh.positions)
+            obj << "v " << triple(o.transform.apply_point(v)) << "\n";
         for (const glm::uvec3& t : o.mesh.triangles)
             obj << "f " << base + t.x << ' ' << base + t.y << ' ' << base + t.z << "\n";
         base += o.mesh.positions.size();

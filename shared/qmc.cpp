@@ -30,7 +30,10 @@ uint32_t nth_prime(int n) {
             bool prime = true;
             for (uint32_t q : p) {
                 if (q * q > c) break;
-                if (c % q == 0) { prime = false; break; }
+                if (c % q == 0) {
+                    prime = false;
+                    break;
+                }
             }
             if (prime) p.push_back(c);
         }
@@ -80,7 +83,8 @@ Halton::Halton(int dimensions, uint32_t seed) : dimensions_(dimensions), seed_(s
         std::vector<double>& tail = tails_[size_t(d)];
         tail.assign(size_t(digits) + 1, 0.0);
         for (int j = digits - 1; j >= 0; --j)
-            tail[size_t(j)] = tail[size_t(j) + 1] + double(perm[size_t(j) * base]) * std::pow(double(base), -double(j + 1));
+            tail[size_t(j)] = tail[size_t(j) + 1] + double(perm[size_t(j) * base]) *
+                                                        std::pow(double(base), -double(j + 1));
     }
 }
 

@@ -5,11 +5,10 @@
 
 #include <array>
 #include <cstdint>
-#include <string>
-#include <vector>
-
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <string>
+#include <vector>
 
 #include "shared/host_device_shared.h"
 #include "shared/lightmap.h"
@@ -19,7 +18,11 @@
 namespace ag {
 
 // Values shared with the frame shaders' `material` uniform (shared/host_device_shared.h).
-enum class MaterialType { diffuse = kMaterialDiffuse, mirror = kMaterialMirror, glass = kMaterialGlass };
+enum class MaterialType {
+    diffuse = kMaterialDiffuse,
+    mirror = kMaterialMirror,
+    glass = kMaterialGlass
+};
 inline constexpr std::array kMaterialTypeNames = {"diffuse", "mirror", "glass"};
 
 // A material. Diffuse albedo is the Lambertian reflectance ρ (BRDF ρ/π); mirrors and glass are
@@ -44,8 +47,8 @@ struct Transform {
 
 struct Object {
     std::string name;
-    Mesh mesh;           // object space, plain indexed arrays
-    Material material;   // each object owns its copy, so an albedo edit touches one object
+    Mesh mesh;          // object space, plain indexed arrays
+    Material material;  // each object owns its copy, so an albedo edit touches one object
     Transform transform;
     bool dynamic = false;
     std::string source;  // mesh file or built-in shape name, for info/export
@@ -68,8 +71,8 @@ struct Light {
 
     glm::vec3 quad_normal() const;  // unit normal of a quad light
     float quad_area() const;
-    glm::vec3 center() const;       // position, or the quad's centre
-    glm::vec3 power() const;        // emitted flux Φ (W): 4πI for a point, πLA for a quad
+    glm::vec3 center() const;  // position, or the quad's centre
+    glm::vec3 power() const;   // emitted flux Φ (W): 4πI for a point, πLA for a quad
 };
 
 struct Camera {
@@ -112,9 +115,9 @@ struct SceneChange {
 
 struct Scene {
     std::string name;
-    std::string path;          // the scene file, for messages and relative paths
+    std::string path;  // the scene file, for messages and relative paths
     std::string length_unit = "unit";
-    std::string script;        // optional Lua edit script (path, resolved against the scene)
+    std::string script;  // optional Lua edit script (path, resolved against the scene)
     Camera camera;
     std::vector<Object> objects;
     std::vector<Light> lights;
@@ -137,7 +140,7 @@ struct Scene {
     // scale for offsets, tolerances and search radii.
     Bounds world_bounds() const;
     float diagonal() const;
-    int find_light(const std::string& light_name) const;    // -1 if absent
+    int find_light(const std::string& light_name) const;  // -1 if absent
     size_t triangle_count() const;
 };
 

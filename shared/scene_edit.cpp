@@ -1,9 +1,8 @@
 #include "shared/scene_edit.h"
 
 #include <cmath>
-#include <string>
-
 #include <glm/gtc/quaternion.hpp>
+#include <string>
 
 #include "shared/input_error.h"
 
@@ -11,7 +10,9 @@ namespace ag {
 
 namespace {
 
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const glm::vec3& v) {
+    return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
 
 void check_object(const Scene& scene, int object, const char* what) {
     if (object < 0 || object >= int(scene.objects.size()))
@@ -52,7 +53,8 @@ void set_object_transform(Scene& scene, int object, const Transform& transform) 
     check_finite(scene, transform.translation, "set_object_transform");
     const glm::quat q = transform.rotation;
     if (!std::isfinite(q.w) || !finite(glm::vec3(q.x, q.y, q.z)) || glm::length(q) < 1e-6f)
-        throw_input_error(scene.path, "set_object_transform", "expected a finite non-zero rotation");
+        throw_input_error(scene.path, "set_object_transform",
+                          "expected a finite non-zero rotation");
     Object& o = scene.objects[size_t(object)];
     o.transform.translation = transform.translation;
     o.transform.rotation = glm::normalize(q);
@@ -70,7 +72,8 @@ void rotate_object(Scene& scene, int object, const glm::vec3& axis, float degree
     check_object(scene, object, "rotate_object");
     check_finite(scene, axis, "rotate_object");
     if (!std::isfinite(degrees) || glm::length(axis) < 1e-12f)
-        throw_input_error(scene.path, "rotate_object", "expected a non-zero axis and finite degrees");
+        throw_input_error(scene.path, "rotate_object",
+                          "expected a non-zero axis and finite degrees");
     Transform t = scene.objects[size_t(object)].transform;
     t.rotation = glm::angleAxis(glm::radians(degrees), glm::normalize(axis)) * t.rotation;
     set_object_transform(scene, object, t);
@@ -79,7 +82,8 @@ void rotate_object(Scene& scene, int object, const glm::vec3& axis, float degree
 void set_albedo(Scene& scene, int object, const glm::vec3& albedo) {
     check_object(scene, object, "set_albedo");
     check_finite(scene, albedo, "set_albedo");
-    if (glm::any(glm::lessThan(albedo, glm::vec3(0.0f))) || glm::any(glm::greaterThan(albedo, glm::vec3(1.0f))))
+    if (glm::any(glm::lessThan(albedo, glm::vec3(0.0f))) ||
+        glm::any(glm::greaterThan(albedo, glm::vec3(1.0f))))
         throw_input_error(scene.path, "set_albedo", "expected albedo components in [0, 1]");
     scene.objects[size_t(object)].material.albedo = albedo;
     record(scene, ChangeKind::object_material, object);
@@ -120,9 +124,11 @@ void set_camera(Scene& scene, const Camera& camera) {
     check_finite(scene, camera.up, "set_camera");
     if (glm::length(camera.target - camera.eye) <= 0.0f ||
         glm::length(glm::cross(camera.target - camera.eye, camera.up)) <= 0.0f)
-        throw_input_error(scene.path, "set_camera", "expected eye ≠ target and up not parallel to the view");
+        throw_input_error(scene.path, "set_camera",
+                          "expected eye ≠ target and up not parallel to the view");
     if (!(camera.fov_y > 0.0f && camera.fov_y < 180.0f) || camera.width <= 0 || camera.height <= 0)
-        throw_input_error(scene.path, "set_camera", "expected 0 < fov_y < 180 and a positive resolution");
+        throw_input_error(scene.path, "set_camera",
+                          "expected 0 < fov_y < 180 and a positive resolution");
     scene.camera = camera;
     record(scene, ChangeKind::camera, -1);
 }

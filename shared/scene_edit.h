@@ -5,10 +5,9 @@
 #pragma once
 
 #include <cstdint>
-#include <vector>
-
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <vector>
 
 #include "shared/scene.h"
 
@@ -20,7 +19,8 @@ void translate_object(Scene& scene, int object, const glm::vec3& offset);
 void rotate_object(Scene& scene, int object, const glm::vec3& axis, float degrees);
 void set_albedo(Scene& scene, int object, const glm::vec3& albedo);
 
-void set_light_position(Scene& scene, int light, const glm::vec3& position);  // quads: moves the centre
+void set_light_position(Scene& scene, int light,
+                        const glm::vec3& position);                     // quads: moves the centre
 void set_light_color(Scene& scene, int light, const glm::vec3& value);  // intensity or radiance
 void set_light_enabled(Scene& scene, int light, bool enabled);
 

@@ -23,25 +23,25 @@ enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
 
 struct PhotonSettings {
-    int groups = 77;              // QMC photon groups per light (Larsen ch. 9, Cornell: 77)
-    int photons_per_group = 40;   // photons per group (Cornell: 40)
-    int max_bounces = 12;         // hard cap after Russian roulette
-    int verify_per_frame = 1;     // photons per group re-traced and compared each frame
-    int retrace_budget = 4000;    // photons re-traced for invalid groups per frame
-    float path_tolerance = 1e-4f; // hit positions agree within this fraction of the scene diagonal
+    int groups = 77;               // QMC photon groups per light (Larsen ch. 9, Cornell: 77)
+    int photons_per_group = 40;    // photons per group (Cornell: 40)
+    int max_bounces = 12;          // hard cap after Russian roulette
+    int verify_per_frame = 1;      // photons per group re-traced and compared each frame
+    int retrace_budget = 4000;     // photons re-traced for invalid groups per frame
+    float path_tolerance = 1e-4f;  // hit positions agree within this fraction of the scene diagonal
 };
 
 struct LightmapSettings {
-    float texel_size = 0.0f;   // world units per texel; 0 = longest scene extent / 5 (thesis: 5×5)
+    float texel_size = 0.0f;  // world units per texel; 0 = longest scene extent / 5 (thesis: 5×5)
     float crease_angle = 30.0f;  // degrees: adjacent faces closer than this share a surface
     float chart_cone = 30.0f;    // degrees: a chart's normals stay within this of its mean
     int gutter = 1;              // free texels around every chart in the atlas
 };
 
 struct AimSettings {
-    int knn = 50;                  // N nearest photon hits per texel (thesis: 50–500)
-    int surfaces_per_frame = 4;    // AIM rebuilds per frame, by Δf / area
-    float delta_threshold = 1e-3f; // rebuild when Δf / surface flux exceeds this
+    int knn = 50;                   // N nearest photon hits per texel (thesis: 50–500)
+    int surfaces_per_frame = 4;     // AIM rebuilds per frame, by Δf / area
+    float delta_threshold = 1e-3f;  // rebuild when Δf / surface flux exceeds this
 };
 
 struct GatherSettings {
@@ -49,9 +49,9 @@ struct GatherSettings {
     float plane_half_width = 2.0f;  // hemi-plane half-width a at unit distance (a=2: 83%)
     int plane_resolution = 32;      // pixels across the hemi-plane
     BorderCorrection border_correction = BorderCorrection::stretch;
-    int texels_per_frame = 20;      // IIM texels gathered per frame (thesis: ≤ 20)
-    int blend_frames = 4;           // frames over which a new IIM fades in
-    int cpu_rays = 256;             // rays per texel for the CPU gather backend
+    int texels_per_frame = 20;  // IIM texels gathered per frame (thesis: ≤ 20)
+    int blend_frames = 4;       // frames over which a new IIM fades in
+    int cpu_rays = 256;         // rays per texel for the CPU gather backend
 };
 
 struct IndirectSettings {
@@ -110,43 +110,64 @@ template <class Visitor>
 void visit_settings(Settings& s, Visitor& v) {
     v.section("photons", "selective photon tracing, Larsen ch. 9");
     v.field(Field<int>{"groups", s.photons.groups, 1, 1e6, "QMC photon groups per light"});
-    v.field(Field<int>{"photons_per_group", s.photons.photons_per_group, 1, 1e6, "photons per group"});
-    v.field(Field<int>{"max_bounces", s.photons.max_bounces, 1, 1000, "bounce cap after Russian roulette"});
-    v.field(Field<int>{"verify_per_frame", s.photons.verify_per_frame, 0, 1e6, "photons per group verified each frame"});
-    v.field(Field<int>{"retrace_budget", s.photons.retrace_budget, 1, 1e9, "photons re-traced per frame for invalid groups"});
-    v.field(Field<float>{"path_tolerance", s.photons.path_tolerance, 0, 1, "path agreement, fraction of scene diagonal"});
+    v.field(
+        Field<int>{"photons_per_group", s.photons.photons_per_group, 1, 1e6, "photons per group"});
+    v.field(Field<int>{"max_bounces", s.photons.max_bounces, 1, 1000,
+                       "bounce cap after Russian roulette"});
+    v.field(Field<int>{"verify_per_frame", s.photons.verify_per_frame, 0, 1e6,
+                       "photons per group verified each frame"});
+    v.field(Field<int>{"retrace_budget", s.photons.retrace_budget, 1, 1e9,
+                       "photons re-traced per frame for invalid groups"});
+    v.field(Field<float>{"path_tolerance", s.photons.path_tolerance, 0, 1,
+                         "path agreement, fraction of scene diagonal"});
     v.end_section();
     v.section("lightmap", "surfaces and charts, Larsen ch. 8");
-    v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30, "world units per texel; 0 = longest scene extent / 5"});
-    v.field(Field<float>{"crease_angle", s.lightmap.crease_angle, 0, 180, "degrees; adjacent faces closer than this share a surface"});
-    v.field(Field<float>{"chart_cone", s.lightmap.chart_cone, 1, 60, "degrees; chart normals stay within this of the chart axis"});
+    v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30,
+                         "world units per texel; 0 = longest scene extent / 5"});
+    v.field(Field<float>{"crease_angle", s.lightmap.crease_angle, 0, 180,
+                         "degrees; adjacent faces closer than this share a surface"});
+    v.field(Field<float>{"chart_cone", s.lightmap.chart_cone, 1, 60,
+                         "degrees; chart normals stay within this of the chart axis"});
     v.field(Field<int>{"gutter", s.lightmap.gutter, 1, 16, "free texels around every chart"});
     v.end_section();
     v.section("aim", "approximated illumination maps, Larsen ch. 10");
     v.field(Field<int>{"knn", s.aim.knn, 1, 10000, "nearest photon hits per texel"});
-    v.field(Field<int>{"surfaces_per_frame", s.aim.surfaces_per_frame, 1, 1e6, "AIM rebuilds per frame"});
-    v.field(Field<float>{"delta_threshold", s.aim.delta_threshold, 0, 1e30, "rebuild when delta_f / surface flux exceeds this"});
+    v.field(Field<int>{"surfaces_per_frame", s.aim.surfaces_per_frame, 1, 1e6,
+                       "AIM rebuilds per frame"});
+    v.field(Field<float>{"delta_threshold", s.aim.delta_threshold, 0, 1e30,
+                         "rebuild when delta_f / surface flux exceeds this"});
     v.end_section();
     v.section("gather", "hemi-plane final gathering into IIMs, Larsen ch. 11");
-    v.field(EnumField<GatherBackend, 3>{"backend", s.gather.backend, kGatherBackendNames, "gather backend"});
-    v.field(Field<float>{"plane_half_width", s.gather.plane_half_width, 0.1, 100, "hemi-plane half-width at unit distance"});
-    v.field(Field<int>{"plane_resolution", s.gather.plane_resolution, 2, 1024, "pixels across the hemi-plane"});
-    v.field(EnumField<BorderCorrection, 3>{"border_correction", s.gather.border_correction, kBorderCorrectionNames, "missing-hemisphere correction"});
-    v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6, "IIM texels gathered per frame"});
-    v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000, "frames over which a new IIM fades in"});
+    v.field(EnumField<GatherBackend, 3>{"backend", s.gather.backend, kGatherBackendNames,
+                                        "gather backend"});
+    v.field(Field<float>{"plane_half_width", s.gather.plane_half_width, 0.1, 100,
+                         "hemi-plane half-width at unit distance"});
+    v.field(Field<int>{"plane_resolution", s.gather.plane_resolution, 2, 1024,
+                       "pixels across the hemi-plane"});
+    v.field(EnumField<BorderCorrection, 3>{"border_correction", s.gather.border_correction,
+                                           kBorderCorrectionNames,
+                                           "missing-hemisphere correction"});
+    v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6,
+                       "IIM texels gathered per frame"});
+    v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
+                       "frames over which a new IIM fades in"});
     v.field(Field<int>{"cpu_rays", s.gather.cpu_rays, 1, 1e6, "rays per texel, CPU gather"});
     v.end_section();
     v.section("indirect", "the indirect term: which method supplies it");
-    v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{"method", s.indirect.method, kIndirectMethodNames, "indirect method"});
+    v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{
+        "method", s.indirect.method, kIndirectMethodNames, "indirect method"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});
-    v.field(Field<int>{"frames", s.caustics.frames, 1, 1000, "frames to re-trace all caustic photons"});
+    v.field(
+        Field<int>{"frames", s.caustics.frames, 1, 1000, "frames to re-trace all caustic photons"});
     v.field(Field<int>{"kernel_k", s.caustics.kernel_k, 0, 32, "filter half-size k (eq. 12.1)"});
-    v.field(Field<int>{"tile_size", s.caustics.tile_size, 4, 512, "tile edge for occlusion-query culling"});
+    v.field(Field<int>{"tile_size", s.caustics.tile_size, 4, 512,
+                       "tile edge for occlusion-query culling"});
     v.end_section();
     v.section("direct", "direct light and shadow volumes, Larsen ch. 13");
-    v.field(Field<int>{"area_light_samples", s.direct.area_light_samples, 1, 4096, "point lights per quad light"});
+    v.field(Field<int>{"area_light_samples", s.direct.area_light_samples, 1, 4096,
+                       "point lights per quad light"});
     v.field(Field<bool>{"shadows", s.direct.shadows, 0, 1, "stencil shadow volumes"});
     v.end_section();
     v.section("specular", "cube-map reflection and refraction, Larsen ch. 13");

@@ -4,8 +4,8 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
-#include <utility>
 #include <numbers>
+#include <utility>
 
 namespace ag {
 namespace {
@@ -115,7 +115,8 @@ Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude,
     for (int k = 0; k < kWaves; ++k) {
         const float angle = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
         const float cycles = rng.uniform(1.5f, 4.0f);
-        frequency[k] = 2.0f * std::numbers::pi_v<float> * cycles * glm::vec2(std::cos(angle), std::sin(angle));
+        frequency[k] =
+            2.0f * std::numbers::pi_v<float> * cycles * glm::vec2(std::cos(angle), std::sin(angle));
         phase[k] = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
         weight[k] = rng.uniform(0.5f, 1.0f);
         weight_sum += weight[k];
@@ -124,7 +125,8 @@ Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude,
         float h = 0.0f;
         for (int k = 0; k < kWaves; ++k)
             h += weight[k] * std::sin(frequency[k].x * u + frequency[k].y * v + phase[k]);
-        return amplitude * std::sin(std::numbers::pi_v<float> * u) * std::sin(std::numbers::pi_v<float> * v) * h / weight_sum;
+        return amplitude * std::sin(std::numbers::pi_v<float> * u) *
+               std::sin(std::numbers::pi_v<float> * v) * h / weight_sum;
     };
 
     Mesh mesh;

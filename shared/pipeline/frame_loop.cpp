@@ -25,8 +25,8 @@ void FrameLoop::start_script(Script* script) {
 
 bool FrameLoop::run_script() {
     if (!script_) return true;
-    const bool ok = script_->on_frame(pipeline_.scene(), script_frame_,
-                                      script_frame_ / kScriptFramesPerSecond);
+    const bool ok =
+        script_->on_frame(pipeline_.scene(), script_frame_, script_frame_ / kScriptFramesPerSecond);
     ++script_frame_;
     if (!ok) {
         ++script_errors_;

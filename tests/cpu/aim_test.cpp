@@ -2,6 +2,7 @@
 #include "cpu/aim.h"
 
 #include <gtest/gtest.h>
+
 #include <numbers>
 
 #include "cpu/photon_simulation.h"
@@ -27,14 +28,16 @@ TEST(Aim, PlaneUnderPointLightMatchesAnalyticRadiance) {
     double worst = 0.0;
     for (const TexelRecord& t : scene.atlas.texels) {
         const glm::vec3 p = t.position;  // the plane does not move: object = world
-        if (std::abs(p.x) > 0.5f * half || std::abs(p.z) > 0.5f * half) continue;  // away from edges
+        if (std::abs(p.x) > 0.5f * half || std::abs(p.z) > 0.5f * half)
+            continue;  // away from edges
         const double d = glm::length(glm::vec3(0, h, 0) - p);
         const double e = intensity * (h / d) / (d * d);  // I cosθ / d²
         const double expected = albedo / std::numbers::pi * e;
         const glm::vec3 got = aim.radiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)];
         const double rel = std::abs(got.x - expected) / expected;
         worst = std::max(worst, rel);
-        EXPECT_LT(rel, 0.05) << "texel at " << p.x << ", " << p.z << ": " << got.x << " vs " << expected;
+        EXPECT_LT(rel, 0.05) << "texel at " << p.x << ", " << p.z << ": " << got.x << " vs "
+                             << expected;
         EXPECT_NEAR(got.y, got.x, 1e-6 * got.x);
         ++checked;
     }
@@ -57,7 +60,8 @@ TEST(Aim, UpdateFollowsDeltaAndBudget) {
     // Keep updating: every surface with hits is rebuilt eventually, then nothing is left.
     for (int i = 0; i < 100 && rebuilt > 0; ++i) aim.update(sim.maps(), &rebuilt);
     EXPECT_EQ(rebuilt, 0);
-    for (int s = 0; s < int(sim.maps().surface_count()); ++s) EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s)
+        EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
 }
 
 }  // namespace ag::cpu

@@ -1,9 +1,9 @@
 // Caustic photons (Larsen ch. 12): a ball lens focuses, a moving lens leaves a bounded trail.
 #include "cpu/caustic_tracer.h"
 
-#include <algorithm>
-
 #include <gtest/gtest.h>
+
+#include <algorithm>
 #include <numbers>
 
 #include "test_scenes.h"
@@ -43,8 +43,8 @@ Scene ball_lens(float depth) {
 
 struct Spot {
     glm::vec2 centre{0.0f};
-    float r50 = 0.0f;     // radius holding half the caustic's power
-    double peak = 0.0;    // power within 0.03 of the axis
+    float r50 = 0.0f;   // radius holding half the caustic's power
+    double peak = 0.0;  // power within 0.03 of the axis
 };
 
 Spot measure(const std::vector<CausticPhoton>& photons) {
@@ -83,10 +83,12 @@ TEST(CausticTracer, BallLensFocusesNearTheParaxialFocus) {
         const Scene scene = ball_lens(depths[i]);
         CausticTracer tracer(scene, pool);
         const CausticStats st = tracer.trace_all();
-        EXPECT_GE(st.hit_specular, st.traced * 999 / 1000);  // aimed at the ball (its bound is a bit larger)
+        EXPECT_GE(st.hit_specular,
+                  st.traced * 999 / 1000);  // aimed at the ball (its bound is a bit larger)
         EXPECT_GT(st.stored, st.traced / 2);
         spots[i] = measure(tracer.photons());
-        EXPECT_LT(glm::length(spots[i].centre), 0.02f) << "centred below the ball, depth " << depths[i];
+        EXPECT_LT(glm::length(spots[i].centre), 0.02f)
+            << "centred below the ball, depth " << depths[i];
         std::printf("depth %.2f: r50 %.4f, power within 0.03 of the axis %.3g\n", double(depths[i]),
                     double(spots[i].r50), spots[i].peak);
     }
@@ -134,7 +136,8 @@ TEST(CausticTracer, MovingTheLensLeavesAtMostAnNFrameTrail) {
     for (const CausticPhoton& p : tracer.photons()) {
         if (p.power == glm::vec3(0.0f)) continue;
         ++stored;
-        EXPECT_GT(p.frame, moved_at) << "a photon from before the move survived " << frames << " frames";
+        EXPECT_GT(p.frame, moved_at)
+            << "a photon from before the move survived " << frames << " frames";
     }
     EXPECT_GT(stored, 100);
 }

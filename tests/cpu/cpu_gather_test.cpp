@@ -1,18 +1,18 @@
 // CPU final gather (Larsen ch. 11) against analytic form factors, atlas sampling without bleeding
 // across charts, back-face repair, colour bleeding in the Cornell box, thread-count independence.
 #include "cpu/cpu_gather.h"
-#include "cpu/iim.h"
 
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <numeric>
 #include <random>
-#include <numbers>
 
 #include "cpu/aim.h"
+#include "cpu/iim.h"
 #include "cpu/photon_simulation.h"
 #include "shared/lightmap_sample.h"
 #include "test_scenes.h"
@@ -498,7 +498,8 @@ TEST(CpuGather, SameResultForAnyThreadCount) {
     }
     const Gathered one = gather_records(scene, gather1, all_texels(scene)),
                    three = gather_records(scene, gather3, all_texels(scene));
-    for (size_t i = 0; i < one.iim.size(); ++i) ASSERT_EQ(one.iim[i], three.iim[i]) << "atlas texel " << i;
+    for (size_t i = 0; i < one.iim.size(); ++i)
+        ASSERT_EQ(one.iim[i], three.iim[i]) << "atlas texel " << i;
     EXPECT_EQ(one.valid, three.valid);
     // Batches: gathering in pieces gives the same as all at once (repairs read earlier batches).
     CpuGather gather2(scene, s.sim->rays(), s.pool, &s.aim->radiance());

@@ -1,16 +1,16 @@
 // Selective photon tracing invariants (Larsen ch. 9): repair equals rebuild, detection, energy.
 #include "cpu/photon_simulation.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <numbers>
 #include <random>
 #include <set>
 #include <tuple>
 #include <utility>
-
-#include <gtest/gtest.h>
-#include <numbers>
 
 #include "cpu/aim.h"
 #include "test_scenes.h"
@@ -29,7 +29,8 @@ std::map<Key, PhotonHit> hits_of(const PhotonMaps& maps, int surface) {
 
 // Compares two simulations' photon hits surface by surface: same hits (by owner), positions
 // within the path tolerance, powers within float rounding.
-void expect_same_hits(const PhotonSimulation& a, const PhotonSimulation& b, float tolerance, const std::string& what) {
+void expect_same_hits(const PhotonSimulation& a, const PhotonSimulation& b, float tolerance,
+                      const std::string& what) {
     ASSERT_EQ(a.maps().surface_count(), b.maps().surface_count());
     size_t total = 0;
     for (int s = 0; s < int(a.maps().surface_count()); ++s) {
@@ -38,14 +39,17 @@ void expect_same_hits(const PhotonSimulation& a, const PhotonSimulation& b, floa
         for (const auto& [key, hit] : ha) {
             auto it = hb.find(key);
             ASSERT_NE(it, hb.end()) << what << ": surface " << s;
-            EXPECT_LE(glm::length(hit.position - it->second.position), tolerance) << what << ": surface " << s;
+            EXPECT_LE(glm::length(hit.position - it->second.position), tolerance)
+                << what << ": surface " << s;
             for (int c = 0; c < 3; ++c)
-                EXPECT_NEAR(hit.power[c], it->second.power[c], 1e-4f * std::max(1e-20f, std::abs(it->second.power[c])))
+                EXPECT_NEAR(hit.power[c], it->second.power[c],
+                            1e-4f * std::max(1e-20f, std::abs(it->second.power[c])))
                     << what << ": surface " << s;
         }
         total += ha.size();
         const glm::dvec3 fa = a.maps().surface(s).flux, fb = b.maps().surface(s).flux;
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(fa[c], fb[c], 1e-4 * std::max(1e-12, std::abs(fb[c]))) << what;
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(fa[c], fb[c], 1e-4 * std::max(1e-12, std::abs(fb[c]))) << what;
     }
     EXPECT_GT(total, 0u) << what;
 }
@@ -66,7 +70,6 @@ void expect_identical_maps(const PhotonMaps& a, const PhotonMaps& b) {
     }
 }
 
-
 // World bounds of the static objects: dynamic objects are only moved to where they stay inside,
 // so the scene's diagonal (hence ray epsilon and path tolerance) is the one a fresh trace sees.
 Bounds static_bounds(const Scene& scene) {
@@ -82,7 +85,8 @@ bool place_inside(Scene& scene, int o, const Transform& t) {
     const Bounds room = static_bounds(scene);
     for (const glm::vec3& p : scene.objects[size_t(o)].mesh.positions) {
         const glm::vec3 w = t.apply_point(p);
-        if (glm::any(glm::lessThan(w, room.min)) || glm::any(glm::greaterThan(w, room.max))) return false;
+        if (glm::any(glm::lessThan(w, room.min)) || glm::any(glm::greaterThan(w, room.max)))
+            return false;
     }
     set_object_transform(scene, o, t);
     return true;
@@ -106,13 +110,17 @@ void random_edit(Scene& scene, std::mt19937& rng) {
                 const int o = dynamic[rng() % dynamic.size()];
                 Transform t = scene.objects[size_t(o)].transform;
                 t.translation += glm::vec3(step * u(rng), 0.0f, step * u(rng));
-                if (rng() % 2) t.rotation = glm::angleAxis(glm::radians(30.0f * u(rng)), glm::vec3(0, 1, 0)) * t.rotation;
+                if (rng() % 2)
+                    t.rotation = glm::angleAxis(glm::radians(30.0f * u(rng)), glm::vec3(0, 1, 0)) *
+                                 t.rotation;
                 place_inside(scene, o, t);
             }
             break;
         case 2: {
             const int l = int(rng() % scene.lights.size());
-            set_light_position(scene, l, scene.lights[size_t(l)].center() + 0.3f * step * glm::vec3(u(rng), -std::abs(u(rng)), u(rng)));
+            set_light_position(scene, l,
+                               scene.lights[size_t(l)].center() +
+                                   0.3f * step * glm::vec3(u(rng), -std::abs(u(rng)), u(rng)));
             break;
         }
         case 3: {
@@ -122,14 +130,19 @@ void random_edit(Scene& scene, std::mt19937& rng) {
         }
         case 4: {
             const int l = int(rng() % scene.lights.size());
-            const glm::vec3 c = scene.lights[size_t(l)].type == LightType::point ? scene.lights[size_t(l)].intensity
-                                                                                 : scene.lights[size_t(l)].radiance;
-            set_light_color(scene, l, c * glm::vec3(0.5f + 0.5f * std::abs(u(rng)), 1.0f, 0.7f + 0.5f * std::abs(u(rng))));
+            const glm::vec3 c = scene.lights[size_t(l)].type == LightType::point
+                                    ? scene.lights[size_t(l)].intensity
+                                    : scene.lights[size_t(l)].radiance;
+            set_light_color(scene, l,
+                            c * glm::vec3(0.5f + 0.5f * std::abs(u(rng)), 1.0f,
+                                          0.7f + 0.5f * std::abs(u(rng))));
             break;
         }
         case 5: {
             const int o = diffuse[rng() % diffuse.size()];
-            set_albedo(scene, o, glm::vec3(0.2f + 0.6f * std::abs(u(rng)), 0.3f + 0.6f * std::abs(u(rng)), 0.5f));
+            set_albedo(
+                scene, o,
+                glm::vec3(0.2f + 0.6f * std::abs(u(rng)), 0.3f + 0.6f * std::abs(u(rng)), 0.5f));
             break;
         }
         case 6:
@@ -151,7 +164,8 @@ void random_edit(Scene& scene, std::mt19937& rng) {
                 const int o = dynamic[rng() % dynamic.size()];
                 Transform t = scene.objects[size_t(o)].transform;
                 const glm::vec3 axis(u(rng), 1.0f + u(rng), u(rng));
-                t.rotation = glm::angleAxis(glm::radians(180.0f * u(rng)), glm::normalize(axis)) * t.rotation;
+                t.rotation = glm::angleAxis(glm::radians(180.0f * u(rng)), glm::normalize(axis)) *
+                             t.rotation;
                 place_inside(scene, o, t);
             }
             break;
@@ -172,7 +186,8 @@ bool same_paths(const PhotonGroup& a, const PhotonGroup& b, float tolerance) {
 
 // Bit-identical stored paths and hit positions of every traced group against a fresh trace; hit
 // powers within float rounding (a light colour edit rescales hits instead of re-tracing them).
-void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b, const std::string& what) {
+void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b,
+                        const std::string& what) {
     const Scene& scene = b.scene();
     for (int l = 0; l < int(scene.lights.size()); ++l)
         for (int g = 0; g < scene.settings.photons.groups; ++g) {
@@ -180,9 +195,12 @@ void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b, co
             ASSERT_EQ(x.traced, y.traced) << what << ": light " << l << " group " << g;
             ASSERT_EQ(x.photon_begin, y.photon_begin) << what << ": light " << l << " group " << g;
             for (size_t i = 0; i < x.vertices.size(); ++i) {
-                ASSERT_EQ(x.vertices[i].surface, y.vertices[i].surface) << what << ": light " << l << " group " << g;
-                ASSERT_EQ(x.vertices[i].position, y.vertices[i].position) << what << ": light " << l << " group " << g;
-                ASSERT_EQ(x.vertices[i].local, y.vertices[i].local) << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].surface, y.vertices[i].surface)
+                    << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].position, y.vertices[i].position)
+                    << what << ": light " << l << " group " << g;
+                ASSERT_EQ(x.vertices[i].local, y.vertices[i].local)
+                    << what << ": light " << l << " group " << g;
             }
         }
     for (int s = 0; s < int(a.maps().surface_count()); ++s) {
@@ -210,7 +228,8 @@ int settle(PhotonSimulation& sim) {
 
 // With `verify` off the round-robin safety net is switched off: the edits' own invalidation (the
 // moved-object query, light and albedo edits) must then find every group alone.
-void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits, bool verify = true) {
+void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits,
+                           bool verify = true) {
     Scene scene = load_scene(test::scene_path(scene_file));
     if (!verify) scene.settings.photons.verify_per_frame = 0;
     ThreadPool pool(2);
@@ -244,8 +263,10 @@ TEST(SelectiveTracing, RepairEqualsRebuildTwoRooms) {
 }
 
 TEST(SelectiveTracing, RepairEqualsRebuildWithoutVerification) {
-    for (uint32_t seed = 300; seed <= 311; ++seed) repair_equals_rebuild("cornell.json", seed, 8, false);
-    for (uint32_t seed = 400; seed <= 408; ++seed) repair_equals_rebuild("two_rooms.json", seed, 8, false);
+    for (uint32_t seed = 300; seed <= 311; ++seed)
+        repair_equals_rebuild("cornell.json", seed, 8, false);
+    for (uint32_t seed = 400; seed <= 408; ++seed)
+        repair_equals_rebuild("two_rooms.json", seed, 8, false);
 }
 
 TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
@@ -254,7 +275,8 @@ TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
 
 // The same edits and frames on 1 and 3 worker threads give bit-identical maps, hit order included.
 TEST(SelectiveTracing, RepairIsIndependentOfThreadCount) {
-    Scene a = load_scene(test::scene_path("cornell.json")), b = load_scene(test::scene_path("cornell.json"));
+    Scene a = load_scene(test::scene_path("cornell.json")),
+          b = load_scene(test::scene_path("cornell.json"));
     ThreadPool one(1), three(3);
     PhotonSimulation sa(a, one), sb(b, three);
     std::mt19937 ra(5), rb(5);
@@ -303,7 +325,8 @@ TEST(SelectiveTracing, MovingTheCubeInvalidatesGroupsWithinGFrames) {
     ASSERT_GE(cube, 0);
     translate_object(scene, cube, {60.0f, 0.0f, -40.0f});
     int invalidated = 0;
-    for (int f = 0; f < scene.settings.photons.groups && invalidated == 0; ++f) invalidated += sim.frame().groups_invalidated;
+    for (int f = 0; f < scene.settings.photons.groups && invalidated == 0; ++f)
+        invalidated += sim.frame().groups_invalidated;
     EXPECT_GT(invalidated, 0);
 }
 
@@ -313,9 +336,10 @@ struct EditOutcome {
     PhotonFrameStats stats;                     // of that frame
 };
 
-// Applies `edit` to a settled simulation of `scene_file`, runs one frame, and finds the ground truth
-// by brute force: every group's photons re-traced in the edited scene.
-EditOutcome step_edit(const std::string& scene_file, const std::function<void(Scene&)>& edit, bool query) {
+// Applies `edit` to a settled simulation of `scene_file`, runs one frame, and finds the ground
+// truth by brute force: every group's photons re-traced in the edited scene.
+EditOutcome step_edit(const std::string& scene_file, const std::function<void(Scene&)>& edit,
+                      bool query) {
     Scene scene = load_scene(test::scene_path(scene_file));
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
@@ -328,13 +352,15 @@ EditOutcome step_edit(const std::string& scene_file, const std::function<void(Sc
     edit(scene);
     EditOutcome out;
     out.stats = sim.frame();
-    out.invalidated.insert(sim.invalidated_last_frame().begin(), sim.invalidated_last_frame().end());
+    out.invalidated.insert(sim.invalidated_last_frame().begin(),
+                           sim.invalidated_last_frame().end());
     PhotonSimulation fresh(scene, pool);
     fresh.trace_all();
     const float tolerance = scene.settings.photons.path_tolerance * scene.diagonal();
     for (int l = 0; l < int(scene.lights.size()); ++l)
         for (int g = 0; g < groups; ++g)
-            if (!same_paths(before[size_t(l * groups + g)], fresh.maps().group(l, g), tolerance)) out.changed.emplace(l, g);
+            if (!same_paths(before[size_t(l * groups + g)], fresh.maps().group(l, g), tolerance))
+                out.changed.emplace(l, g);
     return out;
 }
 
@@ -361,28 +387,35 @@ TEST(SelectiveTracing, CubeJumpInvalidatesEveryChangedGroupInTheEditFrame) {
     EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
     EXPECT_GT(on.stats.groups_invalidated_by_query, 0);
     EXPECT_GT(on.stats.query_segments_tested, 0u);
-    std::printf("cube jump: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
-                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
-                static_cast<unsigned long long>(on.stats.query_segments_tested));
+    std::printf(
+        "cube jump: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu "
+        "segments tested)\n",
+        on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+        static_cast<unsigned long long>(on.stats.query_segments_tested));
 
     const EditOutcome off = step_edit("cornell.json", jump_cube, false);
     EXPECT_EQ(off.changed, on.changed);
     EXPECT_GT(missed(off), 0u);  // without the query the check above fails
     EXPECT_EQ(off.stats.groups_invalidated_by_query, 0);
-    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n", missed(off),
-                off.changed.size());
+    std::printf("cube jump without the query: %zu of %zu changed groups missed in the edit frame\n",
+                missed(off), off.changed.size());
 }
 
 // The same for the door of two_rooms opened by 90 degrees in one edit (a rotation about its hinge).
 TEST(SelectiveTracing, DoorStepInvalidatesEveryChangedGroupInTheEditFrame) {
-    const EditOutcome on = step_edit("two_rooms.json", [](Scene& scene) {
-        rotate_object(scene, scene.find_object("door"), {0, 1, 0}, 90.0f);
-    }, true);
+    const EditOutcome on = step_edit(
+        "two_rooms.json",
+        [](Scene& scene) {
+            rotate_object(scene, scene.find_object("door"), {0, 1, 0}, 90.0f);
+        },
+        true);
     ASSERT_FALSE(on.changed.empty());
     EXPECT_EQ(missed(on), 0u) << "of " << on.changed.size() << " changed groups";
-    std::printf("door step: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu segments tested)\n",
-                on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
-                static_cast<unsigned long long>(on.stats.query_segments_tested));
+    std::printf(
+        "door step: %zu groups changed, %zu invalidated in the edit frame (%d by the query, %llu "
+        "segments tested)\n",
+        on.changed.size(), on.invalidated.size(), on.stats.groups_invalidated_by_query,
+        static_cast<unsigned long long>(on.stats.query_segments_tested));
 }
 
 TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {
@@ -405,8 +438,10 @@ TEST(SelectiveTracing, ClosedDoorIsolatesTheRooms) {
     uint64_t room_a = 0;
     for (int l = 0; l < int(scene.lights.size()); ++l) {
         const uint64_t n = sim.invalidations(l) - before[size_t(l)];
-        if (scene.lights[size_t(l)].position.x > wall_x) EXPECT_EQ(n, 0u) << scene.lights[size_t(l)].name;
-        else room_a += n;
+        if (scene.lights[size_t(l)].position.x > wall_x)
+            EXPECT_EQ(n, 0u) << scene.lights[size_t(l)].name;
+        else
+            room_a += n;
     }
     EXPECT_GT(room_a, 0u);  // the edit was seen where it happened
 }
@@ -419,10 +454,12 @@ TEST(SelectiveTracing, ClosedBoxStoresPhiOverOneMinusRho) {
         PhotonSimulation sim(scene, pool);
         sim.trace_all();
         glm::dvec3 total(0.0);
-        for (int s = 0; s < int(sim.maps().surface_count()); ++s) total += sim.maps().surface(s).flux;
+        for (int s = 0; s < int(sim.maps().surface_count()); ++s)
+            total += sim.maps().surface(s).flux;
         const double phi = 4.0 * std::numbers::pi * intensity;
         EXPECT_NEAR(total.x / (phi / (1.0 - rho)), 1.0, 0.01) << "rho " << rho;
-        std::printf("closed box rho %.1f: stored flux / (phi / (1 - rho)) = %.5f\n", double(rho), total.x / (phi / (1.0 - rho)));
+        std::printf("closed box rho %.1f: stored flux / (phi / (1 - rho)) = %.5f\n", double(rho),
+                    total.x / (phi / (1.0 - rho)));
         EXPECT_NEAR(total.y, total.x, 1e-9 * total.x);
     }
 }
@@ -449,12 +486,15 @@ TEST(SelectiveTracing, DeltaBookkeepingIsExact) {
     for (int s = 0; s < int(sim.maps().surface_count()); ++s) {
         const SurfaceHits& h = sim.maps().surface(s);
         const glm::dvec3 change = h.flux - flux0[size_t(s)];
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(h.signed_delta[c], change[c], 1e-9 * std::max(1.0, std::abs(flux0[size_t(s)][c])));
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(h.signed_delta[c], change[c],
+                        1e-9 * std::max(1.0, std::abs(flux0[size_t(s)][c])));
         // Δf sums |energy| of every add and remove, so it bounds the net change.
         EXPECT_GE(h.delta_f + 1e-9, std::abs(energy(change)));
         glm::dvec3 sum(0.0);
         for (const PhotonHit& hit : h.hits) sum += glm::dvec3(hit.power);
-        for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c], h.flux[c], 1e-9 * std::max(1.0, std::abs(sum[c])));
+        for (int c = 0; c < 3; ++c)
+            EXPECT_NEAR(sum[c], h.flux[c], 1e-9 * std::max(1.0, std::abs(sum[c])));
         any = any || h.delta_f > 0.0;
     }
     EXPECT_TRUE(any);

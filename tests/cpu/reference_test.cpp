@@ -60,7 +60,9 @@ Object quad_object(const std::string& name, float size, float height, bool facin
     o.material.type = type;
     o.material.albedo = glm::vec3(albedo);
     o.transform.translation = {0.0f, height, 0.0f};
-    if (facing_down) o.transform.rotation = glm::angleAxis(std::numbers::pi_v<float>, glm::vec3(1.0f, 0.0f, 0.0f));
+    if (facing_down)
+        o.transform.rotation =
+            glm::angleAxis(std::numbers::pi_v<float>, glm::vec3(1.0f, 0.0f, 0.0f));
     return o;
 }
 
@@ -137,7 +139,8 @@ float point_lit_radiance(const glm::vec3& p, const glm::vec3& n, const glm::vec3
                          float intensity, float albedo) {
     const glm::vec3 to = light - p;
     const float d2 = glm::dot(to, to);
-    return albedo / std::numbers::pi_v<float> * intensity * std::abs(glm::dot(n, to)) / std::sqrt(d2) / d2;
+    return albedo / std::numbers::pi_v<float> * intensity * std::abs(glm::dot(n, to)) /
+           std::sqrt(d2) / d2;
 }
 
 bool slow_tests() {
@@ -204,7 +207,8 @@ TEST(Reference, QuadLightDirectMatchesAnalytic) {
     scene.lights.push_back(quad_light(side, height, radiance));
     // Close above the floor's centre, below the light (lights are invisible to camera rays).
     scene.camera = looking_at({0.0f, 0.5f, 0.0f}, {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 4.0f, 5);
-    const float expected = albedo / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, height);
+    const float expected =
+        albedo / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, height);
     for (const ReferenceSettings& settings : {pt(256), pm(16, 20000, 16)}) {
         const ReferenceResult r = render(scene, settings);
         EXPECT_NEAR(image_mean(r.components[size_t(FrameTerm::direct)]).r, expected,
@@ -267,7 +271,8 @@ TEST(Reference, PointLightCausticsComeFromPhotonMappingOnly) {
 TEST(Reference, QuadLightCausticsAgreeWithAnalytic) {
     const float radiance = 2.0f, side = 1.0f;
     const Scene scene = mirror_room(quad_light(side, 1.0f, radiance));
-    const float expected = 0.5f / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, 3.0f);
+    const float expected =
+        0.5f / std::numbers::pi_v<float> * square_irradiance(radiance, 0.5f * side, 3.0f);
 
     const ReferenceResult path = render(scene, pt(1024));
     EXPECT_NEAR(image_mean(path.components[size_t(FrameTerm::caustics)]).r, expected,

@@ -11,7 +11,9 @@
 
 namespace ag::test {
 
-inline std::string scene_path(const std::string& name) { return std::string(AG_SOURCE_DIR) + "/scenes/" + name; }
+inline std::string scene_path(const std::string& name) {
+    return std::string(AG_SOURCE_DIR) + "/scenes/" + name;
+}
 
 // A closed cube of side `size` centred at the origin, all faces facing inwards, albedo ρ, one
 // point light of intensity I at the centre.

@@ -1,12 +1,11 @@
 // Screen-space caustics (Larsen ch. 12): tile culling changes nothing, brightness holds under zoom.
-#include "gpu/caustics_renderer.h"
+#include <gtest/gtest.h>
 
+#include <numbers>
 #include <random>
 
-#include <gtest/gtest.h>
-#include <numbers>
-
 #include "gl_fixture.h"
+#include "gpu/caustics_renderer.h"
 #include "shared/charts.h"
 #include "shared/scene_edit.h"
 #include "shared/shapes.h"
@@ -35,7 +34,8 @@ Scene floor_scene(float distance) {
     return s;
 }
 
-void disc_photons(float r, int n, std::vector<glm::vec3>& positions, std::vector<glm::vec3>& powers) {
+void disc_photons(float r, int n, std::vector<glm::vec3>& positions,
+                  std::vector<glm::vec3>& powers) {
     std::mt19937 rng(3);
     std::uniform_real_distribution<float> u(0.0f, 1.0f);
     for (int i = 0; i < n; ++i) {
@@ -64,7 +64,8 @@ TEST_F(CausticsTest, TileCullingChangesNothing) {
     EXPECT_GT(caustics.tiles_filtered(), 0);
     double total = 0.0;
     for (size_t i = 0; i < full.size(); ++i) {
-        for (int c = 0; c < 3; ++c) ASSERT_NEAR(culled[i][c], full[i][c], 1e-6f * std::max(1.0f, full[i][c])) << i;
+        for (int c = 0; c < 3; ++c)
+            ASSERT_NEAR(culled[i][c], full[i][c], 1e-6f * std::max(1.0f, full[i][c])) << i;
         total += full[i].x;
     }
     EXPECT_GT(total, 0.0);

@@ -1,11 +1,11 @@
 // The composed frame (Larsen ch. 13): shadow volumes, the sum of the eq. 13.2 terms, and the
 // light-sample limit.
-#include "gpu/frame_renderer.h"
-
 #include <gtest/gtest.h>
+
 #include <numbers>
 
 #include "gl_fixture.h"
+#include "gpu/frame_renderer.h"
 #include "gpu/lightmap_texture.h"
 #include "shared/camera.h"
 #include "shared/charts.h"
@@ -49,9 +49,11 @@ Scene occluder_scene() {
 
 // The pixel where world point p lands.
 glm::ivec2 project(const Camera& c, const glm::vec3& p) {
-    const glm::vec4 clip = projection_matrix(c, 0.01f, 100.0f) * view_matrix(c) * glm::vec4(p, 1.0f);
+    const glm::vec4 clip =
+        projection_matrix(c, 0.01f, 100.0f) * view_matrix(c) * glm::vec4(p, 1.0f);
     const glm::vec2 ndc = glm::vec2(clip) / clip.w;
-    return {int((ndc.x * 0.5f + 0.5f) * float(c.width)), int((0.5f - ndc.y * 0.5f) * float(c.height))};
+    return {int((ndc.x * 0.5f + 0.5f) * float(c.width)),
+            int((0.5f - ndc.y * 0.5f) * float(c.height))};
 }
 
 }  // namespace
@@ -68,16 +70,19 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
     const Image& direct = images.aov[size_t(FrameTerm::direct)];
     const glm::ivec2 under = project(scene.camera, {0.0f, 0.0f, 0.0f});
     const glm::ivec2 beside = project(scene.camera, {3.0f, 0.0f, 0.0f});
-    EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f)) << "pixel " << under.x << "," << under.y;
+    EXPECT_EQ(direct.rgb(under.x, under.y), glm::vec3(0.0f))
+        << "pixel " << under.x << "," << under.y;
     // Beside: ρ/π · I cosθ / d² with ρ = 0.75, d² = 9 + 25, cosθ = 5/√34.
-    const float d2 = 34.0f, expected = 0.75f / std::numbers::pi_v<float> * 25.0f * (5.0f / std::sqrt(d2)) / d2;
+    const float d2 = 34.0f,
+                expected = 0.75f / std::numbers::pi_v<float> * 25.0f * (5.0f / std::sqrt(d2)) / d2;
     EXPECT_NEAR(direct.rgb(beside.x, beside.y).x, expected, 0.03f * expected);
     // Switching shadows off lights the point under the box too.
     Scene unshadowed = scene;
     unshadowed.settings.direct.shadows = false;
     FrameRenderer plain(unshadowed, meshes, scene.camera.width, scene.camera.height);
     plain.render(iim.id());
-    EXPECT_GT(plain.read_back().aov[size_t(FrameTerm::direct)].rgb(under.x, under.y).x, 0.1f * expected);
+    EXPECT_GT(plain.read_back().aov[size_t(FrameTerm::direct)].rgb(under.x, under.y).x,
+              0.1f * expected);
 }
 
 TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
@@ -85,7 +90,8 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     scene.camera.width = scene.camera.height = 96;
     SceneMeshes meshes(scene);
     LightmapTexture iim(scene.atlas);
-    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(0.2f, 0.1f, 0.05f));
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                  glm::vec3(0.2f, 0.1f, 0.05f));
     iim.update_all(values);
     FrameRenderer renderer(scene, meshes, 96, 96);
     renderer.render(iim.id());
@@ -97,7 +103,8 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
             sum += images.aov[size_t(t)].pixels[i];
             terms[size_t(t)] += images.aov[size_t(t)].pixels[i];
         }
-        ASSERT_NEAR(images.frame.pixels[i], sum, 1e-5f * std::max(1.0f, sum)) << "pixel value " << i;
+        ASSERT_NEAR(images.frame.pixels[i], sum, 1e-5f * std::max(1.0f, sum))
+            << "pixel value " << i;
     }
     EXPECT_GT(terms[size_t(FrameTerm::direct)], 0.0);
     EXPECT_GT(terms[size_t(FrameTerm::indirect)], 0.0);

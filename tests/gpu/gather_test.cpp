@@ -1,9 +1,8 @@
 // Hemi-plane gathering (Larsen ch. 11, eq. 11.2) against analytic answers.
-#include "gpu/hemi_plane_gather.h"
-
 #include <gtest/gtest.h>
 
 #include "gl_fixture.h"
+#include "gpu/hemi_plane_gather.h"
 #include "gpu/lightmap_texture.h"
 #include "shared/charts.h"
 #include "shared/scene_edit.h"
@@ -37,8 +36,10 @@ TEST(HemiPlaneWeights, StretchOnlyAddsToTheBorder) {
         for (int i = 0; i < r; ++i) {
             const bool border = i == 0 || j == 0 || i == r - 1 || j == r - 1;
             const size_t k = size_t(j) * r + size_t(i);
-            if (border) EXPECT_GT(stretch[k], none[k]);
-            else EXPECT_FLOAT_EQ(stretch[k], none[k]);
+            if (border)
+                EXPECT_GT(stretch[k], none[k]);
+            else
+                EXPECT_FLOAT_EQ(stretch[k], none[k]);
         }
 }
 
@@ -57,7 +58,8 @@ Scene receiver_under_plane(float h, float half_size, BorderCorrection correction
     plane.name = "plane";
     plane.mesh = make_quad(2.0f * half_size, 2.0f * half_size);
     plane.transform.translation = {0.0f, h, 0.0f};
-    plane.transform.rotation = glm::angleAxis(glm::radians(180.0f), glm::vec3(1, 0, 0));  // face down
+    plane.transform.rotation =
+        glm::angleAxis(glm::radians(180.0f), glm::vec3(1, 0, 0));  // face down
     s.objects.push_back(plane);
     s.settings.lightmap.texel_size = 0.5f;
     s.settings.gather.plane_resolution = 32;
@@ -74,27 +76,33 @@ class HemiPlaneGatherTest : public test::GlTest {};
 
 TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
     const glm::vec3 radiance(2.0f, 1.0f, 0.5f);
-    for (BorderCorrection c : {BorderCorrection::none, BorderCorrection::renormalize, BorderCorrection::stretch}) {
+    for (BorderCorrection c :
+         {BorderCorrection::none, BorderCorrection::renormalize, BorderCorrection::stretch}) {
         // The plane reaches far beyond the frustum (|x| < 2h at a = 2) so it fills the view.
         const Scene scene = receiver_under_plane(1.0f, 50.0f, c);
         SceneMeshes meshes(scene);
         LightmapTexture aim(scene.atlas);
-        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(0.0f));
+        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                      glm::vec3(0.0f));
         std::vector<int> receiver_texels;
         for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
             const TexelRecord& t = scene.atlas.texels[size_t(i)];
-            if (t.object == 1) values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
-            else receiver_texels.push_back(i);
+            if (t.object == 1)
+                values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
+            else
+                receiver_texels.push_back(i);
         }
         aim.update_all(values);
         HemiPlaneGather gather(scene, meshes, 16);
         const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
         ASSERT_FALSE(r.empty());
-        const double expected_fraction = c == BorderCorrection::none ? hemi_plane_coverage(2.0f) : 1.0;
+        const double expected_fraction =
+            c == BorderCorrection::none ? hemi_plane_coverage(2.0f) : 1.0;
         for (const GatherResult& g : r) {
             // E = π L · fraction, and the IIM stores E / π.
             for (int k = 0; k < 3; ++k)
-                EXPECT_NEAR(g.iim[k], radiance[k] * expected_fraction, 0.01 * radiance[k] * expected_fraction)
+                EXPECT_NEAR(g.iim[k], radiance[k] * expected_fraction,
+                            0.01 * radiance[k] * expected_fraction)
                     << kBorderCorrectionNames[size_t(c)];
             EXPECT_EQ(g.back_fraction, 0.0f);
         }
@@ -111,21 +119,25 @@ TEST_F(HemiPlaneGatherTest, TexelUnderABackFaceIsFlagged) {
     for (int i = 0; i < int(scene.atlas.texels.size()); ++i)
         if (scene.atlas.texels[size_t(i)].object == 0) receiver_texels.push_back(i);
     HemiPlaneGather gather(scene, meshes, 16);
-    for (const GatherResult& g : gather.gather(receiver_texels, aim.id())) EXPECT_GT(g.back_fraction, 0.9f);
+    for (const GatherResult& g : gather.gather(receiver_texels, aim.id()))
+        EXPECT_GT(g.back_fraction, 0.9f);
 }
 
 TEST_F(HemiPlaneGatherTest, BatchedAndSingleGathersAgree) {
-    const Scene scene = receiver_under_plane(1.0f, 3.0f, BorderCorrection::stretch);  // partial view
+    const Scene scene =
+        receiver_under_plane(1.0f, 3.0f, BorderCorrection::stretch);  // partial view
     SceneMeshes meshes(scene);
     LightmapTexture aim(scene.atlas);
-    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height), glm::vec3(1.0f));
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                  glm::vec3(1.0f));
     aim.update_all(values);
     std::vector<int> all(scene.atlas.texels.size());
     for (size_t i = 0; i < all.size(); ++i) all[i] = int(i);
     HemiPlaneGather batched(scene, meshes, 64), single(scene, meshes, 1);
     single.set_max_per_pass(1);
     const auto a = batched.gather(all, aim.id()), b = single.gather(all, aim.id());
-    for (size_t i = 0; i < all.size(); ++i) EXPECT_NEAR(a[i].iim.x, b[i].iim.x, 1e-4f) << "texel " << i;
+    for (size_t i = 0; i < all.size(); ++i)
+        EXPECT_NEAR(a[i].iim.x, b[i].iim.x, 1e-4f) << "texel " << i;
 }
 
 }  // namespace ag::gpu

@@ -2,11 +2,11 @@
 // can be made the test is reported as skipped, never passed.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstdlib>
 #include <memory>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "gpu/gl_context.h"
 

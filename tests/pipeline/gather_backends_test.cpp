@@ -117,8 +117,10 @@ TEST_P(GatherBackendTest, FacingSquareMatchesFormFactor) {
     const glm::vec3 radiance(2.0f, 1.0f, 0.5f);
     for (int r = 0; r < int(s.atlas.texels.size()); ++r) {
         const TexelRecord& t = s.atlas.texels[size_t(r)];
-        if (t.object == 1) aim[atlas_index(s.atlas, t)] = radiance;
-        else receivers.push_back(r);
+        if (t.object == 1)
+            aim[atlas_index(s.atlas, t)] = radiance;
+        else
+            receivers.push_back(r);
     }
     Backend backend(GetParam(), s, aim);
     const std::vector<GatherResult> got = (*backend).gather(receivers);
@@ -160,8 +162,9 @@ TEST_P(GatherBackendTest, TexelsInsideGeometryAreInvalidAndRepaired) {
     for (int r = 0; r < int(s.atlas.texels.size()); ++r) {
         const TexelRecord& t = s.atlas.texels[size_t(r)];
         if (t.object == 0) floor.push_back(r);
-        aim[atlas_index(s.atlas, t)] =
-            glm::vec3(t.object == 1 ? 1.0f : t.object == 2 ? cube_radiance : 0.0f);
+        aim[atlas_index(s.atlas, t)] = glm::vec3(t.object == 1   ? 1.0f
+                                                 : t.object == 2 ? cube_radiance
+                                                                 : 0.0f);
     }
     Backend backend(GetParam(), s, aim);
     cpu::Iim iim(s);
@@ -215,7 +218,8 @@ TEST_P(GatherBackendTest, ResultsDoNotDependOnTheBatch) {
     const std::vector<GatherResult> second = (*backend).gather(reversed);
     for (size_t k = 0; k < reversed.size(); ++k) {
         const GatherResult& a = first[size_t(reversed[k])];
-        EXPECT_NEAR(second[k].iim.x, a.iim.x, 1e-4f * (1e-3f + a.iim.x)) << "record " << reversed[k];
+        EXPECT_NEAR(second[k].iim.x, a.iim.x, 1e-4f * (1e-3f + a.iim.x))
+            << "record " << reversed[k];
         EXPECT_NEAR(second[k].back_fraction, a.back_fraction, 1e-5f);
     }
 }
@@ -255,9 +259,8 @@ TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
         sum_sq += rel * rel;
         ++compared;
         // Both read the AIMs chart-aware; what remains is the hemi-plane's missing band.
-        EXPECT_LT(rel, 0.02) << "texel " << i << " (object "
-                             << scene.objects[size_t(t.object)].name << ") gl " << lg << " cpu "
-                             << lc << " area " << t.area;
+        EXPECT_LT(rel, 0.02) << "texel " << i << " (object " << scene.objects[size_t(t.object)].name
+                             << ") gl " << lg << " cpu " << lc << " area " << t.area;
     }
     std::printf("GL vs CPU gather on %d Cornell texels: worst %.2f%%, RMS %.2f%%\n", compared,
                 100.0 * worst, 100.0 * std::sqrt(sum_sq / std::max(1, compared)));

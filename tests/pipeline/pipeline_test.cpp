@@ -103,7 +103,8 @@ TEST_F(PipelineTest, AnEditReachesTheIimAndSettlesLikeAFreshPipeline) {
             worst = std::max(worst, double(std::abs(iim_after[a][c] - expected[a][c])) /
                                         (1e-3 + double(expected[a][c])));
     }
-    std::printf("settled IIM after the edit against a fresh pipeline: worst %.3g relative\n", worst);
+    std::printf("settled IIM after the edit against a fresh pipeline: worst %.3g relative\n",
+                worst);
     // Immediate invalidation finds every changed photon group, the AIMs are rebuilt from the
     // repaired maps and every texel is re-gathered with the final AIMs: the same numbers.
     EXPECT_LT(worst, 1e-6);
@@ -207,8 +208,8 @@ TEST_F(PipelineTest, AScreenSpaceTermComposesLikeTheLightmap) {
     const glm::vec3 value(0.25f, 0.5f, 0.125f);
 
     gpu::LightmapTexture lightmap(scene.atlas);
-    lightmap.update_all(std::vector<glm::vec3>(
-        size_t(scene.atlas.width) * size_t(scene.atlas.height), value));
+    lightmap.update_all(
+        std::vector<glm::vec3>(size_t(scene.atlas.width) * size_t(scene.atlas.height), value));
     renderer.render(gpu::IndirectTerm{lightmap.id(), gpu::IndirectSpace::lightmap});
     const Image in_lightmap = renderer.read_back().aov[size_t(FrameTerm::indirect)];
 

@@ -11,8 +11,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <set>
 #include <numbers>
+#include <set>
 
 #include "shared/shapes.h"
 
@@ -247,7 +247,8 @@ TEST(Charts, CoverEveryTriangleExactlyOnce) {
 TEST(Charts, NormalsStayWithinTheCone) {
     for (const auto& [name, scene] : invariant_scenes()) {
         SCOPED_TRACE(name);
-        const float cos_cone = std::cos(scene.settings.lightmap.chart_cone * std::numbers::pi_v<float> / 180.0f);
+        const float cos_cone =
+            std::cos(scene.settings.lightmap.chart_cone * std::numbers::pi_v<float> / 180.0f);
         for (const Chart& chart : scene.atlas.charts) {
             EXPECT_NEAR(glm::length(chart.axis), 1.0f, 1e-5f);
             EXPECT_NEAR(glm::dot(glm::cross(chart.u_axis, chart.v_axis), chart.axis), 1.0f, 1e-5f);

@@ -1,10 +1,10 @@
 #include "shared/image.h"
 
+#include <gtest/gtest.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-
-#include <gtest/gtest.h>
 
 #include "shared/input_error.h"
 
@@ -22,7 +22,8 @@ fs::path temp_dir() {
 Image gradient(int w, int h) {
     Image img(w, h);
     for (int y = 0; y < h; ++y)
-        for (int x = 0; x < w; ++x) img.set_rgb(x, y, {x / float(w - 1), y / float(h - 1), 0.25f + 3.0f * (x == y)});
+        for (int x = 0; x < w; ++x)
+            img.set_rgb(x, y, {x / float(w - 1), y / float(h - 1), 0.25f + 3.0f * (x == y)});
     return img;
 }
 }  // namespace
@@ -95,7 +96,8 @@ TEST(Image, FailedWriteLeavesDestinationUntouched) {
     Image broken(4, 4);
     broken.pixels.resize(3);  // malformed
     EXPECT_THROW(write_image(broken, p.string()), std::runtime_error);
-    EXPECT_THROW(write_image(gradient(4, 4), (d / "missing_dir" / "z.png").string()), std::runtime_error);
+    EXPECT_THROW(write_image(gradient(4, 4), (d / "missing_dir" / "z.png").string()),
+                 std::runtime_error);
     EXPECT_EQ(fs::file_size(p), size_before);
 }
 

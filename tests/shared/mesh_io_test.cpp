@@ -4,13 +4,12 @@
 
 #include <gtest/gtest.h>
 
-#include "temp_dir.h"
-
 #include <filesystem>
 #include <fstream>
 
 #include "shared/input_error.h"
 #include "shared/shapes.h"
+#include "temp_dir.h"
 
 namespace ag {
 namespace {

@@ -1,10 +1,10 @@
 #include "shared/qmc.h"
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <set>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 namespace ag {
 
@@ -28,7 +28,8 @@ TEST(Qmc, Base2SequenceEq62) {
         std::vector<double> got;
         for (int i = first; i < first + count; ++i) got.push_back(radical_inverse(2, uint64_t(i)));
         std::sort(got.begin(), got.end());
-        for (int j = 0; j < count; ++j) EXPECT_DOUBLE_EQ(got[size_t(j)], (2.0 * j + 1.0) / (2.0 * count)) << level;
+        for (int j = 0; j < count; ++j)
+            EXPECT_DOUBLE_EQ(got[size_t(j)], (2.0 * j + 1.0) / (2.0 * count)) << level;
     }
     EXPECT_DOUBLE_EQ(radical_inverse(2, 4), 1.0 / 8);
     EXPECT_DOUBLE_EQ(radical_inverse(2, 8), 1.0 / 16);
@@ -50,7 +51,8 @@ TEST(Qmc, Primes) {
 TEST(Qmc, HaltonUnscrambledMatchesRadicalInverse) {
     const Halton h(4);
     for (uint64_t i = 0; i < 100; ++i)
-        for (int d = 0; d < 4; ++d) EXPECT_DOUBLE_EQ(h.sample(i, d), radical_inverse(nth_prime(d), i));
+        for (int d = 0; d < 4; ++d)
+            EXPECT_DOUBLE_EQ(h.sample(i, d), radical_inverse(nth_prime(d), i));
 }
 
 // Every full level of a (scrambled or not) radical inverse hits each of the b^k elementary

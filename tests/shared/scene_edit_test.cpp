@@ -1,6 +1,7 @@
 #include "shared/scene_edit.h"
 
 #include <gtest/gtest.h>
+
 #include <numbers>
 
 #include "shared/input_error.h"
@@ -21,7 +22,8 @@ Scene two_objects_two_lights() {
     s.lights[0].intensity = glm::vec3(10.0f);
     s.lights[1].name = "panel";
     s.lights[1].type = LightType::quad;
-    s.lights[1].corners = {glm::vec3(0, 4, 0), glm::vec3(2, 4, 0), glm::vec3(2, 4, 2), glm::vec3(0, 4, 2)};
+    s.lights[1].corners = {glm::vec3(0, 4, 0), glm::vec3(2, 4, 0), glm::vec3(2, 4, 2),
+                           glm::vec3(0, 4, 2)};
     s.lights[1].radiance = glm::vec3(1.0f);
     init_versions(s);
     return s;
@@ -67,7 +69,8 @@ TEST(SceneEdit, TransformsComposeRigidly) {
     Scene s = two_objects_two_lights();
     rotate_object(s, 0, {0, 1, 0}, 90.0f);
     const Transform& t = s.objects[0].transform;
-    EXPECT_NEAR(glm::length(t.translation - glm::vec3(1, 2, 3)), 0.0f, 1e-6f);  // about its own origin
+    EXPECT_NEAR(glm::length(t.translation - glm::vec3(1, 2, 3)), 0.0f,
+                1e-6f);  // about its own origin
     const glm::vec3 x = t.apply_vector({1, 0, 0});
     EXPECT_NEAR(x.z, -1.0f, 1e-6f);  // +90° about +Y takes +X to -Z
     translate_object(s, 0, {0, 0, 1});

@@ -4,8 +4,6 @@
 
 #include <gtest/gtest.h>
 
-#include "temp_dir.h"
-
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -19,6 +17,7 @@
 #include "shared/input_error.h"
 #include "shared/mesh_io.h"
 #include "shared/shapes.h"
+#include "temp_dir.h"
 
 namespace ag {
 namespace {

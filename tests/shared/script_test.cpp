@@ -113,12 +113,14 @@ TEST(ScriptExamples, StepScriptsEditInOneFrame) {
     }
     // The jump lands where the slide ends.
     Scene jump = load_scene((kScenes / "cornell.json").string()), slide = jump;
-    Script a((kScenes / "cornell_cube_jump.lua").string()), b((kScenes / "cornell_move_cube.lua").string());
+    Script a((kScenes / "cornell_cube_jump.lua").string()),
+        b((kScenes / "cornell_move_cube.lua").string());
     run_frames(a, jump, 61);
     run_frames(b, slide, 61);
     const int cube = jump.find_object("cube");
     EXPECT_LT(glm::length(jump.objects[size_t(cube)].transform.translation -
-                          slide.objects[size_t(cube)].transform.translation), 1e-3f);
+                          slide.objects[size_t(cube)].transform.translation),
+              1e-3f);
 }
 
 TEST(ScriptExamples, CornellCubeSlidesThenStops) {

@@ -5,8 +5,8 @@
 
 #include <cmath>
 #include <map>
-#include <utility>
 #include <numbers>
+#include <utility>
 
 namespace ag {
 namespace {

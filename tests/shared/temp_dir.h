@@ -1,11 +1,11 @@
 // A GoogleTest fixture with a fresh temporary folder per test, and helpers to write files in it.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <filesystem>
 #include <fstream>
 #include <string>
-
-#include <gtest/gtest.h>
 
 namespace ag::test {
 

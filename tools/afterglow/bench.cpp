@@ -14,11 +14,11 @@
 #include "gpu/lightmap_texture.h"
 #include "gpu/scene_meshes.h"
 #include "shared/charts.h"
+#include "shared/pipeline/frame_loop.h"
 #include "shared/qmc.h"
 #include "shared/scene_edit.h"
-#include "shared/shapes.h"
-#include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
+#include "shared/shapes.h"
 #include "tools/afterglow/commands.h"
 
 namespace ag::cli {
@@ -32,7 +32,8 @@ const Command kBenchCommand{
     "14.1 (300–2,000 photons; build and 100-nearest lookup). 'gather SCENE...': Larsen Table 14.2, "
     "ms per gathered texel for plane sizes 8/16/32, GL batched and unbatched against CPU rays. "
     "'frame SCENE': frames per second of the whole pipeline, static and with the first dynamic "
-    "object moving every frame (--indirect picks the method). 'caustics SCENE': caustic photons traced per second per core and "
+    "object moving every frame (--indirect picks the method). 'caustics SCENE': caustic photons "
+    "traced per second per core and "
     "the share reaching a specular object; the screen filter over the whole screen against "
     "tile-culled filtering for a caustic covering about 1% and 5% of it (Larsen: 37.6 ms against "
     "0.38 ms for 1% of 512²).",
@@ -55,14 +56,17 @@ const Command kBenchCommand{
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+double seconds_since(Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+}
 
 int bench_photons(const std::string& scene_path, int repeat) {
     Scene scene = load_scene(scene_path);
     ThreadPool pool(1);  // per-core figures
     cpu::PhotonSimulation sim(scene, pool);
     sim.trace_all();
-    const int groups = scene.settings.photons.groups, per_group = scene.settings.photons.photons_per_group;
+    const int groups = scene.settings.photons.groups,
+              per_group = scene.settings.photons.photons_per_group;
     const int photons = groups * per_group * int(scene.lights.size());
 
     // The same photon paths as rays: record every segment once.
@@ -79,7 +83,8 @@ int bench_photons(const std::string& scene_path, int repeat) {
                     rays.push_back({origin, v.position - origin, 1e-4f, 1.0f + 1e-4f});
                     origin = v.position;
                 }
-                rays.push_back({origin, glm::vec3(0.0f, 0.0f, 1.0f), 1e-3f, 1e30f});  // the final miss / absorption ray
+                rays.push_back({origin, glm::vec3(0.0f, 0.0f, 1.0f), 1e-3f,
+                                1e30f});  // the final miss / absorption ray
             }
 
     double best_full = 1e30, best_raw = 1e30, best_trace = 1e30;
@@ -109,21 +114,30 @@ int bench_photons(const std::string& scene_path, int repeat) {
         for (int g = 0; g < groups; ++g) {
             const cpu::PhotonGroup& grp = sim.maps().group(l, g);
             vertices += grp.vertices.size();
-            bytes += grp.vertices.size() * sizeof(cpu::PathVertex) + grp.photon_begin.size() * sizeof(uint32_t) +
-                     sizeof(cpu::PhotonGroup);
+            bytes += grp.vertices.size() * sizeof(cpu::PathVertex) +
+                     grp.photon_begin.size() * sizeof(uint32_t) + sizeof(cpu::PhotonGroup);
         }
-    std::printf("scene %s: %zu triangles, %d photons (%d groups x %d per light), %zu path vertices, %zu stored hits\n",
-                scene_path.c_str(), scene.triangle_count(), photons, groups, per_group, vertices, stored);
-    std::printf("photons with bookkeeping: %.0f photons/s/core (%.3f ms for all)\n", photons / best_full, 1e3 * best_full);
-    std::printf("raw Embree, same segments: %.0f rays/s/core = %.0f photons/s/core (%zu rays, %.3f ms)\n",
-                double(rays.size()) / best_raw, photons / best_raw, rays.size(), 1e3 * best_raw);
-    std::printf("tracing without bookkeeping (same photons, nothing stored): %.0f photons/s/core (%.3f ms)\n",
-                photons / best_trace, 1e3 * best_trace);
-    std::printf("ratio with bookkeeping / without: %.2f;  with bookkeeping / raw Embree rays: %.2f\n",
-                best_trace / best_full, best_raw / best_full);
-    std::printf("memory: %zu bytes for hits + paths = %.1f KB, %.1f bytes per stored hit (sizeof hit %zu, vertex %zu)\n",
-                bytes, bytes / 1024.0, double(bytes) / double(std::max<size_t>(1, stored)), sizeof(cpu::PhotonHit),
-                sizeof(cpu::PathVertex));
+    std::printf(
+        "scene %s: %zu triangles, %d photons (%d groups x %d per light), %zu path vertices, %zu "
+        "stored hits\n",
+        scene_path.c_str(), scene.triangle_count(), photons, groups, per_group, vertices, stored);
+    std::printf("photons with bookkeeping: %.0f photons/s/core (%.3f ms for all)\n",
+                photons / best_full, 1e3 * best_full);
+    std::printf(
+        "raw Embree, same segments: %.0f rays/s/core = %.0f photons/s/core (%zu rays, %.3f ms)\n",
+        double(rays.size()) / best_raw, photons / best_raw, rays.size(), 1e3 * best_raw);
+    std::printf(
+        "tracing without bookkeeping (same photons, nothing stored): %.0f photons/s/core (%.3f "
+        "ms)\n",
+        photons / best_trace, 1e3 * best_trace);
+    std::printf(
+        "ratio with bookkeeping / without: %.2f;  with bookkeeping / raw Embree rays: %.2f\n",
+        best_trace / best_full, best_raw / best_full);
+    std::printf(
+        "memory: %zu bytes for hits + paths = %.1f KB, %.1f bytes per stored hit (sizeof hit %zu, "
+        "vertex %zu)\n",
+        bytes, bytes / 1024.0, double(bytes) / double(std::max<size_t>(1, stored)),
+        sizeof(cpu::PhotonHit), sizeof(cpu::PathVertex));
     return sink == size_t(-1) ? 1 : 0;
 }
 
@@ -149,11 +163,13 @@ int bench_knn(int repeat, int queries) {
             best_build = std::min(best_build, seconds_since(t));
             const std::vector<glm::vec3> q = random_points(size_t(queries));
             t = Clock::now();
-            for (int i = 0; i < queries; ++i) trees[size_t(i) % maps].query(q[size_t(i)], k, idx, d2);
+            for (int i = 0; i < queries; ++i)
+                trees[size_t(i) % maps].query(q[size_t(i)], k, idx, d2);
             best_query = std::min(best_query, seconds_since(t) / queries);
         }
-        std::printf("  %8zu photons in %5zu maps of %7zu: build %9.3f ms, %d-nearest lookup %8.2f us\n", total, maps,
-                    per_map, 1e3 * best_build, k, 1e6 * best_query);
+        std::printf(
+            "  %8zu photons in %5zu maps of %7zu: build %9.3f ms, %d-nearest lookup %8.2f us\n",
+            total, maps, per_map, 1e3 * best_build, k, 1e6 * best_query);
     };
     std::printf("Larsen Table 8.1: 1,000,000 random photons in M maps, 500 nearest\n");
     for (size_t maps : {1, 10, 100, 1000}) measure(1000000, maps, 500);
@@ -164,16 +180,16 @@ int bench_knn(int repeat, int queries) {
 
 std::unique_ptr<gpu::GlContext> bench_context(const Args& args) {
     auto context = gpu::make_gl_context(args.gl_backend());
-    std::printf("GL: %s (%s, backend %s)\n", context->renderer().c_str(), context->version().c_str(),
-                gpu::kGlBackendNames[size_t(context->backend())]);
+    std::printf("GL: %s (%s, backend %s)\n", context->renderer().c_str(),
+                context->version().c_str(), gpu::kGlBackendNames[size_t(context->backend())]);
     return context;
 }
 
 // Larsen Table 14.2: one final gather's cost against scene size and plane resolution.
 int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args& args) {
     auto context = bench_context(args);
-    std::printf("%-26s %9s %6s %14s %14s %14s %14s\n", "scene", "polygons", "plane", "GL batched", "GL unbatched",
-                "CPU R² rays", "CPU 256 rays");
+    std::printf("%-26s %9s %6s %14s %14s %14s %14s\n", "scene", "polygons", "plane", "GL batched",
+                "GL unbatched", "CPU R² rays", "CPU 256 rays");
     for (const std::string& path : scenes) {
         Scene scene = load_scene(path);
         ThreadPool pool(1);
@@ -188,7 +204,8 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
         for (int t = 0; t < int(scene.atlas.texels.size()) && t < 256; ++t) texels.push_back(t);
         for (int r : {8, 16, 32}) {
             scene.settings.gather.plane_resolution = r;
-            gpu::HemiPlaneGather batched(scene, meshes, 256, &aim_texture), single(scene, meshes, 1, &aim_texture);
+            gpu::HemiPlaneGather batched(scene, meshes, 256, &aim_texture),
+                single(scene, meshes, 1, &aim_texture);
             single.set_max_per_pass(1);
             auto time_ms = [&](auto&& fn) {
                 fn();  // warm-up
@@ -211,8 +228,9 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
             scene.settings.gather.cpu_rays = 256;
             cpu::CpuGather cpu_256(scene, sim.rays(), pool, &aim.radiance());
             const double cpu_256_ms = time_gather(cpu_256);
-            std::printf("%-26s %9zu %3dx%-3d %11.3f ms %11.3f ms %11.3f ms %11.3f ms\n", path.c_str(),
-                        scene.triangle_count(), r, r, gl_batched, gl_single, cpu_rr, cpu_256_ms);
+            std::printf("%-26s %9zu %3dx%-3d %11.3f ms %11.3f ms %11.3f ms %11.3f ms\n",
+                        path.c_str(), scene.triangle_count(), r, r, gl_batched, gl_single, cpu_rr,
+                        cpu_256_ms);
         }
     }
     std::printf("(ms per gathered texel, best of %d; CPU on one thread)\n", repeat);
@@ -230,7 +248,9 @@ int bench_frame(const std::string& path, int repeat, const Args& args) {
     for (int f = 0; f < 60 && !pipeline.converged(); ++f) loop.step();  // settle first
     int mover = -1;
     for (int o = 0; o < int(scene.objects.size()) && mover < 0; ++o)
-        if (scene.objects[size_t(o)].dynamic && scene.objects[size_t(o)].material.type == MaterialType::diffuse) mover = o;
+        if (scene.objects[size_t(o)].dynamic &&
+            scene.objects[size_t(o)].material.type == MaterialType::diffuse)
+            mover = o;
     for (int moving = 0; moving < 2; ++moving) {
         if (moving && mover < 0) break;
         double best = 1e30;
@@ -244,7 +264,8 @@ int bench_frame(const std::string& path, int repeat, const Args& args) {
                     translate_object(scene, mover, {f % 40 < 20 ? 2.0f : -2.0f, 0.0f, 0.0f});
                 }
                 const PipelineStats s = loop.step();
-                acc.photon_ms += s.photon_ms, acc.aim_ms += s.aim_ms, acc.caustic_ms += s.caustic_ms;
+                acc.photon_ms += s.photon_ms, acc.aim_ms += s.aim_ms,
+                    acc.caustic_ms += s.caustic_ms;
                 acc.gather_ms += s.gather_ms, acc.draw_ms += s.draw_ms, acc.wait_ms += s.wait_ms;
                 acc.photons.groups_invalidated += s.photons.groups_invalidated;
                 acc.photons.photons_retraced += s.photons.photons_retraced;
@@ -254,13 +275,17 @@ int bench_frame(const std::string& path, int repeat, const Args& args) {
             if (secs < best) best = secs, sum = acc;
         }
         const double n = frames;
-        std::printf("%s, %dx%d, %s: %.1f fps (%.2f ms/frame); per frame: draw %.2f, gather %.2f, waited %.2f ms on "
-                    "the GL thread; photons %.2f, AIM %.2f, caustics %.2f ms on workers; %.1f groups invalidated, "
-                    "%.0f photons retraced, %.1f IIM texels gathered; gather backend %s\n",
-                    path.c_str(), size, size, moving ? "cube moving every frame" : "static", n / best, 1e3 * best / n,
-                    sum.draw_ms / n, sum.gather_ms / n, sum.wait_ms / n, sum.photon_ms / n, sum.aim_ms / n,
-                    sum.caustic_ms / n, sum.photons.groups_invalidated / n, sum.photons.photons_retraced / n,
-                    sum.iim_texels_gathered / n, kGatherBackendNames[size_t(pipeline.gather_backend())]);
+        std::printf(
+            "%s, %dx%d, %s: %.1f fps (%.2f ms/frame); per frame: draw %.2f, gather %.2f, waited "
+            "%.2f ms on "
+            "the GL thread; photons %.2f, AIM %.2f, caustics %.2f ms on workers; %.1f groups "
+            "invalidated, "
+            "%.0f photons retraced, %.1f IIM texels gathered; gather backend %s\n",
+            path.c_str(), size, size, moving ? "cube moving every frame" : "static", n / best,
+            1e3 * best / n, sum.draw_ms / n, sum.gather_ms / n, sum.wait_ms / n, sum.photon_ms / n,
+            sum.aim_ms / n, sum.caustic_ms / n, sum.photons.groups_invalidated / n,
+            sum.photons.photons_retraced / n, sum.iim_texels_gathered / n,
+            kGatherBackendNames[size_t(pipeline.gather_backend())]);
     }
     return 0;
 }
@@ -278,10 +303,13 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
             st = tracer.trace_all();
             best = std::min(best, seconds_since(t));
         }
-        std::printf("%s: %d caustic photons in %.2f ms on one core = %.0f photons/s/core; %.1f%% reached a specular "
-                    "object, %.1f%% were stored (L S+ D)\n",
-                    path.c_str(), st.traced, 1e3 * best, st.traced / best, 100.0 * st.hit_specular / std::max(1, st.traced),
-                    100.0 * st.stored / std::max(1, st.traced));
+        std::printf(
+            "%s: %d caustic photons in %.2f ms on one core = %.0f photons/s/core; %.1f%% reached a "
+            "specular "
+            "object, %.1f%% were stored (L S+ D)\n",
+            path.c_str(), st.traced, 1e3 * best, st.traced / best,
+            100.0 * st.hit_specular / std::max(1, st.traced),
+            100.0 * st.stored / std::max(1, st.traced));
     }
     auto context = bench_context(args);
     const int size = args.get_int("size");
@@ -322,13 +350,17 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
             caustics.render(positions, powers, false);
             if (k) full = std::min(full, caustics.filter_ms());
             caustics.render(positions, powers, true);
-            if (k) culled = std::min(culled, caustics.filter_ms()), queries = std::min(queries, caustics.query_ms());
+            if (k)
+                culled = std::min(culled, caustics.filter_ms()),
+                queries = std::min(queries, caustics.query_ms());
             tiles = caustics.tiles_filtered();
         }
-        std::printf("caustic over %.0f%% of %dx%d: full-screen filter %.2f ms; culled %.2f ms (%d of %d tiles of %d px) "
-                    "+ %.2f ms for the occlusion queries\n",
-                    100.0 * share, size, size, full, culled, tiles, caustics.tiles_total(), scene.settings.caustics.tile_size,
-                    queries);
+        std::printf(
+            "caustic over %.0f%% of %dx%d: full-screen filter %.2f ms; culled %.2f ms (%d of %d "
+            "tiles of %d px) "
+            "+ %.2f ms for the occlusion queries\n",
+            100.0 * share, size, size, full, culled, tiles, caustics.tiles_total(),
+            scene.settings.caustics.tile_size, queries);
     }
     return 0;
 }
@@ -345,13 +377,20 @@ int run_bench(const Args& args) {
     if (what == "knn") return bench_knn(repeat, args.get_int("queries"));
     if (what == "gather") {
         std::vector<std::string> scenes(args.positionals().begin() + 1, args.positionals().end());
-        if (scenes.empty()) scenes = {"scenes/cornell_34.json", "scenes/bumpy_13k.json", "scenes/bumpy_133k.json"};
+        if (scenes.empty())
+            scenes = {"scenes/cornell_34.json", "scenes/bumpy_13k.json", "scenes/bumpy_133k.json"};
         return bench_gather(scenes, repeat, args);
     }
     if (what == "caustics")
-        return bench_caustics(args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat, args);
-    if (what == "frame") return bench_frame(args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat, args);
-    throw CliError("afterglow bench: unknown benchmark '" + what + "' (expected photons, knn, gather, frame or caustics)");
+        return bench_caustics(
+            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat,
+            args);
+    if (what == "frame")
+        return bench_frame(
+            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat,
+            args);
+    throw CliError("afterglow bench: unknown benchmark '" + what +
+                   "' (expected photons, knn, gather, frame or caustics)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

@@ -90,8 +90,8 @@ public:
     // --size WxH: overwrites width and height when given.
     void get_size(const std::string& name, int& width, int& height) const;
     gpu::GlBackend gl_backend() const;
-    // --gather, --indirect and every --set KEY=VALUE, in that order, onto the scene's settings (rebuilding
-    // surfaces and atlas when a lightmap setting changes).
+    // --gather, --indirect and every --set KEY=VALUE, in that order, onto the scene's settings
+    // (rebuilding surfaces and atlas when a lightmap setting changes).
     void apply_settings(Scene& scene) const;
     const std::vector<std::string>& positionals() const { return positionals_; }
 

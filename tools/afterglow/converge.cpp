@@ -38,13 +38,14 @@ const Command kConvergeCommand{
              "reference image (its .COMPONENT.exr beside it is used for --component)"),
         integer("frames,n", "N", "frames to run", 1, 1000000, 120),
         size_option("image size", "96x96"),
-        choice("component", "NAME", "the component compared (a frame term, or full):",
-               [] {
-                   std::vector<std::string> names{"full"};
-                   names.insert(names.end(), kFrameTermNames.begin(), kFrameTermNames.end());
-                   return names;
-               }(),
-               "indirect"),
+        choice(
+            "component", "NAME", "the component compared (a frame term, or full):",
+            [] {
+                std::vector<std::string> names{"full"};
+                names.insert(names.end(), kFrameTermNames.begin(), kFrameTermNames.end());
+                return names;
+            }(),
+            "indirect"),
         choice("baseline", "MODE", "full recomputes everything every frame:", {"selective", "full"},
                "selective"),
         text("csv", "FILE.csv", "where to write the per-frame record (default out/NAME.MODE.csv)"),
@@ -88,11 +89,13 @@ uint64_t state_hash(const Scene& scene, const cpu::ReferenceSettings& rs) {
         add(o.material.type), add(o.material.albedo), add(o.material.ior), add(o.material.emission);
     }
     for (const Light& l : scene.lights) {
-        add(l.type), add(l.position), add(l.intensity), add(l.corners), add(l.radiance), add(l.enabled);
+        add(l.type), add(l.position), add(l.intensity), add(l.corners), add(l.radiance),
+            add(l.enabled);
     }
     add(scene.camera.eye), add(scene.camera.target), add(scene.camera.up), add(scene.camera.fov_y);
     add(scene.camera.width), add(scene.camera.height);
-    add(rs.method), add(rs.spp), add(rs.seed), add(rs.photons), add(rs.caustic_photons), add(rs.knn);
+    add(rs.method), add(rs.spp), add(rs.seed), add(rs.photons), add(rs.caustic_photons),
+        add(rs.knn);
     add(rs.caustic_knn), add(rs.gather_rays), add(rs.area_light_samples), add(rs.max_depth);
     return h;
 }
@@ -140,17 +143,20 @@ int run_converge(const Args& args) {
         rs.caustic_photons = rs.photons;
         rs.seed = scene.settings.seed;
         char hex[32];
-        std::snprintf(hex, sizeof hex, "%016llx", static_cast<unsigned long long>(state_hash(final_state, rs)));
+        std::snprintf(hex, sizeof hex, "%016llx",
+                      static_cast<unsigned long long>(state_hash(final_state, rs)));
         const std::string cache = args.get("cache");
         std::filesystem::create_directories(cache);
         reference_path = cache + "/" + name + "-" + hex + ".exr";
         if (!std::filesystem::exists(component_path(reference_path, "indirect"))) {
-            std::cerr << "afterglow converge: rendering the pm reference of the final state (" << rs.spp << " spp, "
-                      << rs.photons << " photons) into " << reference_path << "\n";
+            std::cerr << "afterglow converge: rendering the pm reference of the final state ("
+                      << rs.spp << " spp, " << rs.photons << " photons) into " << reference_path
+                      << "\n";
             ThreadPool pool(threads);
             const cpu::ReferenceResult ref = cpu::render_reference(final_state, rs, pool);
             for (int c = 0; c < kFrameTermCount; ++c)
-                write_image(ref.components[size_t(c)], component_path(reference_path, kFrameTermNames[size_t(c)]));
+                write_image(ref.components[size_t(c)],
+                            component_path(reference_path, kFrameTermNames[size_t(c)]));
             write_image(ref.full, reference_path);
         } else {
             std::cerr << "afterglow converge: reference from the cache: " << reference_path << "\n";
@@ -159,17 +165,20 @@ int run_converge(const Args& args) {
     const Image reference = read_image(component_path(reference_path, component));
     if (reference.width != width || reference.height != height)
         throw_input_error(component_path(reference_path, component), "",
-                          "expected a " + std::to_string(width) + "x" + std::to_string(height) + " image, got " +
-                              std::to_string(reference.width) + "x" + std::to_string(reference.height));
+                          "expected a " + std::to_string(width) + "x" + std::to_string(height) +
+                              " image, got " + std::to_string(reference.width) + "x" +
+                              std::to_string(reference.height));
 
     std::optional<Script> script;
     if (!script_path.empty()) script.emplace(script_path);
     auto context = gpu::make_gl_context(backend);
-    Pipeline pipeline(scene, PipelineOptions{width, height, threads,
-                                             mode == "full" ? PipelineMode::full : PipelineMode::selective});
+    Pipeline pipeline(
+        scene, PipelineOptions{width, height, threads,
+                               mode == "full" ? PipelineMode::full : PipelineMode::selective});
 
     std::ostringstream csv;
-    csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_retraced,"
+    csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
+           "retraced,"
            "aim_texels,iim_texels,iim_pending\n";
     Progress progress("converge", frames, !args.has("quiet"));
     std::vector<double> errors, times;
@@ -184,16 +193,18 @@ int run_converge(const Args& args) {
         wall += std::chrono::duration<double>(Clock::now() - t0).count();
         // Metrics are taken outside the timed part.
         const gpu::FrameImages images = pipeline.images();
-        const Image& test = component == "full" ? images.frame
-                                                : images.aov[size_t(*parse_frame_term(component))];
+        const Image& test =
+            component == "full" ? images.frame : images.aov[size_t(*parse_frame_term(component))];
         const ImageMetrics m = compare_images(test, reference);
         const bool edited = loop.edited();
         errors.push_back(m.rel_mse);
         times.push_back(wall);
         if (edited) edited_frames.push_back(f);
-        csv << mode << ',' << f << ',' << wall << ',' << st.frame_ms << ',' << (edited ? 1 : 0) << ',' << m.rel_mse << ','
-            << m.rmse << ',' << m.ssim << ',' << st.photons.groups_invalidated << ',' << st.photons.photons_retraced << ','
-            << st.photons.aim_texels_rebuilt << ',' << st.iim_texels_gathered << ',' << st.iim_texels_pending << "\n";
+        csv << mode << ',' << f << ',' << wall << ',' << st.frame_ms << ',' << (edited ? 1 : 0)
+            << ',' << m.rel_mse << ',' << m.rmse << ',' << m.ssim << ','
+            << st.photons.groups_invalidated << ',' << st.photons.photons_retraced << ','
+            << st.photons.aim_texels_rebuilt << ',' << st.iim_texels_gathered << ','
+            << st.iim_texels_pending << "\n";
         progress.update(f + 1);
     }
     progress.finish();
@@ -203,7 +214,8 @@ int run_converge(const Args& args) {
     // Settled value: the mean of the last tenth of the frames (at least 3).
     const size_t tail = std::max<size_t>(3, errors.size() / 10);
     double settled = 0.0;
-    for (size_t i = errors.size() - std::min(tail, errors.size()); i < errors.size(); ++i) settled += errors[i];
+    for (size_t i = errors.size() - std::min(tail, errors.size()); i < errors.size(); ++i)
+        settled += errors[i];
     settled /= double(std::min(tail, errors.size()));
     const int last_edit = edited_frames.empty() ? 0 : edited_frames.back();
     int within = -1;
@@ -211,18 +223,24 @@ int run_converge(const Args& args) {
         if (std::abs(errors[size_t(f)] - settled) > 0.1 * settled) break;
         within = f;
     }
-    std::printf("converge %s (%s, %s): %d frames, %.2f s; settled relMSE %.5f (%s); last edit at frame %d (%.2f s)\n",
-                scene_path.c_str(), mode.c_str(), component.c_str(), frames, wall, settled, reference_path.c_str(),
-                last_edit, last_edit < int(times.size()) ? times[size_t(last_edit)] : 0.0);
+    std::printf(
+        "converge %s (%s, %s): %d frames, %.2f s; settled relMSE %.5f (%s); last edit at frame %d "
+        "(%.2f s)\n",
+        scene_path.c_str(), mode.c_str(), component.c_str(), frames, wall, settled,
+        reference_path.c_str(), last_edit,
+        last_edit < int(times.size()) ? times[size_t(last_edit)] : 0.0);
     if (within >= 0)
-        std::printf("within 10%% of the settled error from frame %d: %d frames, %.3f s after the last edit\n", within,
-                    within - last_edit, times[size_t(within)] - times[size_t(last_edit)]);
+        std::printf(
+            "within 10%% of the settled error from frame %d: %d frames, %.3f s after the last "
+            "edit\n",
+            within, within - last_edit, times[size_t(within)] - times[size_t(last_edit)]);
     else
         std::printf("the error did not settle within 10%% after the last edit\n");
     std::printf("wrote %s\n", csv_path.c_str());
 
     if (!plot_path.empty()) {
-        std::string command = "/usr/bin/python3 tools/plot_convergence.py '" + plot_path + "' '" + csv_path + "'";
+        std::string command =
+            "/usr/bin/python3 tools/plot_convergence.py '" + plot_path + "' '" + csv_path + "'";
         if (args.has("compare")) command += " '" + args.get("compare") + "'";
         command += " --title '" + name + ": " + component + " relMSE against time'";
         if (std::system(command.c_str()) != 0)

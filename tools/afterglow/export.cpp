@@ -21,10 +21,12 @@ int run_export(const Args& args) {
     if (!args.has("output")) throw CliError("afterglow export: missing -o OUT.obj");
     const std::string out = args.get("output");
     if (out.size() < 4 || out.substr(out.size() - 4) != ".obj")
-        throw CliError("afterglow export: -o expects a file name ending in .obj, got '" + out + "'");
+        throw CliError("afterglow export: -o expects a file name ending in .obj, got '" + out +
+                       "'");
     const Scene scene = load_scene(args.positionals()[0]);
     export_obj(scene, out);
-    std::cerr << "afterglow export: wrote " << out << " (" << scene.triangle_count() << " triangles)\n";
+    std::cerr << "afterglow export: wrote " << out << " (" << scene.triangle_count()
+              << " triangles)\n";
     return 0;
 }
 

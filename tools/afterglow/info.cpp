@@ -41,41 +41,47 @@ int run_info(const Args& args) {
     size_t atlas_texels = size_t(scene.atlas.width) * size_t(scene.atlas.height);
 
     std::ostream& out = std::cout;
-    out << "scene      " << scene.name << " (" << scene.path << "), length unit: " << scene.length_unit << "\n"
+    out << "scene      " << scene.name << " (" << scene.path
+        << "), length unit: " << scene.length_unit << "\n"
         << "triangles  " << scene.triangle_count() << "\n"
         << "objects    " << scene.objects.size() << " (" << dynamic << " dynamic)\n"
         << "surfaces   " << scene.surfaces.size() << "\n"
         << "charts     " << scene.atlas.charts.size() << "\n"
-        << "atlas      " << scene.atlas.width << " x " << scene.atlas.height << " texels, texel size "
-        << scene.atlas.texel_size << " " << scene.length_unit << ", gutter " << scene.atlas.gutter << "\n"
+        << "atlas      " << scene.atlas.width << " x " << scene.atlas.height
+        << " texels, texel size " << scene.atlas.texel_size << " " << scene.length_unit
+        << ", gutter " << scene.atlas.gutter << "\n"
         << "texels     " << scene.atlas.texels.size() << " used of " << atlas_texels << "\n"
         << "lights     " << scene.lights.size() << "\n";
     for (const Light& l : scene.lights) {
         out << "  " << l.name << ": ";
         if (l.type == LightType::point)
-            out << "point at " << fmt_vec(l.position) << ", intensity " << fmt_vec(l.intensity) << " W/sr";
+            out << "point at " << fmt_vec(l.position) << ", intensity " << fmt_vec(l.intensity)
+                << " W/sr";
         else
-            out << "quad centred at " << fmt_vec(l.center()) << ", area " << l.quad_area() << ", radiance "
-                << fmt_vec(l.radiance);
+            out << "quad centred at " << fmt_vec(l.center()) << ", area " << l.quad_area()
+                << ", radiance " << fmt_vec(l.radiance);
         out << ", power " << fmt_vec(l.power()) << " W" << (l.enabled ? "" : " (off)") << "\n";
     }
-    out << "camera     eye " << fmt_vec(scene.camera.eye) << " target " << fmt_vec(scene.camera.target)
-        << ", fov " << scene.camera.fov_y << " deg, " << scene.camera.width << " x " << scene.camera.height << "\n";
+    out << "camera     eye " << fmt_vec(scene.camera.eye) << " target "
+        << fmt_vec(scene.camera.target) << ", fov " << scene.camera.fov_y << " deg, "
+        << scene.camera.width << " x " << scene.camera.height << "\n";
     if (!scene.script.empty()) out << "script     " << scene.script << "\n";
 
     if (args.has("objects")) {
         out << "objects:\n";
         for (size_t i = 0; i < scene.objects.size(); ++i) {
             const Object& o = scene.objects[i];
-            std::set<int> surfaces(scene.triangle_surface.size() > i ? scene.triangle_surface[i].begin()
-                                                                     : std::vector<int>::const_iterator{},
-                                   scene.triangle_surface.size() > i ? scene.triangle_surface[i].end()
-                                                                     : std::vector<int>::const_iterator{});
+            std::set<int> surfaces(
+                scene.triangle_surface.size() > i ? scene.triangle_surface[i].begin()
+                                                  : std::vector<int>::const_iterator{},
+                scene.triangle_surface.size() > i ? scene.triangle_surface[i].end()
+                                                  : std::vector<int>::const_iterator{});
             int charts = 0;
             for (const Chart& c : scene.atlas.charts) charts += c.object == int(i) ? 1 : 0;
-            out << "  " << o.name << ": " << o.mesh.triangles.size() << " triangles, " << surfaces.size()
-                << " surfaces, " << charts << " charts, " << kMaterialTypeNames[size_t(o.material.type)]
-                << " '" << o.material.name << "'" << (o.dynamic ? ", dynamic" : "") << ", from " << o.source << "\n";
+            out << "  " << o.name << ": " << o.mesh.triangles.size() << " triangles, "
+                << surfaces.size() << " surfaces, " << charts << " charts, "
+                << kMaterialTypeNames[size_t(o.material.type)] << " '" << o.material.name << "'"
+                << (o.dynamic ? ", dynamic" : "") << ", from " << o.source << "\n";
         }
     }
     if (args.has("settings")) out << settings_to_json(scene.settings) << "\n";

@@ -6,9 +6,8 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <optional>
-
 #include <nlohmann/json.hpp>
+#include <optional>
 
 #include "cpu/aim.h"
 #include "cpu/photon_simulation.h"
@@ -23,16 +22,19 @@ namespace ag::cli {
 const Command kPhotonsCommand{
     "photons",
     "SCENE [--frames N] [--script S.lua] [--no-query] [--dump FILE.json] [--threads N]",
-    "Run selective photon tracing and AIM rebuilds for N frames on worker threads, under the scene's "
+    "Run selective photon tracing and AIM rebuilds for N frames on worker threads, under the "
+    "scene's "
     "edit script if given, and report per-frame counters (groups invalidated by the moved-object "
-    "query, segments it tested, its time); --dump writes per-surface hit counts, flux, delta_f, delta_i, per-light "
+    "query, segments it tested, its time); --dump writes per-surface hit counts, flux, delta_f, "
+    "delta_i, per-light "
     "group states and per-frame counters as JSON.",
     {
         integer("frames,n", "N", "frames to run", 0, 10000000, 1),
         text("dump", "FILE.json", "write the state as JSON (atomically)"),
         integer("threads", "N", "worker threads (default: settings.threads, 0 = all cores)", 0,
                 1024),
-        text("script", "S.lua", "scene-edit script run before each frame (default: none); frame time = frame / 30 s"),
+        text("script", "S.lua",
+             "scene-edit script run before each frame (default: none); frame time = frame / 30 s"),
         flag("no-query", "find moved objects by round-robin verification only (for comparison)"),
         settings_option(),
         flag("quiet,q", "no per-frame lines on stderr"),
@@ -55,13 +57,15 @@ int run_photons(const Args& args) {
     sim.set_query_invalidation(!args.has("no-query"));
     cpu::Aim aim(scene, pool);
     std::optional<Script> script;
-    if (args.has("script")) script.emplace(args.get("script"));  // a syntax error stops here (exit 1)
+    if (args.has("script"))
+        script.emplace(args.get("script"));  // a syntax error stops here (exit 1)
     if (script && !script->on_start(scene)) warn(*script->last_error());
 
     nlohmann::json frame_log = nlohmann::json::array();
     const auto start = std::chrono::steady_clock::now();
     for (int f = 0; f < frames; ++f) {
-        if (script && !script->on_frame(scene, f, f / 30.0)) warn(*script->last_error() + " (edit skipped)");
+        if (script && !script->on_frame(scene, f, f / 30.0))
+            warn(*script->last_error() + " (edit skipped)");
         const auto t0 = std::chrono::steady_clock::now();
         cpu::PhotonFrameStats st = sim.frame();
         const auto t1 = std::chrono::steady_clock::now();
@@ -84,19 +88,26 @@ int run_photons(const Args& args) {
                              {"aim_ms", aim_ms}});
         if (!args.has("quiet")) {
             std::fprintf(stderr,
-                         "frame %4d: verified %5d, invalidated %4d, retraced %6d, queued %4d, AIM %3d surfaces "
+                         "frame %4d: verified %5d, invalidated %4d, retraced %6d, queued %4d, AIM "
+                         "%3d surfaces "
                          "%5d texels  (%.2f + %.2f ms)\n",
-                         int(st.frame), st.photons_verified, st.groups_invalidated, st.photons_retraced,
-                         st.groups_queued, st.aim_surfaces_rebuilt, st.aim_texels_rebuilt, photon_ms, aim_ms);
+                         int(st.frame), st.photons_verified, st.groups_invalidated,
+                         st.photons_retraced, st.groups_queued, st.aim_surfaces_rebuilt,
+                         st.aim_texels_rebuilt, photon_ms, aim_ms);
             if (st.objects_moved > 0)
-                std::fprintf(stderr, "            query: %d moved, %d groups invalidated, %llu segments tested, %.3f ms\n",
+                std::fprintf(stderr,
+                             "            query: %d moved, %d groups invalidated, %llu segments "
+                             "tested, %.3f ms\n",
                              st.objects_moved, st.groups_invalidated_by_query,
-                             static_cast<unsigned long long>(st.query_segments_tested), st.query_ms);
+                             static_cast<unsigned long long>(st.query_segments_tested),
+                             st.query_ms);
         }
     }
-    const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    std::cout << "frames " << frames << " in " << total_s << " s, " << sim.maps().hit_count() << " photon hits on "
-              << scene.surfaces.size() << " surfaces, " << pool.size() << " worker threads\n";
+    const double total_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    std::cout << "frames " << frames << " in " << total_s << " s, " << sim.maps().hit_count()
+              << " photon hits on " << scene.surfaces.size() << " surfaces, " << pool.size()
+              << " worker threads\n";
 
     if (args.has("aim")) {
         // Rebuild every surface so the picture shows the current state, then write it scaled up.
@@ -107,13 +118,15 @@ int run_photons(const Args& args) {
         for (int y = 0; y < h * scale; ++y)
             for (int x = 0; x < w * scale; ++x) {
                 // Atlas row 0 is at the bottom in GL; show it at the bottom of the picture too.
-                const glm::vec3 c = aim.radiance()[size_t(h - 1 - y / scale) * size_t(w) + size_t(x / scale)];
+                const glm::vec3 c =
+                    aim.radiance()[size_t(h - 1 - y / scale) * size_t(w) + size_t(x / scale)];
                 image.set_rgb(x, y, c);
                 if (c != glm::vec3(0.0f)) lum.push_back((c.x + c.y + c.z) / 3.0f);
             }
         float ev = float(args.get_double("exposure", 0.0));
         if (!args.has("exposure") && !lum.empty()) {
-            std::nth_element(lum.begin(), lum.begin() + std::ptrdiff_t(lum.size() * 99 / 100), lum.end());
+            std::nth_element(lum.begin(), lum.begin() + std::ptrdiff_t(lum.size() * 99 / 100),
+                             lum.end());
             ev = std::log2(0.8f / std::max(1e-30f, lum[lum.size() * 99 / 100]));
         }
         write_image(image, args.get("aim"), ev);
@@ -124,13 +137,14 @@ int run_photons(const Args& args) {
         nlohmann::json surfaces = nlohmann::json::array();
         for (int s = 0; s < int(scene.surfaces.size()); ++s) {
             const cpu::SurfaceHits& h = sim.maps().surface(s);
-            surfaces.push_back({{"surface", s},
-                                {"object", scene.objects[size_t(scene.surfaces[size_t(s)].object)].name},
-                                {"area", scene.surfaces[size_t(s)].area},
-                                {"hits", h.hits.size()},
-                                {"flux", {h.flux.x, h.flux.y, h.flux.z}},
-                                {"delta_f", h.delta_f},
-                                {"delta_i", h.delta_i}});
+            surfaces.push_back(
+                {{"surface", s},
+                 {"object", scene.objects[size_t(scene.surfaces[size_t(s)].object)].name},
+                 {"area", scene.surfaces[size_t(s)].area},
+                 {"hits", h.hits.size()},
+                 {"flux", {h.flux.x, h.flux.y, h.flux.z}},
+                 {"delta_f", h.delta_f},
+                 {"delta_i", h.delta_i}});
         }
         nlohmann::json lights = nlohmann::json::array();
         for (int l = 0; l < int(scene.lights.size()); ++l) {

@@ -120,8 +120,7 @@ int run_reference(const Args& args) {
     const std::string stem = out.substr(0, out.size() - 4);
     write_image(result.full, out);
     for (int c = 0; c < kFrameTermCount; ++c)
-        write_image(result.components[size_t(c)],
-                    stem + "." + kFrameTermNames[size_t(c)] + ".exr");
+        write_image(result.components[size_t(c)], stem + "." + kFrameTermNames[size_t(c)] + ".exr");
     write_image(result.full, stem + ".png", 0.0f);
 
     std::cout << "reference " << method << ": " << scene.camera.width << " x "

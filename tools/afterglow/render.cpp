@@ -8,9 +8,9 @@
 #include "shared/frame_terms.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
-#include "shared/script.h"
 #include "shared/pipeline/frame_loop.h"
 #include "shared/scene_file.h"
+#include "shared/script.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/progress.h"
 
@@ -57,7 +57,8 @@ int run_render(const Args& args) {
     if (!args.has("output")) throw CliError("afterglow render: missing -o OUT.exr");
     const std::string out = args.get("output");
     if (std::filesystem::path(out).extension() != ".exr")
-        throw CliError("afterglow render: -o expects a file name ending in .exr, got '" + out + "'");
+        throw CliError("afterglow render: -o expects a file name ending in .exr, got '" + out +
+                       "'");
     const int frames = args.get_int("frames");
     const gpu::GlBackend backend = args.gl_backend();
     const float exposure = float(args.get_double("exposure"));
@@ -75,15 +76,18 @@ int run_render(const Args& args) {
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(scene, PipelineOptions{width, height, threads});
     if (scene.settings.gather.backend == GatherBackend::automatic)
-        std::fprintf(stderr, "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
-                     kGatherBackendNames[size_t(pipeline.gather_backend())], pipeline.gl_gather_us(),
-                     pipeline.cpu_gather_us());
+        std::fprintf(
+            stderr,
+            "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
+            kGatherBackendNames[size_t(pipeline.gather_backend())], pipeline.gl_gather_us(),
+            pipeline.cpu_gather_us());
     Progress progress("render", frames, !args.has("quiet"));
     double total_ms = 0.0;
-    const PipelineStats last = run_frames(pipeline, script ? &*script : nullptr, frames, [&](const FrameEvent& e) {
-        total_ms += e.stats->frame_ms;
-        progress.update(e.frame + 1);
-    });
+    const PipelineStats last =
+        run_frames(pipeline, script ? &*script : nullptr, frames, [&](const FrameEvent& e) {
+            total_ms += e.stats->frame_ms;
+            progress.update(e.frame + 1);
+        });
     progress.finish();
 
     const gpu::FrameImages images = pipeline.images();
@@ -98,19 +102,25 @@ int run_render(const Args& args) {
         }
     std::fprintf(stderr,
                  "afterglow render: %d frames of %dx%d in %.1f ms (%.1f fps) on %s [%s]\n"
-                 "last frame: %.2f ms (gather %.2f, draw %.2f, waited %.2f for photons %.2f + AIM %.2f + caustics %.2f on "
+                 "last frame: %.2f ms (gather %.2f, draw %.2f, waited %.2f for photons %.2f + AIM "
+                 "%.2f + caustics %.2f on "
                  "workers); "
-                 "photons verified %d, groups invalidated %d, retraced %d, queued %d; AIM texels %d; IIM texels "
-                 "gathered %d, pending %d, repaired %d; caustic photons traced %d (%d reached a specular object, %d "
+                 "photons verified %d, groups invalidated %d, retraced %d, queued %d; AIM texels "
+                 "%d; IIM texels "
+                 "gathered %d, pending %d, repaired %d; caustic photons traced %d (%d reached a "
+                 "specular object, %d "
                  "stored), tiles filtered %d\n",
                  frames, width, height, total_ms, 1000.0 * frames / std::max(1e-9, total_ms),
-                 context->renderer().c_str(), gpu::kGlBackendNames[size_t(context->backend())], last.frame_ms,
-                 last.gather_ms, last.draw_ms, last.wait_ms, last.photon_ms, last.aim_ms, last.caustic_ms,
-                 last.photons.photons_verified, last.photons.groups_invalidated, last.photons.photons_retraced,
-                 last.photons.groups_queued, last.photons.aim_texels_rebuilt, last.iim_texels_gathered,
-                 last.iim_texels_pending, last.iim_texels_invalid, last.caustics.traced, last.caustics.hit_specular,
-                 last.caustics.stored, last.caustic_tiles_filtered);
-    std::cerr << "afterglow render: wrote " << out << " and " << with_suffix(out, "", ".png") << "\n";
+                 context->renderer().c_str(), gpu::kGlBackendNames[size_t(context->backend())],
+                 last.frame_ms, last.gather_ms, last.draw_ms, last.wait_ms, last.photon_ms,
+                 last.aim_ms, last.caustic_ms, last.photons.photons_verified,
+                 last.photons.groups_invalidated, last.photons.photons_retraced,
+                 last.photons.groups_queued, last.photons.aim_texels_rebuilt,
+                 last.iim_texels_gathered, last.iim_texels_pending, last.iim_texels_invalid,
+                 last.caustics.traced, last.caustics.hit_specular, last.caustics.stored,
+                 last.caustic_tiles_filtered);
+    std::cerr << "afterglow render: wrote " << out << " and " << with_suffix(out, "", ".png")
+              << "\n";
     return 0;
 }
 

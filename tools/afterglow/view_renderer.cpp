@@ -100,7 +100,8 @@ ViewRenderer::ViewRenderer(const Scene& scene, const gpu::SceneMeshes& meshes, i
     scene_program_ = gpu::Program("view scene", gpu::kSceneVertex, kSceneFragment);
     copy_program_ = gpu::Program("view copy", gpu::kFullScreenTriangleVertex, kCopyFragment);
     points_program_ = gpu::Program("view points", kPointsVertex, kPointsFragment);
-    present_program_ = gpu::Program("view present", gpu::kFullScreenTriangleVertex, kPresentFragment);
+    present_program_ =
+        gpu::Program("view present", gpu::kFullScreenTriangleVertex, kPresentFragment);
 
     display_ = gpu::make_float_texture(width, height);
     gpu::gl::BindTexture(GL_TEXTURE_2D, display_.get());

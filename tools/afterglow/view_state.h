@@ -27,8 +27,8 @@ enum class ViewMode {
     surfaces
 };
 inline constexpr std::array kViewModeNames = {
-    "frame",           kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2],
-    kFrameTermNames[3], "aim",             "iim",              "surfaces"};
+    "frame", kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2], kFrameTermNames[3], "aim",
+    "iim",   "surfaces"};
 static_assert(kViewModeNames.size() == size_t(ViewMode::surfaces) + 1);
 
 struct Selection {
