@@ -73,6 +73,9 @@ struct Light {
     float quad_area() const;
     glm::vec3 center() const;  // position, or the quad's centre
     glm::vec3 power() const;   // emitted flux Φ (W): 4πI for a point, πLA for a quad
+    // The value a user sets: intensity I (W/sr) for a point light, radiance L for a quad.
+    const glm::vec3& value() const { return type == LightType::point ? intensity : radiance; }
+    glm::vec3& value() { return type == LightType::point ? intensity : radiance; }
 };
 
 struct Camera {

@@ -108,7 +108,7 @@ void set_light_color(Scene& scene, int light, const glm::vec3& value) {
     if (glm::any(glm::lessThan(value, glm::vec3(0.0f))))
         throw_input_error(scene.path, "set_light_color", "expected non-negative intensity");
     Light& l = scene.lights[size_t(light)];
-    (l.type == LightType::point ? l.intensity : l.radiance) = value;
+    l.value() = value;
     record(scene, ChangeKind::light_power, light);
 }
 

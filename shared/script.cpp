@@ -118,8 +118,7 @@ void ScriptState::commit(Scene& target) const {
     for (size_t i = 0; i < light_edits.size(); ++i) {
         const Light& l = staging.lights[i];
         if (light_edits[i] & kPositionEdit) set_light_position(target, int(i), l.center());
-        if (light_edits[i] & kPowerEdit)
-            set_light_color(target, int(i), l.type == LightType::point ? l.intensity : l.radiance);
+        if (light_edits[i] & kPowerEdit) set_light_color(target, int(i), l.value());
         if (light_edits[i] & kEnabledEdit) set_light_enabled(target, int(i), l.enabled);
     }
     if (camera_edited) set_camera(target, staging.camera);
@@ -493,7 +492,7 @@ int light_color(lua_State* L) {
     const size_t i = check_light(L, s);
     check_arg_count(L, 0);
     const Light& l = s.view().lights[i];
-    push_vec3(L, l.type == LightType::point ? l.intensity : l.radiance);
+    push_vec3(L, l.value());
     return 3;
 }
 

@@ -80,3 +80,7 @@ ag_cli_test(info_set_enum 0 "\"backend\": \"cpu\"" info scenes/cornell.json --se
 # Values inline (--frames=2, -n=2) or separate, options before or after the scene.
 ag_cli_test(photons_short_inline 0 "frames 2 in" photons -n=2 -q scenes/cornell.json)
 ag_cli_test(photons_long_inline 0 "frames 3 in" photons --frames=3 scenes/cornell.json -q)
+
+# Folder boundaries: cpu/ without GL, gpu/ without Embree/FLANN, shared/ without either side.
+add_test(NAME boundaries COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/boundaries.sh ${PROJECT_SOURCE_DIR})
+set_tests_properties(boundaries PROPERTIES LABELS unit)

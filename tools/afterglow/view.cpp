@@ -142,10 +142,6 @@ EditableState snapshot(const Scene& scene) {
     return s;
 }
 
-glm::vec3 light_value(const Light& l) {
-    return l.type == LightType::point ? l.intensity : l.radiance;
-}
-
 // Back to `s` through scene_edit.h, one edit per item that differs.
 void restore(Scene& scene, const EditableState& s) {
     for (size_t o = 0; o < scene.objects.size(); ++o) {
@@ -159,8 +155,7 @@ void restore(Scene& scene, const EditableState& s) {
         const Light& now = scene.lights[l];
         const Light& then = s.lights[l];
         if (now.center() != then.center()) set_light_position(scene, int(l), then.center());
-        if (light_value(now) != light_value(then))
-            set_light_color(scene, int(l), light_value(then));
+        if (now.value() != then.value()) set_light_color(scene, int(l), then.value());
         if (now.enabled != then.enabled) set_light_enabled(scene, int(l), then.enabled);
     }
 }
@@ -591,7 +586,7 @@ std::vector<ViewPoint> Viewer::overlay_points() const {
     constexpr size_t kMaxPoints = 500000;
     if (o.primary_photons)
         for (size_t l = 0; l < scene_.lights.size(); ++l) {
-            const glm::vec3 v = light_value(scene_.lights[l]);
+            const glm::vec3 v = scene_.lights[l].value();
             const glm::vec3 colour = v / std::max({v.r, v.g, v.b, 1e-30f});
             for (int g = 0; g < scene_.settings.photons.groups && points.size() < kMaxPoints; ++g) {
                 const cpu::PhotonGroup& group = maps.group(int(l), g);
@@ -633,7 +628,7 @@ std::vector<ViewPoint> Viewer::light_markers() const {
         const Light& light = scene_.lights[l];
         const bool selected = state_.selection == Selection{Selection::Kind::light, int(l)};
         if (!state_.overlays.lights && !selected) continue;
-        const glm::vec3 v = light_value(light);
+        const glm::vec3 v = light.value();
         glm::vec3 colour = light.enabled ? v / std::max({v.r, v.g, v.b, 1e-30f}) : glm::vec3(0.3f);
         if (selected) colour = {1.0f, 0.75f, 0.1f};
         markers.push_back({light.center(), colour});
@@ -663,7 +658,7 @@ void Viewer::write_dump(const std::string& path) const {
         j["lights"].push_back({{"name", l.name},
                                {"position", vec_json(l.center())},
                                {"enabled", l.enabled},
-                               {"value", vec_json(light_value(l))}});
+                               {"value", vec_json(l.value())}});
     const Camera& c = scene_.camera;
     j["camera"] = {{"eye", vec_json(c.eye)},
                    {"target", vec_json(c.target)},

@@ -168,7 +168,7 @@ void lights_section(const Scene& scene, ViewRequests& requests) {
             requests.lights.push_back({int(i), std::nullopt, on});
         ImGui::SameLine();
         ImGui::TextColored(kDimColour, l.type == LightType::point ? "I (W/sr)" : "L");
-        glm::vec3 value = l.type == LightType::point ? l.intensity : l.radiance;
+        glm::vec3 value = l.value();
         if (edit_light_value("value", value))
             requests.lights.push_back({int(i), value, std::nullopt});
         ImGui::PopID();
