@@ -54,6 +54,14 @@ struct GatherSettings {
     int cpu_rays = 256;         // rays per texel for the CPU gather backend
 };
 
+// Scheduling by time, not by counts (DESIGN.md): with a frame-time target the pipeline measures
+// what drawing and each unit of work cost and fills the rest of the frame in priority order; the
+// per-frame counts above then only cap the work when `counts_cap` is set.
+struct ScheduleSettings {
+    float frame_ms = 0.0f;    // frame-time target; 0 = no target: the fixed per-frame counts
+    bool counts_cap = false;  // with a target, also hold the fixed counts as upper limits
+};
+
 struct IndirectSettings {
     IndirectMethodKind method = IndirectMethodKind::iim;
 };
@@ -80,6 +88,7 @@ struct Settings {
     AimSettings aim;
     GatherSettings gather;
     IndirectSettings indirect;
+    ScheduleSettings schedule;
     CausticSettings caustics;
     DirectSettings direct;
     SpecularSettings specular;
@@ -152,6 +161,12 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
                        "frames over which a new IIM fades in"});
     v.field(Field<int>{"cpu_rays", s.gather.cpu_rays, 1, 1e6, "rays per texel, CPU gather"});
+    v.end_section();
+    v.section("schedule", "scheduling by frame time (DESIGN.md)");
+    v.field(Field<float>{"frame_ms", s.schedule.frame_ms, 0, 1e6,
+                         "frame-time target in ms; 0 = fixed per-frame counts"});
+    v.field(Field<bool>{"counts_cap", s.schedule.counts_cap, 0, 1,
+                        "with a target, the fixed counts still cap the work"});
     v.end_section();
     v.section("indirect", "the indirect term: which method supplies it");
     v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{

@@ -28,11 +28,13 @@
 
 namespace ag {
 
-// selective: Larsen's method, work by priority under the settings' budgets. full: brute force
-// through the same code, every photon group, AIM surface and IIM texel redone every frame, no
-// blending: the baseline an edit's settling time is held against.
-enum class PipelineMode { selective, full };
-inline constexpr std::array kPipelineModeNames = {"selective", "full"};
+// selective: Larsen's method, work by priority (invalid groups by flux, AIM surfaces by Δf/A, IIM
+// texels by Δi) under the budgets. The baselines an edit's settling time is held against, run by
+// the same code: full redoes every photon group, AIM surface and IIM texel every frame; full_budget
+// redoes everything round robin, with no knowledge of what changed, within the same frame-time
+// budget (settings.schedule.frame_ms) as selective. Neither blends.
+enum class PipelineMode { selective, full, full_budget };
+inline constexpr std::array kPipelineModeNames = {"selective", "full", "full-budget"};
 
 struct PipelineOptions {
     int width = 0, height = 0;  // frame size; 0 = the scene camera's

@@ -47,6 +47,7 @@ const Command kBenchCommand{
                 8192, 512),
         gather_option(),
         indirect_option(),
+        frame_ms_option(),
         settings_option(),
     },
     1,

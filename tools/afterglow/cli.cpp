@@ -191,6 +191,13 @@ Option indirect_option() {
                   {kIndirectMethodNames.begin(), kIndirectMethodNames.end()});
 }
 
+Option frame_ms_option() {
+    return number("frame-ms", "MS",
+                  "frame-time target: work is scheduled by measured cost to fill it (0: the fixed "
+                  "per-frame counts; default: the scene's settings.schedule.frame_ms)",
+                  0, 1e6);
+}
+
 Option settings_option() {
     return make_option("set", "KEY=VALUE",
                        "override a scene setting, e.g. gather.texels_per_frame=40 or seed=7 (keys "
@@ -346,6 +353,7 @@ gpu::GlBackend Args::gl_backend() const { return gpu::parse_gl_backend(get("gl")
 
 void Args::apply_settings(Scene& scene) const {
     if (has("gather")) scene.settings.gather.backend = GatherBackend(get_choice("gather"));
+    if (has("frame-ms")) scene.settings.schedule.frame_ms = float(get_double("frame-ms"));
     if (has("indirect"))
         scene.settings.indirect.method = IndirectMethodKind(get_choice("indirect"));
     const LightmapSettings before = scene.settings.lightmap;

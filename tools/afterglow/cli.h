@@ -60,6 +60,8 @@ Option gl_option(const std::vector<gpu::GlBackend>& allowed, gpu::GlBackend defa
 Option gather_option();
 // --indirect METHOD (kIndirectMethodNames); absent: the scene's settings.indirect.method.
 Option indirect_option();
+// --frame-ms MS: settings.schedule.frame_ms.
+Option frame_ms_option();
 // --set KEY=VALUE, repeatable: any scene setting (visit_settings keys, "section.key").
 Option settings_option();
 
@@ -90,8 +92,8 @@ public:
     // --size WxH: overwrites width and height when given.
     void get_size(const std::string& name, int& width, int& height) const;
     gpu::GlBackend gl_backend() const;
-    // --gather, --indirect and every --set KEY=VALUE, in that order, onto the scene's settings
-    // (rebuilding surfaces and atlas when a lightmap setting changes).
+    // --gather, --indirect, --frame-ms and every --set KEY=VALUE, in that order, onto the scene's
+    // settings (rebuilding surfaces and atlas when a lightmap setting changes).
     void apply_settings(Scene& scene) const;
     const std::vector<std::string>& positionals() const { return positionals_; }
 

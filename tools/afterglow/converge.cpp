@@ -46,8 +46,10 @@ const Command kConvergeCommand{
                 return names;
             }(),
             "indirect"),
-        choice("baseline", "MODE", "full recomputes everything every frame:", {"selective", "full"},
-               "selective"),
+        choice("baseline", "MODE",
+               "selective (Larsen), full (everything every frame) or full-budget (everything "
+               "round robin within the same --frame-ms):",
+               {kPipelineModeNames.begin(), kPipelineModeNames.end()}, "selective"),
         text("csv", "FILE.csv", "where to write the per-frame record (default out/NAME.MODE.csv)"),
         text("plot", "FILE.png",
              "plot of error against time (default out/NAME.MODE.png); '' for none"),
@@ -59,6 +61,7 @@ const Command kConvergeCommand{
                   gpu::GlBackend::osmesa),
         gather_option(),
         indirect_option(),
+        frame_ms_option(),
         settings_option(),
         integer("threads", "N", "worker threads (default: settings.threads)", 0, 1024),
         flag("quiet,q", "no progress bar"),
@@ -173,8 +176,7 @@ int run_converge(const Args& args) {
     if (!script_path.empty()) script.emplace(script_path);
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(
-        scene, PipelineOptions{width, height, threads,
-                               mode == "full" ? PipelineMode::full : PipelineMode::selective});
+        scene, PipelineOptions{width, height, threads, PipelineMode(args.get_choice("baseline"))});
 
     std::ostringstream csv;
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"

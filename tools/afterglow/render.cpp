@@ -32,6 +32,7 @@ const Command kRenderCommand{
                   gpu::GlBackend::osmesa),
         gather_option(),
         indirect_option(),
+        frame_ms_option(),
         settings_option(),
         number("exposure", "EV", "PNG exposure in stops (radiance 1 is white at 0)", -100, 100, 0),
         integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,

@@ -70,6 +70,7 @@ const Command kViewCommand{
         gl_option({gpu::GlBackend::window}, gpu::GlBackend::window),
         gather_option(),
         indirect_option(),
+        frame_ms_option(),
         settings_option(),
         integer("threads", "N", "worker threads for photon work (default: settings.threads)", 0,
                 1024),
