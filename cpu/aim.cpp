@@ -1,6 +1,7 @@
 #include "cpu/aim.h"
 
 #include <algorithm>
+#include <limits>
 #include <numbers>
 #include <numeric>
 
@@ -80,6 +81,24 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
 }
 
 int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {
+    return update(maps, scene_.settings.aim.surfaces_per_frame, std::numeric_limits<int>::max(),
+                  surfaces_rebuilt);
+}
+
+int Aim::rebuild_round_robin(PhotonMaps& maps, int max_texels, int* surfaces_rebuilt) {
+    const size_t n = maps.surface_count();
+    int texels = 0, surfaces = 0;
+    for (size_t visited = 0; visited < n && (surfaces == 0 || texels < max_texels); ++visited) {
+        const int s = int(round_robin_);
+        round_robin_ = (round_robin_ + 1) % n;
+        texels += rebuild_surface(maps, s);
+        ++surfaces;
+    }
+    if (surfaces_rebuilt) *surfaces_rebuilt = surfaces;
+    return texels;
+}
+
+int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surfaces_rebuilt) {
     std::vector<int> candidates;
     for (int s = 0; s < int(maps.surface_count()); ++s) {
         const SurfaceHits& h = maps.surface(s);
@@ -96,11 +115,11 @@ int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {
             maps.surface(b).delta_f / std::max(1e-30f, scene_.surfaces[size_t(b)].area);
         return ka > kb;
     });
-    const int budget =
-        std::min<int>(int(candidates.size()), scene_.settings.aim.surfaces_per_frame);
-    int texels = 0;
-    for (int i = 0; i < budget; ++i) texels += rebuild_surface(maps, candidates[size_t(i)]);
-    if (surfaces_rebuilt) *surfaces_rebuilt = budget;
+    const int budget = std::min<int>(int(candidates.size()), max_surfaces);
+    int texels = 0, surfaces = 0;
+    for (int i = 0; i < budget && (surfaces == 0 || texels < max_texels); ++i, ++surfaces)
+        texels += rebuild_surface(maps, candidates[size_t(i)]);
+    if (surfaces_rebuilt) *surfaces_rebuilt = surfaces;
     return texels;
 }
 

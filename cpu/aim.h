@@ -21,6 +21,12 @@ public:
     // surface's flux) up to aim.surfaces_per_frame. Resets those surfaces' Δf. Returns texels
     // rebuilt; `surfaces_rebuilt` receives the surface count.
     int update(PhotonMaps& maps, int* surfaces_rebuilt = nullptr);
+    // The same under explicit budgets: at most `max_surfaces` surfaces, and no further surface
+    // once `max_texels` texels are rebuilt (at least one surface when any is due).
+    int update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surfaces_rebuilt);
+    // Rebuilds surfaces in turn, whatever changed, from where the last call stopped, until
+    // `max_texels` texels are rebuilt (at least one surface): brute force under a budget.
+    int rebuild_round_robin(PhotonMaps& maps, int max_texels, int* surfaces_rebuilt);
     // Rebuilds every surface.
     int rebuild_all(PhotonMaps& maps);
     // Rebuilds one surface's texels from its hits and resets its Δf.
@@ -38,6 +44,7 @@ private:
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
     std::vector<int> dirty_;
+    size_t round_robin_ = 0;  // next surface for rebuild_round_robin
     std::vector<char> dirty_flag_;
 };
 

@@ -53,6 +53,28 @@ void Iim::invalidate_all() {
         }
 }
 
+void Iim::queue_inside(const std::vector<Bounds>& regions) {
+    std::vector<std::pair<float, int>> found;  // (distance to the nearest region centre, record)
+    for (int t = 0; t < int(scene_.atlas.texels.size()); ++t) {
+        if (is_pending_[size_t(t)]) continue;
+        const TexelRecord& r = scene_.atlas.texels[size_t(t)];
+        const glm::vec3 p = scene_.objects[size_t(r.object)].transform.apply_point(r.position);
+        float nearest = -1.0f;
+        for (const Bounds& b : regions)
+            if (glm::all(glm::greaterThanEqual(p, b.min)) &&
+                glm::all(glm::lessThanEqual(p, b.max))) {
+                const float d = glm::length(p - b.center());
+                nearest = nearest < 0.0f ? d : std::min(nearest, d);
+            }
+        if (nearest >= 0.0f) found.emplace_back(nearest, t);
+    }
+    std::sort(found.begin(), found.end());
+    for (const auto& [d, t] : found) {
+        is_pending_[size_t(t)] = 1;
+        pending_.push_back(t);
+    }
+}
+
 IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
     std::vector<int> batch;
     std::vector<char> in_batch(texel_generation_.size(), 0);
@@ -129,11 +151,13 @@ const std::vector<int>& Iim::blend(uint64_t frame, int blend_frames) {
     return changed_;
 }
 
-bool Iim::settled() const {
-    if (!pending_.empty() || !blending_.empty()) return false;
+bool Iim::complete() const {
+    if (!pending_.empty()) return false;
     for (int g : texel_generation_)
         if (g < aim_generation_) return false;
     return true;
 }
+
+bool Iim::settled() const { return blending_.empty() && complete(); }
 
 }  // namespace ag::cpu

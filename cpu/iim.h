@@ -34,6 +34,9 @@ public:
     void schedule(PhotonMaps& maps);
     // Queues every texel (brute force).
     void invalidate_all();
+    // Queues the texels whose centres lie inside `regions` (world space), nearest to a region's
+    // centre first: where a moved object changes what gathers see, before any photon says so.
+    void queue_inside(const std::vector<Bounds>& regions);
     // Gathers up to `budget` texels with `gatherer`: queued ones first, then stale ones round
     // robin. Results that saw more than kBackFaceInvalidFraction back faces are repaired from
     // valid neighbours of their chart. The new values start blending at `frame`.
@@ -55,6 +58,8 @@ public:
     int pending() const { return int(pending_.size()); }
     // Nothing queued, blending, or gathered with an older AIM than the latest.
     bool settled() const;
+    // Nothing queued and nothing gathered with an older AIM (blends may still run).
+    bool complete() const;
 
 private:
     const Scene& scene_;

@@ -337,7 +337,7 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
         if (!scene_.lights[size_t(l)].enabled) continue;
         for (int g = 0; g < settings.groups; ++g) {
             PhotonGroup& group = maps_.group(l, g);
-            if (!group.traced || group.queued) continue;
+            if (!group.traced || group.queued || !verify_on_) continue;
             for (int v = 0; v < std::min(settings.verify_per_frame, settings.photons_per_group);
                  ++v) {
                 jobs.push_back({l, g, group.verify_cursor});

@@ -62,6 +62,13 @@ public:
     bool settled() const { return queue_.empty(); }
     // Off: moved objects are found only by round-robin verification (for measurements and tests).
     void set_query_invalidation(bool on) { query_on_ = on; }
+    // Off: no round-robin verification either (a brute-force baseline that trusts nothing and
+    // re-traces everything in turn).
+    void set_verification(bool on) { verify_on_ = on; }
+    // Photons waiting in the retrace queue.
+    int queued_photons() const {
+        return int(queue_.size()) * scene_.settings.photons.photons_per_group;
+    }
     // (light, group) of every group invalidated during the last frame(), in invalidation order.
     const std::vector<std::pair<int, int>>& invalidated_last_frame() const { return invalidated_; }
     const PhotonMaps& maps() const { return maps_; }
@@ -113,6 +120,7 @@ private:
     std::vector<Transform> placed_;      // per object: the transform the paths were traced in
     std::vector<Bounds> object_bounds_;  // per object, in its own frame
     bool query_on_ = true;
+    bool verify_on_ = true;
     uint64_t seen_sequence_ = 0;
     uint64_t frame_ = 0;
     float tolerance_ = 0.0f;               // world units

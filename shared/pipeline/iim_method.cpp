@@ -3,6 +3,7 @@
 #include <chrono>
 
 #include "gpu/gl.h"
+#include "shared/scene_edit.h"
 
 namespace ag {
 
@@ -16,6 +17,34 @@ IimMethod::IimMethod(const Scene& scene, const gpu::SceneMeshes& meshes,
       cpu_gather_(scene, cpu_pool_, &aim_values) {
     backend_ = scene_.settings.gather.backend;
     if (backend_ == GatherBackend::automatic) choose_backend();
+    if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
+    for (const Object& o : scene_.objects) placed_.push_back(world_bounds(o));
+}
+
+Bounds IimMethod::world_bounds(const Object& o) {
+    Bounds b;
+    for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b;
+}
+
+std::vector<Bounds> IimMethod::moved_regions() {
+    std::vector<Bounds> regions;
+    for (const SceneChange& c : changes_since(scene_, seen_sequence_)) {
+        if (c.kind != ChangeKind::object_transform) continue;
+        // Gathers within one object diagonal of its old or new place see it under a large
+        // solid angle: their irradiance changes with the move itself, a frame before the
+        // photons and AIMs catch up.
+        const Bounds now = world_bounds(scene_.objects[size_t(c.index)]);
+        for (Bounds b : {placed_[size_t(c.index)], now}) {
+            const glm::vec3 grow(glm::length(b.extent()));
+            b.min -= grow;
+            b.max += grow;
+            regions.push_back(b);
+        }
+        placed_[size_t(c.index)] = now;
+    }
+    if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
+    return regions;
 }
 
 Gatherer& IimMethod::gatherer(GatherBackend backend) {
@@ -53,17 +82,29 @@ void IimMethod::choose_backend() {
 }
 
 void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
+    mode_ = in.mode;
     if (in.aim_changed) iim_.aim_changed();
-    const GatherSettings& g = scene_.settings.gather;
-    const int budget = in.brute_force ? int(scene_.atlas.texels.size()) : g.texels_per_frame;
+    const bool timed = scene_.settings.schedule.frame_ms > 0.0f;
+    const std::vector<Bounds> moved = moved_regions();
+    if (timed && in.mode == PipelineMode::selective && !moved.empty()) iim_.queue_inside(moved);
+    int budget = in.budget;
+    if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());
+    // Round robin through every texel, a new cycle when one ends.
+    if (in.mode == PipelineMode::full_budget && iim_.pending() == 0) iim_.invalidate_all();
     const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
-    texture_.update(iim_.shown(), iim_.blend(in.frame, in.brute_force ? 1 : g.blend_frames));
+    // New values fade in so a partial update never pops; an update that completes the IIM this
+    // frame (everything the budget was given fits in it, as with a frame-time target) shows at
+    // once, as brute force does.
+    const bool blend = in.mode == PipelineMode::selective && !(timed && iim_.complete());
+    const int blend_frames = blend ? scene_.settings.gather.blend_frames : 1;
+    texture_.update(iim_.shown(), iim_.blend(in.frame, blend_frames));
 }
 
 void IimMethod::hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) {
-    iim_.schedule(photons.maps());
+    // The round-robin baseline does not look at what changed.
+    if (mode_ != PipelineMode::full_budget) iim_.schedule(photons.maps());
     stats.iim_texels_pending = iim_.pending();
 }
 

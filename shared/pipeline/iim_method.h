@@ -43,6 +43,9 @@ public:
 
 private:
     void choose_backend();
+    // With a frame-time target: the regions where moved objects change what gathers see.
+    std::vector<Bounds> moved_regions();
+    static Bounds world_bounds(const Object& o);
 
     const Scene& scene_;
     cpu::Iim iim_;
@@ -52,6 +55,9 @@ private:
     cpu::CpuGather cpu_gather_;
     GatherBackend backend_ = GatherBackend::gl;
     double gl_us_ = 0.0, cpu_us_ = 0.0;
+    PipelineMode mode_ = PipelineMode::selective;  // of the last update()
+    uint64_t seen_sequence_ = 0;                   // scene changes looked at
+    std::vector<Bounds> placed_;                   // per object: world bounds when last seen
 };
 
 }  // namespace ag

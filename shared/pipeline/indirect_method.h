@@ -4,6 +4,7 @@
 // space or in screen space and the frame composes either (gpu::IndirectTerm).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <memory>
 
@@ -13,12 +14,21 @@
 
 namespace ag {
 
+// selective: Larsen's method, work by priority (invalid groups by flux, AIM surfaces by Δf/A, IIM
+// texels by Δi) under the budgets. The baselines an edit's settling time is held against, run by
+// the same code: full redoes every photon group, AIM surface and IIM texel every frame; full_budget
+// redoes everything round robin, with no knowledge of what changed, within the same frame-time
+// budget (settings.schedule.frame_ms) as selective. Neither blends.
+enum class PipelineMode { selective, full, full_budget };
+inline constexpr std::array kPipelineModeNames = {"selective", "full", "full-budget"};
+
 // What a method may read on the GL thread while this frame's photon work runs on the workers:
 // only state handed over at the end of the previous frame.
 struct IndirectInputs {
     uint64_t frame = 0;
     bool aim_changed = false;  // the AIM texture (and the staged AIM values) changed this frame
-    bool brute_force = false;  // redo everything this frame, no budgets, no blending
+    PipelineMode mode = PipelineMode::selective;
+    int budget = 0;  // units of work (IIM texels) this frame, from the scheduler
 };
 
 class IndirectMethod {

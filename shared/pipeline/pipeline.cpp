@@ -42,6 +42,11 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
     staged_aim_.assign(size_t(scene_.atlas.width) * size_t(scene_.atlas.height), glm::vec3(0.0f));
     indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_);
+    if (mode_ == PipelineMode::full_budget) {
+        // The baseline knows nothing of what changed: no verification, no moved-object query.
+        photons_->set_verification(false);
+        photons_->set_query_invalidation(false);
+    }
 }
 
 Pipeline::~Pipeline() { sync(); }
@@ -50,21 +55,43 @@ void Pipeline::sync() {
     if (cpu_work_.valid()) cpu_work_.wait();
 }
 
-void Pipeline::start_cpu_work() {
-    // Photons, AIMs and caustic photons for this frame's scene, on the workers.
-    const bool full = mode_ == PipelineMode::full;
-    cpu_work_ = std::async(std::launch::async, [this, full] {
+void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
+    // Photons, AIMs and caustic photons for this frame's scene, on the workers: invalid photon
+    // groups first, AIM texels with what the frame has left.
+    cpu_work_ = std::async(std::launch::async, [this, budgets] {
         CpuWork w;
         if (on_cpu_work_start_) on_cpu_work_start_();
         const Clock::time_point t0 = Clock::now();
-        w.photons = full ? photons_->frame(1 << 30) : photons_->frame();
+        cpu::PhotonMaps& maps = photons_->maps();
+        switch (mode_) {
+            case PipelineMode::full:
+                w.photons = photons_->frame(1 << 30);
+                break;
+            case PipelineMode::full_budget:
+                // Round robin through every group, trusting nothing: a new cycle when one ends.
+                if (photons_->queued_photons() == 0) photons_->invalidate_all();
+                w.photons = photons_->frame(budgets.retrace_photons);
+                break;
+            case PipelineMode::selective:
+                w.photons = photons_->frame(budgets.retrace_photons);
+                break;
+        }
         const Clock::time_point t1 = Clock::now();
-        if (full) {
-            w.photons.aim_texels_rebuilt = aim_->rebuild_all(photons_->maps());
-            w.photons.aim_surfaces_rebuilt = int(photons_->maps().surface_count());
-        } else {
-            w.photons.aim_texels_rebuilt =
-                aim_->update(photons_->maps(), &w.photons.aim_surfaces_rebuilt);
+        const int aim_texels = scheduler_.aim_texels_left(scene_.settings, ms_between(t0, t1));
+        cpu::PhotonFrameStats& p = w.photons;
+        switch (mode_) {
+            case PipelineMode::full:
+                p.aim_texels_rebuilt = aim_->rebuild_all(maps);
+                p.aim_surfaces_rebuilt = int(maps.surface_count());
+                break;
+            case PipelineMode::full_budget:
+                p.aim_texels_rebuilt =
+                    aim_->rebuild_round_robin(maps, aim_texels, &p.aim_surfaces_rebuilt);
+                break;
+            case PipelineMode::selective:
+                p.aim_texels_rebuilt =
+                    aim_->update(maps, budgets.aim_surfaces, aim_texels, &p.aim_surfaces_rebuilt);
+                break;
         }
         const Clock::time_point t2 = Clock::now();
         w.caustics = caustic_tracer_->frame();
@@ -88,14 +115,16 @@ PipelineStats Pipeline::frame() {
         invalidated = photons_->invalidate_all();
         indirect_->invalidate_all();
     }
-    start_cpu_work();
+    const FrameBudgets budgets =
+        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()));
+    start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.
     Clock::time_point t = Clock::now();
     const bool aim_changed = !aim_dirty_.empty();
     aim_texture_.update(staged_aim_, aim_dirty_);
     aim_dirty_.clear();
-    indirect_->update(IndirectInputs{frame_, aim_changed, mode_ == PipelineMode::full}, stats);
+    indirect_->update(IndirectInputs{frame_, aim_changed, mode_, budgets.iim_texels}, stats);
     stats.gather_ms = ms_since(t);
     t = Clock::now();
     caustics_->render(caustic_positions_, caustic_powers_);
@@ -110,6 +139,9 @@ PipelineStats Pipeline::frame() {
     stats.photons.groups_invalidated += invalidated;
     stats.wait_ms = ms_since(t);
     stats.frame_ms = ms_since(start);
+    stats.budget_iim_texels = budgets.iim_texels;
+    stats.budget_photons = budgets.retrace_photons;
+    scheduler_.measure(stats);
     return stats;
 }
 

@@ -24,17 +24,10 @@
 #include "shared/pipeline/iim_method.h"
 #include "shared/pipeline/indirect_method.h"
 #include "shared/pipeline/pipeline_stats.h"
+#include "shared/pipeline/scheduler.h"
 #include "shared/scene.h"
 
 namespace ag {
-
-// selective: Larsen's method, work by priority (invalid groups by flux, AIM surfaces by Δf/A, IIM
-// texels by Δi) under the budgets. The baselines an edit's settling time is held against, run by
-// the same code: full redoes every photon group, AIM surface and IIM texel every frame; full_budget
-// redoes everything round robin, with no knowledge of what changed, within the same frame-time
-// budget (settings.schedule.frame_ms) as selective. Neither blends.
-enum class PipelineMode { selective, full, full_budget };
-inline constexpr std::array kPipelineModeNames = {"selective", "full", "full-budget"};
 
 struct PipelineOptions {
     int width = 0, height = 0;  // frame size; 0 = the scene camera's
@@ -68,6 +61,7 @@ public:
     Scene& scene() { return scene_; }
     PipelineMode mode() const { return mode_; }
     uint64_t frame_index() const { return frame_; }
+    const FrameScheduler& scheduler() const { return scheduler_; }
     gpu::FrameImages images() const { return renderer_->read_back(); }
     const gpu::FrameRenderer& renderer() const { return *renderer_; }
     const IndirectMethod& indirect() const { return *indirect_; }
@@ -92,7 +86,7 @@ public:
     const std::vector<int>& last_gathered() const;   // texel records gathered last frame
 
 private:
-    void start_cpu_work();
+    void start_cpu_work(const FrameBudgets& budgets);
     void hand_over(PipelineStats& stats);
 
     Scene& scene_;
@@ -107,6 +101,7 @@ private:
     std::unique_ptr<gpu::CausticsRenderer> caustics_;
     gpu::LightmapTexture aim_texture_;
     std::unique_ptr<IndirectMethod> indirect_;
+    FrameScheduler scheduler_;
 
     // Results of the CPU side, written by the worker, read only after the hand-over.
     struct CpuWork {

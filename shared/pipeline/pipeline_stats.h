@@ -18,6 +18,8 @@ struct PipelineStats {
     int iim_texels_invalid = 0;  // back-face texels repaired from neighbours
     // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
     // thread; wait_ms is what the GL thread then waited for them.
+    // The scheduler's budgets for this frame (fixed counts without a frame-time target).
+    int budget_iim_texels = 0, budget_photons = 0;
     double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0,
            frame_ms = 0;
 };

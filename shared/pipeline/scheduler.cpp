@@ -1,0 +1,72 @@
+#include "shared/pipeline/scheduler.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace ag {
+
+namespace {
+// The workers share the cores with the GL thread (and a software GL rasteriser): they aim at
+// this share of the frame, so the hand-over rarely waits.
+constexpr double kWorkerShare = 0.8;
+
+int fit(double ms, const RunningCost& cost, int fallback) {
+    if (!cost.known() || cost.value() <= 0.0) return fallback;
+    const double n = std::floor(std::max(0.0, ms) / cost.value());
+    return int(std::min<double>(n, FrameBudgets::kUnlimited));
+}
+}  // namespace
+
+FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_total) const {
+    FrameBudgets b;
+    const double target = settings.schedule.frame_ms;
+    if (target <= 0.0) {
+        b.retrace_photons = settings.photons.retrace_budget;
+        b.aim_surfaces = settings.aim.surfaces_per_frame;
+        b.iim_texels = settings.gather.texels_per_frame;
+        return b;
+    }
+    // GL thread: what drawing leaves of the target goes to gathering. Until a cost is known,
+    // gather the fixed count once to measure it.
+    const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
+    b.iim_texels = std::clamp(fit(target - draw, gather_ms_per_texel_,
+                                  settings.gather.texels_per_frame),
+                              1, std::max(1, iim_texels_total));
+    // Workers: photons first, AIMs with the rest (aim_texels_left, measured as they go).
+    b.worker_ms = kWorkerShare * target;
+    const double caustics = caustic_ms_.known() ? caustic_ms_.value() : 0.0;
+    b.retrace_photons =
+        std::max(1, fit(b.worker_ms - caustics, photon_ms_, settings.photons.retrace_budget));
+    b.aim_surfaces = FrameBudgets::kUnlimited;
+    if (settings.schedule.counts_cap) {
+        b.iim_texels = std::min(b.iim_texels, settings.gather.texels_per_frame);
+        b.retrace_photons = std::min(b.retrace_photons, settings.photons.retrace_budget);
+        b.aim_surfaces = settings.aim.surfaces_per_frame;
+    }
+    return b;
+}
+
+int FrameScheduler::aim_texels_left(const Settings& settings, double elapsed_ms) const {
+    const double target = settings.schedule.frame_ms;
+    if (target <= 0.0) return FrameBudgets::kUnlimited;
+    const double caustics = caustic_ms_.known() ? caustic_ms_.value() : 0.0;
+    return std::max(1, fit(kWorkerShare * target - caustics - elapsed_ms, aim_ms_per_texel_,
+                           FrameBudgets::kUnlimited));
+}
+
+void FrameScheduler::measure(const PipelineStats& s) {
+    // gather_ms holds the gathers and the uploads around them; with enough texels to be a
+    // measurement, the per-texel cost; the rest is counted as drawing.
+    const int texels = s.iim_texels_gathered;
+    if (texels >= 4) gather_ms_per_texel_.add(s.gather_ms / texels);
+    const double gather_part =
+        gather_ms_per_texel_.known() ? texels * gather_ms_per_texel_.value() : 0.0;
+    draw_ms_.add(s.draw_ms + std::max(0.0, s.gather_ms - gather_part));
+    const int photons = s.photons.photons_verified + s.photons.photons_retraced;
+    if (photons >= 32) photon_ms_.add(s.photon_ms / photons);
+    if (s.photons.aim_texels_rebuilt >= 4)
+        aim_ms_per_texel_.add(s.aim_ms / s.photons.aim_texels_rebuilt);
+    caustic_ms_.add(s.caustic_ms);
+}
+
+}  // namespace ag

@@ -1,0 +1,62 @@
+// Scheduling by time, not by counts (DESIGN.md): the thesis's per-frame counts (≤ 20 texels, a
+// few AIM surfaces) were sized for a 2004 GPU. With a frame-time target the scheduler measures,
+// frame by frame, what drawing took and what one unit of each kind of work cost (a photon traced,
+// an AIM texel rebuilt, an IIM texel gathered by the backend in use) and sizes the next frame's
+// work to fill the target: on the GL thread IIM texels after drawing; on the workers invalid
+// photon groups first, then AIM texels with what is left.
+#pragma once
+
+#include <limits>
+
+#include "shared/pipeline/pipeline_stats.h"
+#include "shared/settings.h"
+
+namespace ag {
+
+// An exponentially weighted running mean; empty until the first sample.
+class RunningCost {
+public:
+    void add(double x) {
+        value_ = samples_ == 0 ? x : value_ + 0.3 * (x - value_);
+        ++samples_;
+    }
+    bool known() const { return samples_ > 0; }
+    double value() const { return value_; }
+
+private:
+    double value_ = 0.0;
+    int samples_ = 0;
+};
+
+struct FrameBudgets {
+    static constexpr int kUnlimited = std::numeric_limits<int>::max();
+    int retrace_photons = kUnlimited;  // photons re-traced for invalid groups (workers)
+    int aim_surfaces = kUnlimited;     // AIM surfaces rebuilt (workers)
+    int iim_texels = kUnlimited;       // IIM texels gathered (GL thread)
+    double worker_ms = 0.0;            // time target for the workers' photon + AIM work; 0: none
+};
+
+class FrameScheduler {
+public:
+    // Budgets for the next frame: the fixed counts of the settings without a target; with one,
+    // what the measured costs say fits (the counts then cap them only with counts_cap).
+    FrameBudgets budgets(const Settings& settings, int iim_texels_total) const;
+    // AIM texels the workers may still rebuild, `elapsed_ms` into their frame.
+    int aim_texels_left(const Settings& settings, double elapsed_ms) const;
+    // Learns from a finished frame.
+    void measure(const PipelineStats& stats);
+
+    const RunningCost& draw_ms() const { return draw_ms_; }
+    const RunningCost& gather_ms_per_texel() const { return gather_ms_per_texel_; }
+    const RunningCost& photon_ms() const { return photon_ms_; }
+    const RunningCost& aim_ms_per_texel() const { return aim_ms_per_texel_; }
+
+private:
+    RunningCost draw_ms_;              // GL thread, besides gathering: caustics, frame, uploads
+    RunningCost gather_ms_per_texel_;  // GL thread, per IIM texel, with the backend in use
+    RunningCost photon_ms_;            // workers, per photon traced (verified or re-traced)
+    RunningCost aim_ms_per_texel_;     // workers, per AIM texel rebuilt
+    RunningCost caustic_ms_;           // workers, caustic photons (a fixed share per frame)
+};
+
+}  // namespace ag

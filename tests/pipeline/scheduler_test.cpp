@@ -1,0 +1,107 @@
+// Scheduling by time (DESIGN.md): budgets from measured costs, counted not timed; and the
+// round-robin baseline, which trusts nothing and re-traces everything in turn.
+#include <gtest/gtest.h>
+
+#include "../gpu/gl_fixture.h"
+#include "shared/pipeline/frame_loop.h"
+#include "shared/pipeline/scheduler.h"
+#include "shared/scene_file.h"
+
+namespace ag {
+namespace {
+
+PipelineStats measured(double draw_ms, int texels, double gather_ms, int photons, double photon_ms,
+                       int aim_texels, double aim_ms) {
+    PipelineStats s;
+    s.draw_ms = draw_ms;
+    s.iim_texels_gathered = texels;
+    s.gather_ms = gather_ms;
+    s.photons.photons_retraced = photons;
+    s.photon_ms = photon_ms;
+    s.photons.aim_texels_rebuilt = aim_texels;
+    s.aim_ms = aim_ms;
+    s.caustic_ms = 1.0;
+    return s;
+}
+
+TEST(FrameScheduler, WithoutATargetTheFixedCountsHold) {
+    Settings settings;
+    FrameScheduler scheduler;
+    scheduler.measure(measured(10.0, 20, 2.0, 1000, 5.0, 100, 1.0));
+    const FrameBudgets b = scheduler.budgets(settings, 1000);
+    EXPECT_EQ(b.iim_texels, settings.gather.texels_per_frame);
+    EXPECT_EQ(b.retrace_photons, settings.photons.retrace_budget);
+    EXPECT_EQ(b.aim_surfaces, settings.aim.surfaces_per_frame);
+    EXPECT_EQ(scheduler.aim_texels_left(settings, 0.0), FrameBudgets::kUnlimited);
+}
+
+TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
+    Settings settings;
+    settings.schedule.frame_ms = 33.0f;
+    FrameScheduler scheduler;
+    // Drawing 10 ms, 0.1 ms a texel, 0.005 ms a photon, 0.01 ms an AIM texel, caustics 1 ms.
+    scheduler.measure(measured(10.0, 20, 2.0, 1000, 5.0, 100, 1.0));
+    FrameBudgets b = scheduler.budgets(settings, 100000);
+    EXPECT_EQ(b.iim_texels, 230);                           // (33 − 10) / 0.1
+    EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
+    EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
+    EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
+    // Never more texels than there are, never none.
+    EXPECT_EQ(scheduler.budgets(settings, 50).iim_texels, 50);
+    FrameScheduler slow;
+    slow.measure(measured(40.0, 20, 2.0, 1000, 5.0, 100, 1.0));
+    EXPECT_EQ(slow.budgets(settings, 1000).iim_texels, 1);
+    // With counts_cap the fixed counts are upper limits.
+    settings.schedule.counts_cap = true;
+    b = scheduler.budgets(settings, 100000);
+    EXPECT_EQ(b.iim_texels, settings.gather.texels_per_frame);
+    EXPECT_EQ(b.retrace_photons, settings.photons.retrace_budget);
+    EXPECT_EQ(b.aim_surfaces, settings.aim.surfaces_per_frame);
+}
+
+TEST(FrameScheduler, HalfTheCostTwiceTheWork) {
+    Settings settings;
+    settings.schedule.frame_ms = 40.0f;
+    FrameScheduler a, b;
+    a.measure(measured(8.0, 40, 8.0, 2000, 8.0, 100, 1.0));
+    b.measure(measured(8.0, 40, 4.0, 2000, 4.0, 100, 1.0));
+    EXPECT_NEAR(double(b.budgets(settings, 100000).iim_texels),
+                2.0 * a.budgets(settings, 100000).iim_texels, 1.0);
+    EXPECT_NEAR(double(b.budgets(settings, 100000).retrace_photons),
+                2.0 * a.budgets(settings, 100000).retrace_photons, 1.0);
+}
+
+class FullBudgetTest : public test::GlTest {};
+
+// The round-robin baseline verifies nothing and re-traces every group once per cycle under the
+// budget: two_rooms has 4 lights × 77 groups of 40 photons; 4,000 photons a frame make a cycle of
+// four frames (100 + 100 + 100 + 8 groups).
+TEST_F(FullBudgetTest, EveryGroupOncePerCycleNothingVerified) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/two_rooms.json");
+    scene.settings.gather.backend = GatherBackend::cpu;
+    ASSERT_EQ(scene.settings.photons.retrace_budget, 4000);
+    ASSERT_EQ(scene.settings.photons.photons_per_group, 40);
+    const int groups = scene.settings.photons.groups * int(scene.lights.size());
+    ASSERT_EQ(groups, 308);
+    Pipeline pipeline(scene, PipelineOptions{32, 32, -1, PipelineMode::full_budget});
+    FrameLoop loop(pipeline);
+    int retraced = 0;
+    std::vector<int> per_frame;
+    for (int f = 0; f < 8; ++f) {
+        const PipelineStats s = loop.step();
+        EXPECT_EQ(s.photons.photons_verified, 0);
+        retraced += s.photons.photons_retraced;
+        per_frame.push_back(s.photons.groups_retraced);
+    }
+    EXPECT_EQ(per_frame, (std::vector<int>{100, 100, 100, 8, 100, 100, 100, 8}));
+    EXPECT_EQ(retraced, 2 * groups * 40);
+    // The IIM too: every texel once per cycle, at the fixed count a frame.
+    const int texels = int(scene.atlas.texels.size());
+    const int per = scene.settings.gather.texels_per_frame;
+    int gathered = 0;
+    for (int f = 0; f < (texels + per - 1) / per; ++f) gathered += loop.step().iim_texels_gathered;
+    EXPECT_GE(gathered, texels - per);
+}
+
+}  // namespace
+}  // namespace ag
