@@ -1,0 +1,27 @@
+-- scenes/conference.json: the orange box on the conference table jumps in one frame (frame 20)
+-- 1.4 m along the table towards the camera ((1.4, 0, 0) in x, y, z, metres) and stays there. A
+-- step edit in a 277,564-triangle room: the groups whose stored paths cross the old or the new
+-- placement must be invalidated in that frame.
+
+local at = 20
+local offset = {1.4, 0, 0}
+
+local box
+local start = {}
+local jumped = false
+
+function on_start(scene)
+    box = scene:object("box")
+    start[1], start[2], start[3] = box:position()
+end
+
+-- The placement follows from the frame, so looping back to frame 0 puts the box back; the box
+-- is edited only in the frame its placement changes.
+function on_frame(scene, frame, time)
+    local wanted = frame >= at
+    if wanted ~= jumped then
+        local s = wanted and 1 or 0
+        box:set_position(start[1] + s * offset[1], start[2] + s * offset[2], start[3] + s * offset[3])
+        jumped = wanted
+    end
+end
