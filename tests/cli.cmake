@@ -100,3 +100,7 @@ ag_cli_test(photons_long_inline 0 "frames 3 in" photons --frames=3 scenes/cornel
 # Folder boundaries: cpu/ without GL, gpu/ without Embree/FLANN, shared/ without either side.
 add_test(NAME boundaries COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/boundaries.sh ${PROJECT_SOURCE_DIR})
 set_tests_properties(boundaries PROPERTIES LABELS unit)
+# bench settle: SCENE:SCRIPT pairs and --size N or WxH, checked before any GL or reference work.
+ag_cli_test(bench_settle_bad_entry 2 "bench settle: expected SCENE:SCRIPT, got 'foo'" bench settle foo)
+ag_cli_test(bench_settle_bad_size 2 "--size: expects N or WxH with positive integers up to 16384, got '0x5'"
+            bench settle --size 0x5)

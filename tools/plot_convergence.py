@@ -3,8 +3,9 @@
 
 usage: tools/plot_convergence.py OUT.png RUN.csv [RUN.csv ...] [--title TEXT]
 
-Each CSV becomes one line (labelled by its `method` column, else its file name); vertical
-dashed lines mark the frames at which the script edited the scene (the `edited` column).
+Each CSV becomes one line (labelled by its `method` column, else its file name, and the seconds
+from the last edit until the error stays within 10% of its settled value, marked by a dot);
+vertical lines mark the frames at which the script edited the scene (the `edited` column).
 Uses Debian's python3-matplotlib (the system interpreter, hence the shebang).
 """
 import csv
@@ -28,6 +29,23 @@ def read(path):
     return rows
 
 
+def settle(rows, e):
+    """(frame, seconds after the last edit) from which the error stays within 10% of the mean of
+    the last tenth of the frames (at least 3), or None: the rule of `afterglow converge`."""
+    tail = min(len(e), max(3, len(e) // 10))
+    level = sum(e[-tail:]) / tail
+    edits = [i for i, r in enumerate(rows) if r.get("edited") == "1"]
+    last = edits[-1] if edits else 0
+    within = None
+    for i in range(len(e) - 1, last - 1, -1):
+        if abs(e[i] - level) > 0.1 * level:
+            break
+        within = i
+    if within is None:
+        return None
+    return within, float(rows[within]["wall_s"]) - float(rows[last]["wall_s"])
+
+
 def main(argv):
     title = None
     if "--title" in argv:
@@ -44,7 +62,11 @@ def main(argv):
         label = rows[0].get("method") or os.path.basename(path)
         t = [float(r["wall_s"]) for r in rows]
         e = [float(r["relmse"]) for r in rows]
+        s = settle(rows, e)
+        label += f" (settled {s[1]:.2f} s after the edit)" if s else " (did not settle)"
         line, = ax.plot(t, e, label=label, linewidth=1.4)
+        if s:
+            ax.plot([t[s[0]]], [e[s[0]]], "o", color=line.get_color(), markersize=5)
         for r in rows:
             if r.get("edited") == "1":
                 ax.axvline(float(r["wall_s"]), color=line.get_color(), alpha=0.12, linewidth=0.8)

@@ -5,3 +5,12 @@ add_test(NAME convergence.cornell_move_cube
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(convergence.cornell_move_cube PROPERTIES LABELS convergence SKIP_RETURN_CODE 77
                      TIMEOUT 600)
+
+# Scheduling by time (DESIGN.md): after the cube jumps, selective settles in no more frames than
+# full-budget at the same frame-time target (frames counted, not time).
+add_test(NAME convergence.cornell_cube_jump_settle
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/settle_test.sh $<TARGET_FILE:afterglow>
+                 ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.cornell_cube_jump_settle PROPERTIES LABELS convergence
+                     SKIP_RETURN_CODE 77 TIMEOUT 300)

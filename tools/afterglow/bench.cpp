@@ -20,12 +20,13 @@
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
 #include "tools/afterglow/commands.h"
+#include "tools/afterglow/convergence.h"
 
 namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics [SCENE...] [options]",
+    "photons|knn|gather|frame|caustics|settle [SCENE...|SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -36,27 +37,64 @@ const Command kBenchCommand{
     "traced per second per core and "
     "the share reaching a specular object; the screen filter over the whole screen against "
     "tile-culled filtering for a caustic covering about 1% and 5% of it (Larsen: 37.6 ms against "
-    "0.38 ms for 1% of 512²).",
+    "0.38 ms for 1% of 512²). 'settle [SCENE:SCRIPT...]': for each scene and edit script "
+    "(default: a ladder from cornell to conference), selective, full and full-budget at the same "
+    "--frame-ms (default 33): frames and seconds from the edit until the indirect error is back "
+    "within 10% of its settled value, frame times, work done, the area under the error curve and "
+    "selective's speed-up over full-budget; a table, a CSV and a log-log plot of settle time "
+    "against triangles (docs/convergence.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
-        integer("frames", "N", "frames per measurement for 'frame'", 1, 100000, 100),
-        integer("size", "N", "square frame size for 'frame' and 'caustics' (at least 64 there)", 16,
-                8192, 512),
+        integer("frames", "N",
+                "frames per measurement for 'frame' (default 100), frames per run for 'settle' "
+                "(default 90)",
+                1, 100000),
+        text("size", "N|WxH",
+             "frame size: square N for 'frame' and 'caustics' (at least 64 there; default 512), "
+             "WxH for 'settle' (default 64x64)"),
         gather_option(),
         indirect_option(),
         frame_ms_option(),
         settings_option(),
+        integer("threads", "N", "worker threads for 'settle' (default: settings.threads)", 0, 1024),
+        text("csv", "FILE.csv", "'settle': the table as CSV", "out/bench-settle.csv"),
+        text("plot", "FILE.png", "'settle': settle time against triangles, log-log; '' for none",
+             "out/bench-settle.png"),
+        text("cache", "DIR", "'settle': reference cache", "out/reference-cache"),
+        integer("ref-spp", "N", "'settle': samples per pixel of a computed reference", 1, 1000000,
+                64),
+        integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
+                400000),
+        flag("quick", "'settle': only the cornell scene (for tests)"),
     },
     1,
-    8,
+    16,
 };
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// --size: N (square) or WxH, positive integers up to kMaxImageSize; absent: the fallback.
+void bench_size(const Args& args, int fallback_w, int fallback_h, int& width, int& height) {
+    width = fallback_w, height = fallback_h;
+    if (!args.has("size")) return;
+    const std::string v = args.get("size");
+    int w = 0, h = 0;
+    char extra = 0;
+    const int n = std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &extra);
+    if (n == 1 && v.find('x') == std::string::npos) h = w;
+    const bool digits = !v.empty() && v.find_first_not_of("0123456789x") == std::string::npos;
+    if (!digits || (n != 1 && n != 2) || (n == 1 && v.find('x') != std::string::npos) || w < 1 ||
+        h < 1 || w > kMaxImageSize || h > kMaxImageSize)
+        throw CliError("afterglow bench: --size: expects N or WxH with positive integers up to " +
+                       std::to_string(kMaxImageSize) + ", got '" + v + "'");
+    width = w, height = h;
+}
+
 double seconds_since(Clock::time_point t) {
     return std::chrono::duration<double>(Clock::now() - t).count();
 }
@@ -241,7 +279,10 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
 // Frames per second of the whole pipeline (photons on workers, AIMs, gathers, caustics, frame).
 int bench_frame(const std::string& path, int repeat, const Args& args) {
     auto context = bench_context(args);
-    const int frames = args.get_int("frames"), size = args.get_int("size");
+    const int frames = args.get_int("frames", 100);
+    int size = 0, height = 0;
+    bench_size(args, 512, 512, size, height);
+    if (height != size) throw CliError("afterglow bench frame: --size expects a square N");
     Scene scene = load_scene(path);
     args.apply_settings(scene);
     Pipeline pipeline(scene, PipelineOptions{size, size});
@@ -313,8 +354,9 @@ int bench_caustics(const std::string& path, int repeat, const Args& args) {
             100.0 * st.stored / std::max(1, st.traced));
     }
     auto context = bench_context(args);
-    const int size = args.get_int("size");
-    if (size < 64)
+    int size = 0, height = 0;
+    bench_size(args, 512, 512, size, height);
+    if (size < 64 || height != size)
         throw CliError("afterglow bench caustics: --size expects N >= 64, got " +
                        std::to_string(size));
     // A synthetic caustic: a disc of photons on the floor under the camera's view, sized so that
@@ -390,8 +432,13 @@ int run_bench(const Args& args) {
         return bench_frame(
             args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json", repeat,
             args);
+    if (what == "settle") {
+        int width = 0, height = 0;
+        bench_size(args, 64, 64, width, height);
+        return bench_settle(args, width, height);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame or caustics)");
+                   "' (expected photons, knn, gather, frame, caustics or settle)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

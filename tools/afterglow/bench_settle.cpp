@@ -1,0 +1,269 @@
+// afterglow bench settle: the yardstick of DESIGN.md "Scheduling by time, not by counts". For a
+// ladder of scenes and edit scripts, the time from an edit until the indirect error is back within
+// 10% of its settled value, selective against recomputing everything (full) and against
+// recomputing everything round robin within the same frame-time target (full-budget).
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <iostream>
+#include <sstream>
+
+#include "gpu/gl_context.h"
+#include "shared/image.h"
+#include "shared/scene_file.h"
+#include "tools/afterglow/cli.h"
+#include "tools/afterglow/convergence.h"
+
+namespace ag::cli {
+
+namespace {
+
+struct LadderEntry {
+    std::string scene, script;
+};
+
+// The default ladder: small to large scenes, step edits (geometry, material, visibility, light)
+// and one continuous move (for the area under the error curve).
+const std::vector<LadderEntry> kLadder = {
+    {"scenes/cornell.json", "scenes/cornell_cube_jump.lua"},
+    {"scenes/cornell.json", "scenes/cornell_albedo_step.lua"},
+    {"scenes/cornell.json", "scenes/cornell_move_cube.lua"},
+    {"scenes/two_rooms.json", "scenes/two_rooms_door_step.lua"},
+    {"scenes/two_rooms.json", "scenes/two_rooms_light_off_step.lua"},
+    {"scenes/bumpy_133k_box.json", "scenes/bumpy_133k_jump.lua"},
+    {"scenes/conference.json", "scenes/conference_box_jump.lua"},
+};
+
+constexpr std::array kModes = {PipelineMode::selective, PipelineMode::full,
+                               PipelineMode::full_budget};
+
+// What one mode did on one scene × script.
+struct SettleResult {
+    PipelineMode mode = PipelineMode::selective;
+    SettleAnalysis settle;
+    double frame_mean_settle = 0, frame_p95_settle = 0, frame_mean = 0, frame_p95 = 0;  // ms
+    uint64_t photons = 0, aim_texels = 0, iim_texels = 0;  // first edit .. settled (or the end)
+    double auc = 0.0;  // ∫ relMSE dt after the first edit over the common window
+};
+
+double mean(const std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    double s = 0.0;
+    for (double x : v) s += x;
+    return s / double(v.size());
+}
+
+double p95(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t i = size_t(std::ceil(0.95 * double(v.size()))) - 1;
+    return v[std::min(i, v.size() - 1)];
+}
+
+// Wall time of frame f in ms (its share of the run's wall time).
+double frame_wall_ms(const ConvergenceRun& run, size_t f) {
+    return 1e3 * (run.frames[f].wall_s - (f ? run.frames[f - 1].wall_s : 0.0));
+}
+
+// The time from which the error after the first edit is integrated: when the edit happened, i.e.
+// the end of the frame before it (0 when the first frame carries it).
+double edit_time(const ConvergenceRun& run) {
+    const int e = std::max(0, run.settle.first_edit);
+    return e > 0 ? run.frames[size_t(e - 1)].wall_s : 0.0;
+}
+
+// ∫ relMSE dt from the first edit over `window` seconds: the image on screen (and its error) is
+// the last one drawn until the next frame replaces it, so the edit frame's time is charged at the
+// error of the frame before it.
+double error_area(const ConvergenceRun& run, double window) {
+    const int e = std::max(0, run.settle.first_edit);
+    const double t0 = edit_time(run), end = t0 + window;
+    double area = 0.0, t = t0;
+    for (size_t f = size_t(e); f < run.frames.size() && t < end; ++f) {
+        const double shown = f ? run.frames[f - 1].relmse : run.frames[f].relmse;
+        const double next = std::min(run.frames[f].wall_s, end);
+        area += shown * (next - t);
+        t = next;
+    }
+    if (t < end && !run.frames.empty()) area += run.frames.back().relmse * (end - t);
+    return area;
+}
+
+SettleResult analyse(const ConvergenceRun& run) {
+    SettleResult r;
+    r.mode = run.mode;
+    r.settle = run.settle;
+    const size_t n = run.frames.size();
+    const size_t from = size_t(std::max(0, run.settle.last_edit));
+    const size_t to = run.settle.within >= 0 ? size_t(run.settle.within) : n - 1;
+    std::vector<double> all, window;
+    for (size_t f = 0; f < n; ++f) {
+        all.push_back(frame_wall_ms(run, f));
+        if (f >= from && f <= to) window.push_back(all.back());
+    }
+    r.frame_mean = mean(all), r.frame_p95 = p95(all);
+    r.frame_mean_settle = mean(window), r.frame_p95_settle = p95(window);
+    for (size_t f = size_t(std::max(0, run.settle.first_edit)); f <= to && f < n; ++f) {
+        r.photons += run.frames[f].photons_retraced;
+        r.aim_texels += run.frames[f].aim_texels;
+        r.iim_texels += uint64_t(run.frames[f].iim_texels);
+    }
+    return r;
+}
+
+std::string stem(const std::string& path) { return std::filesystem::path(path).stem().string(); }
+
+// "-" for a run that did not settle.
+std::string fixed(double v, int decimals, bool valid = true) {
+    if (!valid) return "-";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.*f", decimals, v);
+    return b;
+}
+
+}  // namespace
+
+int bench_settle(const Args& args, int width, int height) {
+    const int frames = args.get_int("frames", 90);
+    const double frame_ms = args.get_double("frame-ms", 33.0);
+    const std::string csv_path = args.get("csv", "out/bench-settle.csv");
+    const std::string plot_path = args.get("plot", "out/bench-settle.png");
+    const std::string component = "indirect";
+
+    std::vector<LadderEntry> ladder;
+    for (size_t i = 1; i < args.positionals().size(); ++i) {
+        const std::string& p = args.positionals()[i];
+        const size_t colon = p.find(':');
+        if (colon == std::string::npos || colon == 0 || colon + 1 == p.size())
+            throw CliError("afterglow bench settle: expected SCENE:SCRIPT, got '" + p + "'");
+        ladder.push_back({p.substr(0, colon), p.substr(colon + 1)});
+    }
+    if (ladder.empty())
+        for (const LadderEntry& e : kLadder)
+            if (!args.has("quick") || e.scene == "scenes/cornell.json") ladder.push_back(e);
+
+    auto context = gpu::make_gl_context(args.gl_backend());
+    std::printf(
+        "bench settle: %dx%d, %d frames, --frame-ms %g; indirect relMSE against the pm reference "
+        "of the final state; settled = the mean of the last tenth of the frames, settle = from the "
+        "last edit until the error stays within 10%% of it\n",
+        width, height, frames, frame_ms);
+    std::printf("%-10s %8s %-22s %-11s %9s %6s %8s %15s %15s %9s %9s %9s %9s %8s\n", "scene",
+                "tris", "script", "mode", "settled", "frames", "settle_s", "ms mean/p95 set",
+                "ms mean/p95 all", "photons", "AIM tx", "IIM tx", "area", "speedup");
+
+    std::ostringstream csv;
+    csv << "scene,script,triangles,mode,frame_ms_target,width,height,frames,settled_relmse,first_"
+           "edit,last_edit,settle_frames,settle_s,frame_ms_mean_settle,frame_ms_p95_settle,frame_"
+           "ms_mean,frame_ms_p95,photons_retraced,aim_texels,iim_texels,error_area,error_area_"
+           "window_s,speedup_vs_full_budget\n";
+    const std::filesystem::path runs_dir =
+        std::filesystem::absolute(csv_path).parent_path() / (stem(csv_path) + ".runs");
+    int measured = 0;
+    for (const LadderEntry& entry : ladder) {
+        Scene scene;
+        try {
+            if (!std::filesystem::exists(entry.scene))
+                throw std::runtime_error(entry.scene + ": no such file");
+            if (!std::filesystem::exists(entry.script))
+                throw std::runtime_error(entry.script + ": no such file");
+            scene = load_scene(entry.scene);
+        } catch (const std::exception& e) {
+            std::printf("skipping %s with %s: %s\n", entry.scene.c_str(), entry.script.c_str(),
+                        e.what());
+            continue;
+        }
+        args.apply_settings(scene);
+        if (!args.has("frame-ms")) scene.settings.schedule.frame_ms = float(frame_ms);
+        scene.camera.width = width;
+        scene.camera.height = height;
+        const int threads = args.get_int("threads", scene.settings.threads);
+
+        ReferenceRequest request;
+        request.name = stem(entry.scene);
+        request.cache = args.get("cache");
+        request.spp = args.get_int("ref-spp");
+        request.photons = args.get_int("ref-photons");
+        request.threads = threads;
+        request.log_prefix = "afterglow bench settle";
+        const std::string reference_path = cached_reference(scene, entry.script, frames, request);
+        const Image reference = read_reference(reference_path, component, width, height);
+
+        std::vector<ConvergenceRun> runs;
+        for (PipelineMode mode : kModes) {
+            runs.push_back(run_convergence(scene, entry.script, mode, frames, width, height,
+                                           component, reference, threads));
+            std::filesystem::create_directories(runs_dir);
+            write_file_atomically((runs_dir / (request.name + "." + stem(entry.script) + "." +
+                                               kPipelineModeNames[size_t(mode)] + ".csv"))
+                                      .string(),
+                                  convergence_csv(runs.back()));
+        }
+        // The error area over the same window for every mode: the shortest run after the edit.
+        double window = 1e30;
+        for (const ConvergenceRun& run : runs)
+            window = std::min(window, run.wall_s - edit_time(run));
+        std::vector<SettleResult> results;
+        for (const ConvergenceRun& run : runs) {
+            results.push_back(analyse(run));
+            results.back().auc = error_area(run, window);
+        }
+        const SettleResult& budget = results[size_t(PipelineMode::full_budget)];
+        for (const SettleResult& r : results) {
+            const bool ok = r.settle.settled_ok();
+            const bool speedup_ok = ok && budget.settle.settled_ok() && r.settle.seconds > 0;
+            const double speedup = speedup_ok ? budget.settle.seconds / r.settle.seconds : 0.0;
+            const char* mode = kPipelineModeNames[size_t(r.mode)];
+            std::printf(
+                "%-10s %8zu %-22s %-11s %9.5f %6s %8s %7.1f/%-7.1f %7.1f/%-7.1f %9llu %9llu "
+                "%9llu %9.5f %8s\n",
+                request.name.c_str(), scene.triangle_count(), stem(entry.script).c_str(), mode,
+                r.settle.settled, ok ? std::to_string(r.settle.frames).c_str() : "-",
+                fixed(r.settle.seconds, 3, ok).c_str(), r.frame_mean_settle, r.frame_p95_settle,
+                r.frame_mean, r.frame_p95, static_cast<unsigned long long>(r.photons),
+                static_cast<unsigned long long>(r.aim_texels),
+                static_cast<unsigned long long>(r.iim_texels), r.auc,
+                r.mode != PipelineMode::selective ? ""
+                : speedup_ok                      ? (fixed(speedup, 2) + "x").c_str()
+                                                  : "-");
+            csv << request.name << ',' << stem(entry.script) << ',' << scene.triangle_count() << ','
+                << mode << ',' << frame_ms << ',' << width << ',' << height << ',' << frames << ','
+                << r.settle.settled << ',' << r.settle.first_edit << ',' << r.settle.last_edit
+                << ',' << (ok ? std::to_string(r.settle.frames) : "") << ','
+                << (ok ? fixed(r.settle.seconds, 6) : "") << ',' << r.frame_mean_settle << ','
+                << r.frame_p95_settle << ',' << r.frame_mean << ',' << r.frame_p95 << ','
+                << r.photons << ',' << r.aim_texels << ',' << r.iim_texels << ',' << r.auc << ','
+                << window << ',' << (speedup_ok ? fixed(speedup, 4) : "") << "\n";
+        }
+        std::fflush(stdout);
+        ++measured;
+    }
+    std::printf(
+        "(settle_s: wall time from the last edit; ms mean/p95 over the frames from the last edit "
+        "until settled, and over all frames; photons re-traced, AIM texels rebuilt and IIM texels "
+        "gathered from the first edit until settled; area: ∫ relMSE dt from the first edit over "
+        "the shortest mode's remaining run; speedup: full-budget's settle time over "
+        "selective's)\n");
+    if (measured == 0) {
+        std::fprintf(stderr, "afterglow bench settle: nothing measured\n");
+        return 1;
+    }
+    std::filesystem::create_directories(std::filesystem::absolute(csv_path).parent_path());
+    write_file_atomically(csv_path, csv.str());
+    std::printf("wrote %s (and each run's converge CSV under %s)\n", csv_path.c_str(),
+                runs_dir.string().c_str());
+    if (!plot_path.empty()) {
+        const std::string command =
+            "/usr/bin/python3 tools/plot_settle.py '" + plot_path + "' '" + csv_path + "'";
+        if (std::system(command.c_str()) != 0)
+            std::cerr << "afterglow bench settle: warning: plotting failed (" << command << ")\n";
+        else
+            std::printf("wrote %s\n", plot_path.c_str());
+    }
+    return 0;
+}
+
+}  // namespace ag::cli

@@ -1,0 +1,195 @@
+// Convergence runs (convergence.h): the cached pm reference of a final state, a progressive run
+// with the error after every frame, and the settle rule.
+#include "tools/afterglow/convergence.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+#include <optional>
+#include <sstream>
+
+#include "cpu/reference/reference.h"
+#include "shared/frame_terms.h"
+#include "shared/input_error.h"
+#include "shared/metrics.h"
+#include "shared/parallel.h"
+#include "shared/pipeline/frame_loop.h"
+#include "shared/script.h"
+
+namespace ag::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+uint64_t fnv1a(uint64_t h, const void* data, size_t n) {
+    const unsigned char* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < n; ++i) h = (h ^ p[i]) * 1099511628211ull;
+    return h;
+}
+
+// A hash of everything the reference image depends on: geometry, materials and transforms,
+// lights, camera and the reference settings.
+uint64_t state_hash(const Scene& scene, const cpu::ReferenceSettings& rs) {
+    uint64_t h = 1469598103934665603ull;
+    auto add = [&](const auto& v) { h = fnv1a(h, &v, sizeof v); };
+    for (const Object& o : scene.objects) {
+        h = fnv1a(h, o.mesh.positions.data(), o.mesh.positions.size() * sizeof(glm::vec3));
+        h = fnv1a(h, o.mesh.triangles.data(), o.mesh.triangles.size() * sizeof(glm::uvec3));
+        add(o.transform.translation), add(o.transform.rotation);
+        add(o.material.type), add(o.material.albedo), add(o.material.ior), add(o.material.emission);
+    }
+    for (const Light& l : scene.lights) {
+        add(l.type), add(l.position), add(l.intensity), add(l.corners), add(l.radiance),
+            add(l.enabled);
+    }
+    add(scene.camera.eye), add(scene.camera.target), add(scene.camera.up), add(scene.camera.fov_y);
+    add(scene.camera.width), add(scene.camera.height);
+    add(rs.method), add(rs.spp), add(rs.seed), add(rs.photons), add(rs.caustic_photons),
+        add(rs.knn);
+    add(rs.caustic_knn), add(rs.gather_rays), add(rs.area_light_samples), add(rs.max_depth);
+    return h;
+}
+
+}  // namespace
+
+std::string component_path(const std::string& exr, const std::string& component) {
+    if (component == "full") return exr;
+    const std::filesystem::path p(exr);
+    return (p.parent_path() / (p.stem().string() + "." + component + ".exr")).string();
+}
+
+std::string cached_reference(const Scene& scene, const std::string& script_path, int frames,
+                             const ReferenceRequest& request) {
+    Scene final_state = scene;
+    if (!script_path.empty()) {
+        Script ahead(script_path);
+        run_script_ahead(ahead, final_state, frames);
+    }
+    cpu::ReferenceSettings rs;
+    rs.method = cpu::ReferenceMethod::photon_mapping;
+    rs.spp = request.spp;
+    rs.photons = request.photons;
+    rs.caustic_photons = rs.photons;
+    rs.seed = scene.settings.seed;
+    char hex[32];
+    std::snprintf(hex, sizeof hex, "%016llx",
+                  static_cast<unsigned long long>(state_hash(final_state, rs)));
+    std::filesystem::create_directories(request.cache);
+    const std::string reference_path = request.cache + "/" + request.name + "-" + hex + ".exr";
+    if (!std::filesystem::exists(component_path(reference_path, "indirect"))) {
+        std::cerr << request.log_prefix << ": rendering the pm reference of the final state ("
+                  << rs.spp << " spp, " << rs.photons << " photons) into " << reference_path
+                  << "\n";
+        ThreadPool pool(request.threads);
+        const cpu::ReferenceResult ref = cpu::render_reference(final_state, rs, pool);
+        for (int c = 0; c < kFrameTermCount; ++c)
+            write_image(ref.components[size_t(c)],
+                        component_path(reference_path, kFrameTermNames[size_t(c)]));
+        write_image(ref.full, reference_path);
+    } else {
+        std::cerr << request.log_prefix << ": reference from the cache: " << reference_path << "\n";
+    }
+    return reference_path;
+}
+
+Image read_reference(const std::string& reference_path, const std::string& component, int width,
+                     int height) {
+    const std::string path = component_path(reference_path, component);
+    Image reference = read_image(path);
+    if (reference.width != width || reference.height != height)
+        throw_input_error(path, "",
+                          "expected a " + std::to_string(width) + "x" + std::to_string(height) +
+                              " image, got " + std::to_string(reference.width) + "x" +
+                              std::to_string(reference.height));
+    return reference;
+}
+
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames) {
+    SettleAnalysis a;
+    if (frames.empty()) return a;
+    const size_t n = frames.size();
+    // Settled value: the mean of the last tenth of the frames (at least 3).
+    const size_t tail = std::min(n, std::max<size_t>(3, n / 10));
+    for (size_t i = n - tail; i < n; ++i) a.settled += frames[i].relmse;
+    a.settled /= double(tail);
+    for (size_t i = 0; i < n; ++i)
+        if (frames[i].edited) {
+            if (a.first_edit < 0) a.first_edit = int(i);
+            a.last_edit = int(i);
+        }
+    for (int f = int(n) - 1; f >= a.last_edit; --f) {
+        if (std::abs(frames[size_t(f)].relmse - a.settled) > 0.1 * a.settled) break;
+        a.within = f;
+    }
+    if (a.within >= 0) {
+        a.frames = a.within - a.last_edit;
+        a.seconds = frames[size_t(a.within)].wall_s - frames[size_t(a.last_edit)].wall_s;
+    }
+    return a;
+}
+
+ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
+                               int frames, int width, int height, const std::string& component,
+                               const Image& reference, int threads,
+                               const std::function<void(int)>& on_frame) {
+    scene.camera.width = width;
+    scene.camera.height = height;
+    const std::optional<FrameTerm> term =
+        component == "full" ? std::nullopt : parse_frame_term(component);
+    std::optional<Script> script;
+    if (!script_path.empty()) script.emplace(script_path);
+    Pipeline pipeline(scene, PipelineOptions{width, height, threads, mode});
+
+    ConvergenceRun run;
+    run.mode = mode;
+    run.component = component;
+    run.frames.reserve(size_t(frames));
+    double wall = 0.0;
+    FrameLoop loop(pipeline, script ? &*script : nullptr);
+    loop.on_script_error = [](const std::string& message) { warn(message); };
+    for (int f = 0; f < frames; ++f) {
+        const Clock::time_point t0 = Clock::now();
+        const PipelineStats st = loop.step();
+        pipeline.sync();
+        wall += std::chrono::duration<double>(Clock::now() - t0).count();
+        // Metrics are taken outside the timed part.
+        const gpu::FrameImages images = pipeline.images();
+        const Image& test = term ? images.aov[size_t(*term)] : images.frame;
+        const ImageMetrics m = compare_images(test, reference);
+        FrameRecord r;
+        r.frame = f;
+        r.wall_s = wall;
+        r.frame_ms = st.frame_ms;
+        r.edited = loop.edited();
+        r.relmse = m.rel_mse, r.rmse = m.rmse, r.ssim = m.ssim;
+        r.groups_invalidated = uint64_t(st.photons.groups_invalidated);
+        r.photons_retraced = uint64_t(st.photons.photons_retraced);
+        r.aim_texels = uint64_t(st.photons.aim_texels_rebuilt);
+        r.iim_texels = st.iim_texels_gathered;
+        r.iim_pending = st.iim_texels_pending;
+        run.frames.push_back(r);
+        if (on_frame) on_frame(f + 1);
+    }
+    run.wall_s = wall;
+    run.settle = analyse_settle(run.frames);
+    return run;
+}
+
+std::string convergence_csv(const ConvergenceRun& run) {
+    std::ostringstream csv;
+    csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
+           "retraced,aim_texels,iim_texels,iim_pending\n";
+    const char* method = kPipelineModeNames[size_t(run.mode)];
+    for (const FrameRecord& r : run.frames)
+        csv << method << ',' << r.frame << ',' << r.wall_s << ',' << r.frame_ms << ','
+            << (r.edited ? 1 : 0) << ',' << r.relmse << ',' << r.rmse << ',' << r.ssim << ','
+            << r.groups_invalidated << ',' << r.photons_retraced << ',' << r.aim_texels << ','
+            << r.iim_texels << ',' << r.iim_pending << "\n";
+    return csv.str();
+}
+
+}  // namespace ag::cli

@@ -1,0 +1,90 @@
+// Convergence runs, shared by `afterglow converge` and `afterglow bench settle`: the cached pm
+// reference of a scene's final state, one progressive run recording the error after every frame,
+// and the settle rule (docs/convergence.md): the settled value is the mean of the last tenth of
+// the frames (at least 3); the run has settled at the first frame from the last edit on after
+// which the error stays within 10% of that value.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "shared/image.h"
+#include "shared/pipeline/pipeline.h"
+#include "shared/scene.h"
+
+namespace ag::cli {
+
+// The EXR of one component beside a reference's full image: REF.COMPONENT.exr ("full": REF).
+std::string component_path(const std::string& exr, const std::string& component);
+
+struct ReferenceRequest {
+    std::string name;  // file-name stem in the cache (the scene's)
+    std::string cache = "out/reference-cache";
+    int spp = 64, photons = 400000;
+    int threads = 0;                                // worker threads of the reference renderer
+    std::string log_prefix = "afterglow converge";  // for the messages on stderr
+};
+
+// The pm reference of `scene`'s state after `script_path` (may be empty) has run for `frames`
+// frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with every
+// component beside it) unless already there; HASH covers everything the image depends on.
+// Returns the full image's path.
+std::string cached_reference(const Scene& scene, const std::string& script_path, int frames,
+                             const ReferenceRequest& request);
+
+// The reference's `component` image, checked to be width × height (InputError otherwise).
+Image read_reference(const std::string& reference_path, const std::string& component, int width,
+                     int height);
+
+struct FrameRecord {
+    int frame = 0;
+    double wall_s = 0.0;    // script and pipeline time since the run started, after this frame
+    double frame_ms = 0.0;  // the pipeline's own frame time (PipelineStats::frame_ms)
+    bool edited = false;    // the scene changed before this frame
+    double relmse = 0.0, rmse = 0.0, ssim = 0.0;
+    uint64_t groups_invalidated = 0, photons_retraced = 0, aim_texels = 0;
+    int iim_texels = 0, iim_pending = 0;
+};
+
+struct SettleAnalysis {
+    double settled = 0.0;  // mean relMSE of the last tenth of the frames (at least 3)
+    int first_edit = -1;   // -1: the scene was never edited (then last_edit is 0)
+    int last_edit = 0;
+    // First frame from last_edit on after which the error stays within 10% of `settled`; -1 if
+    // none.
+    int within = -1;
+    int frames = -1;        // within − last_edit, or −1
+    double seconds = -1.0;  // wall time from the last edit's frame to `within`, or −1
+    bool settled_ok() const { return within >= 0; }
+};
+
+struct ConvergenceRun {
+    PipelineMode mode = PipelineMode::selective;
+    std::string component;
+    std::vector<FrameRecord> frames;
+    SettleAnalysis settle;
+    double wall_s = 0.0;  // of the whole run
+};
+
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames);
+
+// Runs `frames` frames of `scene` (a copy; its camera size is overwritten by width × height) with
+// the script (may be empty) in `mode`, comparing `component` ("full" or a frame term) with
+// `reference` after every frame; wall time counts the script and the pipeline, not the read-back
+// and metrics. A GL context must be current. `on_frame` (may be empty) is called after each frame
+// with the number done. threads < 0: settings.threads.
+ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
+                               int frames, int width, int height, const std::string& component,
+                               const Image& reference, int threads,
+                               const std::function<void(int)>& on_frame = {});
+
+// The CSV of a run as `afterglow converge` writes it (header and one row a frame).
+std::string convergence_csv(const ConvergenceRun& run);
+
+class Args;
+// afterglow bench settle [SCENE:SCRIPT ...] (bench_settle.cpp), at width × height.
+int bench_settle(const Args& args, int width, int height);
+
+}  // namespace ag::cli
