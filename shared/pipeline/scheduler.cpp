@@ -29,9 +29,9 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // GL thread: what drawing leaves of the target goes to gathering. Until a cost is known,
     // gather the fixed count once to measure it.
     const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
-    b.iim_texels = std::clamp(fit(target - draw, gather_ms_per_texel_,
-                                  settings.gather.texels_per_frame),
-                              1, std::max(1, iim_texels_total));
+    b.iim_texels =
+        std::clamp(fit(target - draw, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
+                   std::max(1, iim_texels_total));
     // Workers: photons first, AIMs with the rest (aim_texels_left, measured as they go).
     b.worker_ms = kWorkerShare * target;
     const double caustics = caustic_ms_.known() ? caustic_ms_.value() : 0.0;

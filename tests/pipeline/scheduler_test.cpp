@@ -1,10 +1,11 @@
 // Scheduling by time (DESIGN.md): budgets from measured costs, counted not timed; and the
 // round-robin baseline, which trusts nothing and re-traces everything in turn.
+#include "shared/pipeline/scheduler.h"
+
 #include <gtest/gtest.h>
 
 #include "../gpu/gl_fixture.h"
 #include "shared/pipeline/frame_loop.h"
-#include "shared/pipeline/scheduler.h"
 #include "shared/scene_file.h"
 
 namespace ag {
@@ -42,7 +43,7 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     // Drawing 10 ms, 0.1 ms a texel, 0.005 ms a photon, 0.01 ms an AIM texel, caustics 1 ms.
     scheduler.measure(measured(10.0, 20, 2.0, 1000, 5.0, 100, 1.0));
     FrameBudgets b = scheduler.budgets(settings, 100000);
-    EXPECT_EQ(b.iim_texels, 230);                           // (33 − 10) / 0.1
+    EXPECT_EQ(b.iim_texels, 230);                               // (33 − 10) / 0.1
     EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
     EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
