@@ -9,6 +9,9 @@ namespace {
 // The workers share the cores with the GL thread (and a software GL rasteriser): they aim at
 // this share of the frame, so the hand-over rarely waits.
 constexpr double kWorkerShare = 0.8;
+// When drawing alone overruns the target, gathering still gets this share of it: the frame rate
+// cannot hold there, and the picture keeps converging.
+constexpr double kMinGatherShare = 0.25;
 
 int fit(double ms, const RunningCost& cost, int fallback) {
     if (!cost.known() || cost.value() <= 0.0) return fallback;
@@ -26,11 +29,12 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
         b.iim_texels = settings.gather.texels_per_frame;
         return b;
     }
-    // GL thread: what drawing leaves of the target goes to gathering. Until a cost is known,
-    // gather the fixed count once to measure it.
+    // GL thread: what drawing leaves of the target goes to gathering (at least a share of it).
+    // Until a cost is known, gather the fixed count once to measure it.
     const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
+    const double gather_ms = std::max(target - draw, kMinGatherShare * target);
     b.iim_texels =
-        std::clamp(fit(target - draw, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
+        std::clamp(fit(gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
                    std::max(1, iim_texels_total));
     // Workers: photons first, AIMs with the rest (aim_texels_left, measured as they go).
     b.worker_ms = kWorkerShare * target;

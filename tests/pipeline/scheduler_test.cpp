@@ -49,9 +49,10 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
     // Never more texels than there are, never none.
     EXPECT_EQ(scheduler.budgets(settings, 50).iim_texels, 50);
+    // Drawing alone overruns the target: gathering keeps a quarter of it.
     FrameScheduler slow;
     slow.measure(measured(40.0, 20, 2.0, 1000, 5.0, 100, 1.0));
-    EXPECT_EQ(slow.budgets(settings, 1000).iim_texels, 1);
+    EXPECT_EQ(slow.budgets(settings, 1000).iim_texels, int(0.25 * 33 / 0.1));
     // With counts_cap the fixed counts are upper limits.
     settings.schedule.counts_cap = true;
     b = scheduler.budgets(settings, 100000);
