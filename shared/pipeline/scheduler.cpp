@@ -66,8 +66,10 @@ void FrameScheduler::measure(const PipelineStats& s) {
     const double gather_part =
         gather_ms_per_texel_.known() ? texels * gather_ms_per_texel_.value() : 0.0;
     draw_ms_.add(s.draw_ms + std::max(0.0, s.gather_ms - gather_part));
+    // Only frames that re-traced groups measure a photon's cost: a frame of verification alone
+    // (one photon a group) is dominated by its fixed costs (edits, the moved-object query).
     const int photons = s.photons.photons_verified + s.photons.photons_retraced;
-    if (photons >= 32) photon_ms_.add(s.photon_ms / photons);
+    if (s.photons.photons_retraced >= 500) photon_ms_.add(s.photon_ms / photons);
     if (s.photons.aim_texels_rebuilt >= 4)
         aim_ms_per_texel_.add(s.aim_ms / s.photons.aim_texels_rebuilt);
     caustic_ms_.add(s.caustic_ms);
