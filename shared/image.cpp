@@ -46,7 +46,9 @@ void commit_temporary(const std::string& tmp, const std::string& path) {
     std::error_code ec;
     fs::rename(tmp, path, ec);
     if (ec) {
-        fs::remove(tmp, ec);
+        std::error_code ignored;
+        if (fs::is_directory(path, ignored)) ec = std::make_error_code(std::errc::is_a_directory);
+        fs::remove(tmp, ignored);
         throw std::runtime_error(path +
                                  ": cannot move the written image into place: " + ec.message());
     }
@@ -73,6 +75,14 @@ void write_image(const Image& image, const std::string& path, float exposure_ev)
     if (image.width <= 0 || image.height <= 0 ||
         image.pixels.size() != size_t(image.width) * image.height * image.channels)
         throw std::runtime_error(path + ": refusing to write an empty or malformed image");
+    std::error_code dir_ec;
+    if (fs::is_directory(path, dir_ec))
+        throw std::runtime_error(path + ": cannot write image: is a directory");
+    size_t non_finite = 0;
+    for (const float v : image.pixels) non_finite += std::isfinite(v) ? 0 : 1;
+    if (non_finite > 0)
+        warn(path + ": " + std::to_string(non_finite) +
+             " NaN or infinite pixel values written (PNG/JPEG: as black or white)");
     const std::string ext = lower_extension(path);
     const bool eight_bit = ext == ".png" || ext == ".jpg" || ext == ".jpeg";
     const std::string tmp = temporary_beside(path);
@@ -82,9 +92,8 @@ void write_image(const Image& image, const std::string& path, float exposure_ev)
         throw std::runtime_error(path + ": no image writer for this extension (" +
                                  OIIO::geterror() + ")");
     OIIO::ImageSpec spec(image.width, image.height, image.channels,
-                         eight_bit
-                             ? OIIO::TypeDesc::UINT8
-                             : (ext == ".exr" ? OIIO::TypeDesc::HALF : OIIO::TypeDesc::FLOAT));
+                         // 32-bit float everywhere: half overflows to +Inf above 65504.
+                         eight_bit ? OIIO::TypeDesc::UINT8 : OIIO::TypeDesc::FLOAT);
     bool ok = false;
     if (eight_bit) {
         spec.attribute("oiio:ColorSpace", "sRGB");

@@ -161,11 +161,12 @@ std::string JsonInput::string(const Json& value, const std::string& path, bool n
     return s;
 }
 
-glm::vec3 JsonInput::vec3(const Json& value, const std::string& path) const {
+glm::vec3 JsonInput::vec3(const Json& value, const std::string& path, double max_abs) const {
     if (!value.is_array() || value.size() != 3)
         fail(path, "expected [x, y, z], got " + describe(value));
     glm::vec3 v;
-    for (int k = 0; k < 3; ++k) v[k] = float(number(value[size_t(k)], child(path, size_t(k))));
+    for (int k = 0; k < 3; ++k)
+        v[k] = float(number(value[size_t(k)], child(path, size_t(k)), -max_abs, max_abs));
     return v;
 }
 

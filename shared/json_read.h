@@ -46,8 +46,8 @@ public:
                       long long max) const;
     bool boolean(const Json& value, const std::string& path) const;
     std::string string(const Json& value, const std::string& path, bool non_empty = true) const;
-    // [x, y, z] of finite numbers.
-    glm::vec3 vec3(const Json& value, const std::string& path) const;
+    // [x, y, z] of finite numbers, each within ±max_abs.
+    glm::vec3 vec3(const Json& value, const std::string& path, double max_abs = kInf) const;
     // [r, g, b] or one number for grey, every component in [min, max].
     glm::vec3 color(const Json& value, const std::string& path, double min, double max) const;
     // One of `names` (an enum's name table); returns its index.

@@ -7,11 +7,42 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <string>
 #include <vector>
 
 #include "shared/scene.h"
 
 namespace ag {
+
+// World-size limit (docs/scene-format.md, "Limits"): every coordinate that reaches Embree or GL —
+// vertices as placed, light positions and corners, the camera — lies within ±kMaxCoordinate.
+// float has a 24-bit mantissa, so at 1e7 units positions are still resolved to 1 unit and
+// differences, squared lengths (≤ 1e15) and Embree's ray extents stay finite.
+inline constexpr float kMaxCoordinate = 1e7f;
+// Light values (intensity, radiance, emission) at most this, so that sums of photon powers and
+// pixel values stay finite in float.
+inline constexpr double kMaxLightValue = 1e15;
+// Camera field of view where the projection is non-degenerate, degrees.
+inline constexpr double kMinFovY = 0.1, kMaxFovY = 179.0;
+
+// Checks shared by the scene loader and the edits: each returns "" when the value is fine, else
+// what was expected and what it got.
+std::string position_problem(const glm::vec3& p);
+std::string light_value_problem(const glm::vec3& value);
+// The object's vertices as placed by `t` within the world-size limit (checked through the
+// object-space radius, so an edit need not transform every vertex).
+std::string placement_problem(const Mesh& mesh, const Transform& t);
+// The largest distance of a vertex from the object's origin.
+float object_radius(const Mesh& mesh);
+// Names the offending camera key ("eye", "target", "up", "fov_y", "resolution") in `key`.
+std::string camera_problem(const Camera& camera, std::string& key);
+// Unit vector along v, scaled first so that huge or tiny (but non-zero, finite) vectors
+// normalise exactly; false for a zero or non-finite v.
+bool safe_normalize(const glm::vec3& v, glm::vec3& unit);
+
+// Scripts and the viewer move dynamic objects only (docs/scripting.md): InputError for a static
+// one, naming it.
+void check_movable(const Scene& scene, int object, const char* what);
 
 void set_object_transform(Scene& scene, int object, const Transform& transform);
 void translate_object(Scene& scene, int object, const glm::vec3& offset);

@@ -159,11 +159,13 @@ private:
         in_.object(json, path);
         in_.check_keys(json, path, {"eye", "target", "up", "fov_y", "resolution"});
         Camera& c = scene_.camera;
-        c.eye = in_.vec3(in_.require(json, path, "eye", "[x, y, z]"), path + "/eye");
-        c.target = in_.vec3(in_.require(json, path, "target", "[x, y, z]"), path + "/target");
+        c.eye =
+            in_.vec3(in_.require(json, path, "eye", "[x, y, z]"), path + "/eye", kMaxCoordinate);
+        c.target = in_.vec3(in_.require(json, path, "target", "[x, y, z]"), path + "/target",
+                            kMaxCoordinate);
         if (const Json* v = JsonInput::find(json, "up")) c.up = in_.vec3(*v, path + "/up");
         if (const Json* v = JsonInput::find(json, "fov_y"))
-            c.fov_y = float(in_.number(*v, path + "/fov_y", 0, 180, true, true));
+            c.fov_y = float(in_.number(*v, path + "/fov_y", kMinFovY, kMaxFovY));
         if (const Json* v = JsonInput::find(json, "resolution")) {
             const std::string rpath = path + "/resolution";
             if (!v->is_array() || v->size() != 2)
@@ -171,15 +173,9 @@ private:
             c.width = int(in_.integer((*v)[0], rpath + "/0", 1, 16384));
             c.height = int(in_.integer((*v)[1], rpath + "/1", 1, 16384));
         }
-        const glm::vec3 view = c.target - c.eye;
-        if (!(glm::length(view) > 0.0f))
-            in_.fail(path + "/target",
-                     "expected a target different from the eye, got the eye " + format_vec(c.eye));
-        const float up_length = glm::length(c.up);
-        if (!(up_length > 0.0f) ||
-            glm::length(glm::cross(view / glm::length(view), c.up / up_length)) < 1e-4f)
-            in_.fail(path + "/up", "expected an up vector not parallel to the view direction " +
-                                       format_vec(view) + ", got " + format_vec(c.up));
+        std::string key;
+        if (const std::string problem = camera_problem(c, key); !problem.empty())
+            in_.fail(path + "/" + key, problem);
     }
 
     void read_materials(const Json& json) {
@@ -206,7 +202,7 @@ private:
                 mat.ior = float(in_.number(*v, mpath + "/ior", 1, 4));
             }
             if (const Json* v = JsonInput::find(m, "emission"))
-                mat.emission = in_.color(*v, mpath + "/emission", 0, JsonInput::kInf);
+                mat.emission = in_.color(*v, mpath + "/emission", 0, kMaxLightValue);
             materials_[mat.name] = mat;
         }
     }
@@ -232,16 +228,16 @@ private:
             if (const Json* v = JsonInput::find(l, "enabled"))
                 light.enabled = in_.boolean(*v, lpath + "/enabled");
             if (light.type == LightType::point) {
-                light.position =
-                    in_.vec3(in_.require(l, lpath, "position", "[x, y, z]"), lpath + "/position");
+                light.position = in_.vec3(in_.require(l, lpath, "position", "[x, y, z]"),
+                                          lpath + "/position", kMaxCoordinate);
                 light.intensity = in_.color(in_.require(l, lpath, "intensity", "[r, g, b] in W/sr"),
-                                            lpath + "/intensity", 0, JsonInput::kInf);
+                                            lpath + "/intensity", 0, kMaxLightValue);
             } else {
                 read_quad_corners(in_.require(l, lpath, "corners", "4 corners [[x, y, z], ...]"),
                                   lpath + "/corners", light);
                 light.radiance =
                     in_.color(in_.require(l, lpath, "radiance", "[r, g, b] in W/(sr·unit²)"),
-                              lpath + "/radiance", 0, JsonInput::kInf);
+                              lpath + "/radiance", 0, kMaxLightValue);
             }
             scene_.lights.push_back(light);
         }
@@ -251,7 +247,7 @@ private:
         if (!json.is_array() || json.size() != 4)
             in_.fail(path, "expected 4 corners [[x, y, z], ...], got " + JsonInput::describe(json));
         for (size_t k = 0; k < 4; ++k)
-            light.corners[k] = in_.vec3(json[k], JsonInput::child(path, k));
+            light.corners[k] = in_.vec3(json[k], JsonInput::child(path, k), kMaxCoordinate);
         const std::array<glm::vec3, 4>& c = light.corners;
         const glm::vec3 e1 = c[1] - c[0], e3 = c[3] - c[0];
         const float scale = std::max(glm::length(e1), glm::length(e3));
@@ -298,8 +294,12 @@ private:
             if (const Json* v = JsonInput::find(o, "dynamic"))
                 object.dynamic = in_.boolean(*v, opath + "/dynamic");
             read_geometry(o, opath, object);
-            if (const Json* v = JsonInput::find(o, "transform"))
+            if (const Json* v = JsonInput::find(o, "transform")) {
                 object.transform = read_transform(*v, opath + "/transform");
+                if (const std::string problem = placement_problem(object.mesh, object.transform);
+                    !problem.empty())
+                    in_.fail(opath + "/transform", problem);
+            }
             scene_.objects.push_back(std::move(object));
         }
     }
@@ -325,6 +325,16 @@ private:
                 if (s.x == 0.0f || s.y == 0.0f || s.z == 0.0f)
                     in_.fail(spath, "expected non-zero scale factors, got " + format_vec(s));
                 scale_mesh(object.mesh, s);
+                const size_t total = object.mesh.triangles.size();
+                const int dropped = remove_degenerate_triangles(object.mesh);
+                if (object.mesh.triangles.empty())
+                    in_.fail(spath,
+                             "expected a scale that leaves triangles of non-zero area, got " +
+                                 format_vec(s) + ", which makes all " + std::to_string(total) +
+                                 " triangles degenerate");
+                if (dropped > 0)
+                    warn(in_.file() + ": " + spath + ": dropped " + std::to_string(dropped) +
+                         " triangles made degenerate by the scale");
             }
         } else {
             if (JsonInput::find(o, "scale"))
@@ -335,13 +345,12 @@ private:
             object.source = (*shape)["type"].get<std::string>();
         }
         if (const Json* v = JsonInput::find(o, "offset")) {
-            const glm::vec3 offset = in_.vec3(*v, opath + "/offset");
+            const glm::vec3 offset = in_.vec3(*v, opath + "/offset", kMaxCoordinate);
             for (glm::vec3& p : object.mesh.positions) p += offset;
         }
         for (const glm::vec3& p : object.mesh.positions)
-            if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
-                in_.fail(opath, "expected finite vertex positions after scale and offset, got " +
-                                    format_vec(p));
+            if (const std::string problem = position_problem(p); !problem.empty())
+                in_.fail(opath, "vertex positions after scale and offset: " + problem);
     }
 
     // Positive finite extents: [x, y, z] for a box, [width, depth] for planes.
@@ -353,7 +362,7 @@ private:
         glm::vec3 size(0.0f);
         for (int k = 0; k < n; ++k)
             size[k] = float(in_.number(json[size_t(k)], JsonInput::child(path, size_t(k)), 0,
-                                       JsonInput::kInf, true));
+                                       2.0 * kMaxCoordinate, true));
         return size;
     }
 
@@ -376,7 +385,7 @@ private:
             case ShapeType::sphere: {
                 in_.check_keys(json, path, {"type", "radius", "subdivisions"});
                 const double radius = in_.number(in_.require(json, path, "radius", "a number > 0"),
-                                                 path + "/radius", 0, JsonInput::kInf, true);
+                                                 path + "/radius", 0, kMaxCoordinate, true);
                 long long subdivisions = 3;
                 if (const Json* v = JsonInput::find(json, "subdivisions"))
                     subdivisions = in_.integer(*v, path + "/subdivisions", 0, 7);
@@ -397,8 +406,9 @@ private:
                 const long long resolution =
                     in_.integer(in_.require(json, path, "resolution", "an integer in [1, 2048]"),
                                 path + "/resolution", 1, 2048);
-                const double amplitude = in_.number(
-                    in_.require(json, path, "amplitude", "a number >= 0"), path + "/amplitude", 0);
+                const double amplitude =
+                    in_.number(in_.require(json, path, "amplitude", "a number >= 0"),
+                               path + "/amplitude", 0, kMaxCoordinate);
                 long long seed = 1;
                 if (const Json* v = JsonInput::find(json, "seed"))
                     seed = in_.integer(*v, path + "/seed", 0, 4294967295ll);
@@ -432,11 +442,12 @@ private:
         in_.check_keys(json, path, {"axis", "degrees"});
         const glm::vec3 axis =
             in_.vec3(in_.require(json, path, "axis", "[x, y, z]"), path + "/axis");
-        if (!(glm::length(axis) > 0.0f))
+        glm::vec3 unit;
+        if (!safe_normalize(axis, unit))
             in_.fail(path + "/axis", "expected a non-zero axis, got " + format_vec(axis));
         const double degrees =
             in_.number(in_.require(json, path, "degrees", "a number"), path + "/degrees");
-        return glm::angleAxis(glm::radians(float(degrees)), glm::normalize(axis));
+        return glm::angleAxis(glm::radians(float(degrees)), unit);
     }
 
     Transform read_transform(const Json& json, const std::string& path) {
@@ -444,7 +455,7 @@ private:
         in_.check_keys(json, path, {"translate", "rotate", "rotate_euler"});
         Transform t;
         if (const Json* v = JsonInput::find(json, "translate"))
-            t.translation = in_.vec3(*v, path + "/translate");
+            t.translation = in_.vec3(*v, path + "/translate", kMaxCoordinate);
         const Json* rotate = JsonInput::find(json, "rotate");
         const Json* euler = JsonInput::find(json, "rotate_euler");
         if (rotate && euler)

@@ -97,6 +97,11 @@ void ScriptState::begin_staging() {
         staging.objects[i].name = real.objects[i].name;
         staging.objects[i].material = real.objects[i].material;
         staging.objects[i].transform = real.objects[i].transform;
+        staging.objects[i].dynamic = real.objects[i].dynamic;
+        // The placement check needs only the object's radius; one vertex at that distance stands
+        // in for the mesh, which staging does not copy.
+        staging.objects[i].mesh.positions.assign(
+            1, glm::vec3(object_radius(real.objects[i].mesh), 0.0f, 0.0f));
     }
     staging.lights = real.lights;
     staging.camera = real.camera;
@@ -388,6 +393,7 @@ int object_set_position(lua_State* L) {
     const glm::vec3 p = check_vec3(L, 2);
     guarded(L, [&] {
         s.begin_staging();
+        check_movable(s.staging, int(i), "set_position");
         Transform t = s.staging.objects[i].transform;
         t.translation = p;
         set_object_transform(s.staging, int(i), t);
@@ -403,6 +409,7 @@ int object_translate(lua_State* L) {
     const glm::vec3 d = check_vec3(L, 2);
     guarded(L, [&] {
         s.begin_staging();
+        check_movable(s.staging, int(i), "translate");
         translate_object(s.staging, int(i), d);
         s.object_edits[i] |= kTransformEdit;
     });
@@ -417,6 +424,7 @@ int object_rotate(lua_State* L) {
     const float degrees = check_float(L, 5);
     guarded(L, [&] {
         s.begin_staging();
+        check_movable(s.staging, int(i), "rotate");
         rotate_object(s.staging, int(i), axis, degrees);
         s.object_edits[i] |= kTransformEdit;
     });

@@ -46,6 +46,10 @@ add_test(NAME cli.render_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/render_
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.render_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 ag_cli_test(render_needs_exr 2 "ending in .exr" render scenes/cornell.json -o x.png)
+# Values above half float's 65504 survive in the EXR; compare refuses NaN/Inf images (exit 1).
+add_test(NAME cli.render_bright COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/bright_render_test.sh
+         ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.render_bright PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 
 # Bad flags are exit 2 with a message naming the flag and what it expects, checked while parsing
 # (before the scene loads or a window opens), the same for every command (tools/afterglow/cli.h).
@@ -53,7 +57,8 @@ foreach(cmd info export photons render view converge reference compare glinfo be
   ag_cli_test(${cmd}_help 0 "usage: afterglow ${cmd} .*" ${cmd} --help)
   ag_cli_test(${cmd}_help_short 0 "  -h, --help +show this help" ${cmd} -h)
 endforeach()
-set(bad_sizes 0x5 5x abc 20000x10 12by5 x5 -3x5 5x0 5x5x5)
+# 4294967328 = 2^32 + 32 used to wrap to 32.
+set(bad_sizes 0x5 5x abc 20000x10 12by5 x5 -3x5 5x0 5x5x5 4294967328x32 32x4294967328)
 foreach(cmd_args IN ITEMS "render;-o;x.exr" "view" "converge" "reference;-m;pt;-o;x.exr")
   list(GET cmd_args 0 cmd)
   foreach(size IN LISTS bad_sizes)

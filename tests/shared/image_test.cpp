@@ -44,8 +44,58 @@ TEST(Image, ExrRoundTripIsLinearAndKeepsHdr) {
     ASSERT_EQ(back.height, 9);
     ASSERT_EQ(back.channels, 3);
     for (size_t i = 0; i < img.pixels.size(); ++i)
-        EXPECT_NEAR(back.pixels[i], img.pixels[i], 2e-3f * std::max(1.0f, img.pixels[i]));  // half
-    EXPECT_GT(back.rgb(3, 3).b, 3.0f);  // values above 1 survive
+        EXPECT_EQ(back.pixels[i], img.pixels[i]);  // 32-bit float: exact
+    EXPECT_GT(back.rgb(3, 3).b, 3.0f);             // values above 1 survive
+}
+
+// Half floats overflow to +Inf above 65504; a wall of emission 70000 or a 1e11 W/sr lamp must
+// survive the EXR.
+TEST(Image, ExrKeepsValuesAboveTheHalfFloatRange) {
+    const fs::path p = temp_dir() / "bright.exr";
+    Image img(2, 1);
+    img.set_rgb(0, 0, glm::vec3(70000.0f));
+    img.set_rgb(1, 0, glm::vec3(1e11f, 3e38f, 1.0f));
+    write_image(img, p.string());
+    const Image back = read_image(p.string());
+    EXPECT_EQ(back.rgb(0, 0).x, 70000.0f);
+    EXPECT_EQ(back.rgb(1, 0).x, 1e11f);
+    EXPECT_EQ(back.rgb(1, 0).y, 3e38f);
+}
+
+TEST(Image, NonFinitePixelsAreWrittenWithACountedWarning) {
+    const fs::path p = temp_dir() / "nan.exr";
+    Image img(2, 2);
+    img.pixels[0] = std::nanf("");
+    img.pixels[4] = INFINITY;
+    ::testing::internal::CaptureStderr();
+    write_image(img, p.string());
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("nan.exr: 2 NaN or infinite pixel values"), std::string::npos) << err;
+    ::testing::internal::CaptureStderr();
+    write_image(Image(2, 2), p.string());
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+}
+
+TEST(Image, OutputPathThatIsADirectoryIsNamed) {
+    const fs::path d = temp_dir() / "out.exr";
+    fs::create_directories(d);
+    try {
+        write_image(gradient(4, 4), d.string());
+        FAIL() << "wrote over a directory";
+    } catch (const std::runtime_error& e) {
+        EXPECT_EQ(std::string(e.what()), d.string() + ": cannot write image: is a directory");
+    }
+    const fs::path f = temp_dir() / "out.txt";
+    fs::create_directories(f);
+    try {
+        write_file_atomically(f.string(), "x");
+        FAIL() << "wrote over a directory";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("out.txt: cannot move the written image into place: "
+                                             "Is a directory"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 TEST(Image, PngRoundTripThroughSrgb) {

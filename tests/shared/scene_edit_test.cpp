@@ -1,14 +1,19 @@
 #include "shared/scene_edit.h"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <functional>
 #include <numbers>
+#include <string>
 
 #include "shared/input_error.h"
 
 namespace ag {
 
 namespace {
+using ::testing::HasSubstr;
+
 Scene two_objects_two_lights() {
     Scene s;
     s.path = "test.json";
@@ -105,6 +110,84 @@ TEST(SceneEdit, BadEditsAreInputErrorsAndChangeNothing) {
     EXPECT_EQ(s.version, 0u);
     EXPECT_TRUE(s.changes.empty());
     EXPECT_EQ(s.objects[0].transform.translation, glm::vec3(1, 2, 3));
+}
+
+// Finite but huge values used to reach Embree (abort) or the frame (NaN/Inf pixels, black
+// images); each edit outside the documented limits is an InputError that changes nothing.
+TEST(SceneEdit, EditsBeyondTheWorldAndLightLimitsAreInputErrors) {
+    Scene s = two_objects_two_lights();
+    s.objects[0].dynamic = true;
+    s.objects[0].mesh.positions = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}};
+    s.objects[0].mesh.triangles = {{0, 1, 2}};
+    auto message = [](const std::function<void()>& edit) {
+        try {
+            edit();
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    const float two63 = 9.223372e18f;
+    EXPECT_THAT(message([&] {
+                    set_light_position(s, 0, {two63, 500, 200});
+                }),
+                HasSubstr("set_light_position: expected coordinates within ±10000000 (the "
+                          "world-size limit), got [9.223372e+18, 500, 200]"));
+    EXPECT_THAT(message([&] {
+                    set_light_position(s, 1, {0, two63, 0});
+                }),
+                HasSubstr("set_light_position: corner: expected coordinates within"));
+    Transform far;
+    far.translation = {1e20f, 82.5f, 169};
+    EXPECT_THAT(message([&] { set_object_transform(s, 0, far); }),
+                HasSubstr("set_object_transform: object 'cube': expected the placed object "
+                          "within ±10000000"));
+    EXPECT_THROW(translate_object(s, 0, {1e7f, 0, 0}), InputError);
+    EXPECT_THAT(message([&] {
+                    set_light_color(s, 0, {3e38f, 1, 1});
+                }),
+                HasSubstr("set_light_color: expected components in [0, 1e+15], got [3e+38, 1, 1]"));
+    Camera c = s.camera;
+    c.eye = {0, 0, 3e38f};
+    EXPECT_THAT(message([&] { set_camera(s, c); }),
+                HasSubstr("set_camera: eye: expected coordinates within"));
+    c = s.camera;
+    c.fov_y = 179.9999f;
+    EXPECT_THAT(message([&] { set_camera(s, c); }),
+                HasSubstr("set_camera: fov_y: expected a number in [0.1, 179]"));
+    c.fov_y = 1e-30f;
+    EXPECT_THROW(set_camera(s, c), InputError);
+    EXPECT_EQ(s.version, 0u);
+    EXPECT_TRUE(s.changes.empty());
+    EXPECT_EQ(s.objects[0].transform.translation, glm::vec3(1, 2, 3));
+    EXPECT_EQ(s.lights[0].position, glm::vec3(0, 5, 0));
+    EXPECT_EQ(s.lights[1].corners[0], glm::vec3(0, 4, 0));
+}
+
+// Directions are normalised after scaling, so a huge axis or up vector still has a direction.
+TEST(SceneEdit, HugeAxesAndUpVectorsKeepTheirDirection) {
+    Scene s = two_objects_two_lights();
+    rotate_object(s, 0, {0, 1e20f, 0}, 90.0f);
+    const glm::vec3 x = s.objects[0].transform.apply_vector({1, 0, 0});
+    EXPECT_NEAR(x.z, -1.0f, 1e-5f);
+    Camera c = s.camera;
+    c.up = {0, 1e-25f, 0};
+    EXPECT_NO_THROW(set_camera(s, c));
+    c.up = {0, 3e38f, 0};
+    EXPECT_NO_THROW(set_camera(s, c));
+}
+
+TEST(SceneEdit, StaticObjectsAreNotMovable) {
+    Scene s = two_objects_two_lights();
+    s.objects[0].dynamic = true;
+    EXPECT_NO_THROW(check_movable(s, 0, "set_position"));
+    try {
+        check_movable(s, 1, "set_position");
+        ADD_FAILURE() << "a static object passed";
+    } catch (const InputError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("set_position: object 'floor' is static; mark it "
+                                        "\"dynamic\": true in the scene to move it"));
+    }
 }
 
 TEST(SceneEdit, FindByName) {

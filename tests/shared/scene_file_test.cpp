@@ -279,6 +279,7 @@ TEST_F(SceneFile, MissingSceneFileIsAClearError) {
 // Each malformed scene breaks one thing and must say which, where and what was expected.
 TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
     write("flat.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+    write("tri.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n");
     struct Case {
         const char* name;
         std::function<void(Json&)> edit;
@@ -291,9 +292,83 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
         {"missing_camera", [](Json& j) { j.erase("camera"); }, "/",
          "missing key \"camera\"; expected a camera"},
         {"fov_type", [](Json& j) { j["camera"]["fov_y"] = "wide"; }, "/camera/fov_y",
-         "expected a number in (0, 180), got the string \"wide\""},
+         "expected a number in [0.1, 179], got the string \"wide\""},
         {"fov_range", [](Json& j) { j["camera"]["fov_y"] = 180; }, "/camera/fov_y",
-         "expected a number in (0, 180), got 180"},
+         "expected a number in [0.1, 179], got 180"},
+        // Inside the old (0, 180) but a degenerate projection: all-black images.
+        {"fov_almost_180", [](Json& j) { j["camera"]["fov_y"] = 179.9999; }, "/camera/fov_y",
+         "expected a number in [0.1, 179], got 179.9999"},
+        {"fov_tiny", [](Json& j) { j["camera"]["fov_y"] = 1e-30; }, "/camera/fov_y",
+         "expected a number in [0.1, 179], got 1e-30"},
+        // The world-size limit: each of these aborted `render` inside Embree.
+        {"eye_far",
+         [](Json& j) {
+             j["camera"]["eye"] = {0, 1, -3e38};
+         },
+         "/camera/eye/2", "expected a number in [-10000000, 10000000], got -3e+38"},
+        {"target_far",
+         [](Json& j) {
+             j["camera"]["target"] = {3e38, 1, 0};
+         },
+         "/camera/target/0", "expected a number in [-10000000, 10000000], got 3e+38"},
+        {"translate_far",
+         [](Json& j) {
+             j["objects"][1]["transform"]["translate"] = {2e19, 0, 0};
+         },
+         "/objects/1/transform/translate/0", "expected a number in [-10000000, 10000000]"},
+        {"placed_beyond_limit",
+         [](Json& j) {
+             j["objects"][1]["transform"]["translate"] = {1e7, 0, 0};
+         },
+         "/objects/1/transform",
+         "expected the placed object within ±10000000 (the world-size limit), got translation "
+         "[10000000, 0, 0]"},
+        {"light_far",
+         [](Json& j) {
+             j["lights"][0]["position"] = {3e38, 1, 0};
+         },
+         "/lights/0/position/0", "expected a number in [-10000000, 10000000], got 3e+38"},
+        {"quad_light_too_wide",
+         [](Json& j) {
+             j["lights"][1]["corners"] = {
+                 {-5e18, 1.99, -0.5}, {5e18, 1.99, -0.5}, {5e18, 1.99, 0.5}, {-5e18, 1.99, 0.5}};
+         },
+         "/lights/1/corners/0/0", "expected a number in [-10000000, 10000000], got -5e+18"},
+        {"box_too_big",
+         [](Json& j) {
+             j["objects"][0]["shape"] = {{"type", "box"}, {"size", {3.4e38, 1, 1}}};
+         },
+         "/objects/0/shape/size/0", "expected a number in (0, 20000000], got 3.4e+38"},
+        {"offset_far",
+         [](Json& j) {
+             j["objects"][0]["offset"] = {0, 3.4e38, 0};
+         },
+         "/objects/0/offset/1", "expected a number in [-10000000, 10000000], got 3.4e+38"},
+        {"offset_pushes_vertices_out",
+         [](Json& j) {
+             j["objects"][0]["offset"] = {1e7, 0, 0};
+         },
+         "/objects/0", "vertex positions after scale and offset: expected coordinates within"},
+        {"intensity_huge", [](Json& j) { j["lights"][0]["intensity"] = 3e38; },
+         "/lights/0/intensity", "expected a number in [0, 1e+15], got 3e+38"},
+        {"radiance_huge",
+         [](Json& j) {
+             j["lights"][1]["radiance"] = {3e38, 1, 1};
+         },
+         "/lights/1/radiance/0", "expected a number in [0, 1e+15], got 3e+38"},
+        {"emission_huge",
+         [](Json& j) {
+             j["materials"]["white"]["emission"] = {1, 1, 3e38};
+         },
+         "/materials/white/emission/2", "expected a number in [0, 1e+15], got 3e+38"},
+        {"scale_degenerates_mesh",
+         [](Json& j) {
+             j["objects"][0] = {
+                 {"name", "m"}, {"material", "white"}, {"mesh", "tri.obj"}, {"scale", 1e-30}};
+         },
+         "/objects/0/scale",
+         "expected a scale that leaves triangles of non-zero area, got [1e-30, 1e-30, 1e-30], "
+         "which makes all 1 triangles degenerate"},
         {"eye_is_target",
          [](Json& j) {
              j["camera"]["target"] = {0, 1, -5};
@@ -332,7 +407,7 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
          [](Json& j) {
              j["lights"][0]["intensity"] = {1, -1, 1};
          },
-         "/lights/0/intensity/1", "expected a number >= 0, got -1"},
+         "/lights/0/intensity/1", "expected a number in [0, 1e+15], got -1"},
         {"not_parallelogram",
          [](Json& j) {
              j["lights"][1]["corners"][2] = {0.7, 1.99, 0.5};
@@ -361,9 +436,9 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
          [](Json& j) {
              j["objects"][0]["shape"]["size"] = {4, -1};
          },
-         "/objects/0/shape/size/1", "expected a number > 0, got -1"},
+         "/objects/0/shape/size/1", "expected a number in (0, 20000000], got -1"},
         {"zero_radius", [](Json& j) { j["objects"][1]["shape"]["radius"] = 0; },
-         "/objects/1/shape/radius", "expected a number > 0, got 0"},
+         "/objects/1/shape/radius", "expected a number in (0, 10000000], got 0"},
         {"subdivisions", [](Json& j) { j["objects"][1]["shape"]["subdivisions"] = 9; },
          "/objects/1/shape/subdivisions", "expected an integer in [0, 7], got 9"},
         {"shape_type", [](Json& j) { j["objects"][1]["shape"]["type"] = "torus"; },
@@ -414,6 +489,21 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
         EXPECT_TRUE(messages.insert(err.substr(err.find(file) + file.size())).second) << err;
     }
     EXPECT_GE(messages.size(), 12u);
+}
+
+// Vectors whose squared length over- or underflows in float still give their direction: a huge
+// rotation axis rotates (it used to lose the rotation), a tiny or huge up vector is accepted (it
+// used to be "parallel to the view direction").
+TEST_F(SceneFile, HugeAndTinyDirectionsNormaliseExactly) {
+    Json j = base_scene();
+    j["objects"][1]["transform"]["rotate"] = {{"axis", {0, 1e20, 0}}, {"degrees", 90}};
+    j["camera"]["up"] = {0, 1e-25, 0};
+    const Scene a = load_scene(write("huge_axis.json", j.dump(2)));
+    const glm::vec3 x = a.objects[1].transform.apply_vector({1, 0, 0});
+    EXPECT_NEAR(x.x, 0.0f, 1e-5f);
+    EXPECT_NEAR(x.z, -1.0f, 1e-5f);
+    j["camera"]["up"] = {0, 3e38, 0};
+    EXPECT_NO_THROW(load_scene(write("huge_up.json", j.dump(2))));
 }
 
 TEST_F(SceneFile, MoreLightSamplesThanTheGpuFrameHoldsAreRejected) {

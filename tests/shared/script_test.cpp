@@ -29,6 +29,7 @@ Scene small_scene() {
     s.objects.resize(2);
     s.objects[0].name = "cube";
     s.objects[0].transform.translation = {1, 2, 3};
+    s.objects[0].dynamic = true;
     s.objects[1].name = "floor";
     s.lights.resize(2);
     s.lights[0].name = "lamp";
@@ -554,8 +555,24 @@ TEST(Script, WrongArgumentsGiveClearMessages) {
          "camera field 'eye': expected a table of 3 numbers {x, y, z}"},
         {"scene:set_camera({up = {0, 'a', 0}})",
          "camera field 'up': element 2 is not a finite number"},
-        {"scene:set_camera({fov_y = 200})", "set_camera: expected 0 < fov_y < 180"},
-        {"scene:set_camera({target = {0, 0, 5}})", "set_camera: expected eye ≠ target"},
+        {"scene:set_camera({fov_y = 200})", "set_camera: fov_y: expected a number in [0.1, 179]"},
+        {"scene:set_camera({target = {0, 0, 5}})",
+         "set_camera: target: expected a target different from the eye"},
+        {"scene:set_camera({eye = {0, 0, 3e38}})",
+         "set_camera: eye: expected coordinates within ±10000000 (the world-size limit)"},
+        {"scene:light('lamp'):set_position(2^63, 500, 200)",
+         "set_light_position: expected coordinates within ±10000000"},
+        {"scene:light('lamp'):move(0, 2^63, 0)",
+         "set_light_position: expected coordinates within ±10000000"},
+        {"scene:light('lamp'):set_color(3e38, 1, 1)",
+         "set_light_color: expected components in [0, 1e+15]"},
+        {"cube:set_position(1e20, 82.5, 169)",
+         "set_object_transform: object 'cube': expected the placed object within ±10000000"},
+        {"scene:object('floor'):set_position(1, 2, 3)",
+         "set_position: object 'floor' is static; mark it \"dynamic\": true in the scene to move "
+         "it"},
+        {"scene:object('floor'):translate(1, 2, 3)", "translate: object 'floor' is static"},
+        {"scene:object('floor'):rotate(0, 1, 0, 5)", "rotate: object 'floor' is static"},
         {"scene:set_camera(5)", "bad argument #1 to 'set_camera' (table expected, got number)"},
     };
     for (const Case& c : cases) {

@@ -39,12 +39,23 @@ std::string format_number(double d) {
 
 // WxH (or WXH) with 1 <= W, H <= kMaxImageSize; false for anything else.
 bool parse_size(const std::string& text, int& width, int& height) {
+    // Digits only, checked against the limit while reading: sscanf("%d") wraps on overflow
+    // (4294967328x32 read as 32x32).
+    size_t i = 0;
+    auto read_dimension = [&](int& value) {
+        long long v = 0;
+        const size_t start = i;
+        for (; i < text.size() && std::isdigit(static_cast<unsigned char>(text[i])); ++i) {
+            v = v * 10 + (text[i] - '0');
+            if (v > kMaxImageSize) return false;
+        }
+        value = int(v);
+        return i > start && v >= 1;
+    };
     int w = 0, h = 0;
-    char x = 0, extra = 0;
-    if (std::sscanf(text.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') ||
-        !std::isdigit(static_cast<unsigned char>(text[0])) || w < 1 || h < 1 || w > kMaxImageSize ||
-        h > kMaxImageSize)
-        return false;
+    if (!read_dimension(w) || i >= text.size() || (text[i] != 'x' && text[i] != 'X')) return false;
+    ++i;
+    if (!read_dimension(h) || i != text.size()) return false;
     width = w;
     height = h;
     return true;

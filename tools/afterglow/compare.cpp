@@ -5,6 +5,7 @@
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include <utility>
 
 #include "shared/image.h"
 #include "shared/metrics.h"
@@ -17,7 +18,7 @@ const Command kCompareCommand{
     "A.exr B.exr [--mask M.png] [--heatmap OUT.png]",
     "Compare image A with the reference B: RMSE, relMSE = mean((a-b)^2/(b^2+0.01)), PSNR (peak = "
     "the reference's maximum) and SSIM on luminance. Exit 1 if an image cannot be read or the "
-    "sizes differ.",
+    "sizes differ, or an image holds NaN or infinite values.",
     {
         text("mask", "M.png", "only pixels where the mask is nonzero count"),
         text("heatmap", "OUT.png", "write the per-pixel relative error as a colour ramp"),
@@ -35,6 +36,16 @@ int run_compare(const Args& args) {
     if (args.has("mask")) mask = read_image(args.get("mask"));
     const Image* mask_ptr = args.has("mask") ? &mask : nullptr;
     const double heatmap_max = args.get_double("heatmap-max");
+    // NaN or Inf would make every metric NaN and the comparison meaningless.
+    for (const auto& [path, image] : {std::pair{&a_path, &a}, std::pair{&b_path, &b}}) {
+        size_t non_finite = 0;
+        for (const float v : image->pixels) non_finite += std::isfinite(v) ? 0 : 1;
+        if (non_finite > 0) {
+            std::cerr << "afterglow compare: " << *path << ": " << non_finite
+                      << " NaN or infinite pixel values; expected finite images\n";
+            return 1;
+        }
+    }
 
     ImageMetrics m;
     try {
