@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "deadline.h"
 #include "shared/input_error.h"
 #include "shared/shapes.h"
 #include "temp_dir.h"
@@ -141,7 +142,9 @@ TEST_F(MeshIo, RejectsMissingUnsupportedAndCorruptFiles) {
 TEST_F(MeshIo, PlyWithoutEndHeaderIsRejected) {
     std::string header = "ply\nformat ascii 1.0\nelement vertex 3\n";
     for (int i = 0; i < 100; ++i) header += "comment no end here\n";
-    const std::string err = load_error(write("open.ply", header));
+    std::string err;
+    test::within_deadline(std::chrono::seconds(20),
+                          [&] { err = load_error(write("open.ply", header)); });
     EXPECT_NE(err.find("open.ply"), std::string::npos) << err;
     EXPECT_NE(err.find("end_header"), std::string::npos) << err;
 }
@@ -189,7 +192,9 @@ TEST_F(MeshIo, OffCountsAreChecked) {
     text += "3 0 1 2\n";
     err = load_error(write("extra.off", text));
     EXPECT_NE(err.find("extra.off: line 7"), std::string::npos) << err;
-    err = load_error(write("garbage.off", "OFF BINARY\n" + std::string(64, '\xff')));
+    test::within_deadline(std::chrono::seconds(20), [&] {
+        err = load_error(write("garbage.off", "OFF BINARY\n" + std::string(64, '\xff')));
+    });
     EXPECT_NE(err.find("garbage.off: byte"), std::string::npos) << err;
 }
 

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "deadline.h"
 #include "external_scenes.h"
 #include "shared/input_error.h"
 #include "shared/scene_edit.h"
@@ -349,13 +350,15 @@ TEST_F(ScriptFiles, OnlyRegularFilesOfBoundedSizeAreRead) {
 
 // Finalizers run with hooks off, outside the budget: scripts cannot declare them.
 TEST(Script, GcFinalizersAreRefused) {
-    try {
-        script("setmetatable({}, {__gc = function() while true do end end})");
-        FAIL() << "expected an InputError";
-    } catch (const InputError& e) {
-        EXPECT_THAT(e.what(), StartsWith("test.lua:1: "));
-        EXPECT_THAT(e.what(), HasSubstr("__gc"));
-    }
+    test::within_deadline(std::chrono::seconds(20), [] {
+        try {
+            script("setmetatable({}, {__gc = function() while true do end end})");
+            ADD_FAILURE() << "expected an InputError";
+        } catch (const InputError& e) {
+            EXPECT_THAT(e.what(), StartsWith("test.lua:1: "));
+            EXPECT_THAT(e.what(), HasSubstr("__gc"));
+        }
+    });
     Scene scene = small_scene();
     Script s = script(
         "function on_frame(scene)\n"
