@@ -328,12 +328,6 @@ void validate_off(const std::string& path, const std::string& data) {
                                       "vertex index " + std::to_string(i) + " out of range 0.." +
                                           std::to_string(nv - 1));
             }
-            // OpenMesh reads a colour count after each face.
-            const int64_t colors = read_int("face's colour count");
-            if (colors < 0 || colors > 4)
-                throw_input_error(path, "byte " + std::to_string(pos - 4),
-                                  "expected a face colour count 0..4");
-            pos += colors * 4;
         }
         return;
     }
