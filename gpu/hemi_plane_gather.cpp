@@ -11,6 +11,8 @@ namespace ag::gpu {
 
 namespace {
 
+constexpr int kMaxFramebufferSide = 2048;  // 2048² RGBA32F with mips: ~85 MiB
+
 const char* kVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
@@ -113,7 +115,13 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     while (resolution_ < scene.settings.gather.plane_resolution) resolution_ *= 2;  // mip alignment
     level_ = 0;
     while ((1 << level_) < resolution_) ++level_;
-    tiles_x_ = std::max(1, int(std::ceil(std::sqrt(double(tiles)))));
+    // The tile framebuffer is (tiles_x·R)²: at R = 1024 and 256 tiles that is 16k², more than GL
+    // allows or memory holds (GL_OUT_OF_MEMORY). Fewer tiles per pass keep every documented R.
+    GLint max_texture = 0;
+    gl::GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+    const int max_side = std::min(kMaxFramebufferSide, std::max(int(max_texture), resolution_));
+    tiles_x_ = std::clamp(int(std::ceil(std::sqrt(double(tiles)))), 1,
+                          std::max(1, max_side / resolution_));
     const int size = tiles_x_ * resolution_;
     program_ = Program("hemi-plane gather", kVertex, kFragment);
     color_ = make_float_texture(size, size, true);

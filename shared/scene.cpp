@@ -93,4 +93,23 @@ void check_light_samples(const Scene& scene) {
             ", what the GPU frame holds (use fewer lights or fewer area_light_samples)");
 }
 
+void check_photon_budget(const Scene& scene) {
+    const int64_t lights = std::max<int64_t>(1, int64_t(scene.lights.size()));
+    const PhotonSettings& p = scene.settings.photons;
+    const int64_t photons = int64_t(p.groups) * p.photons_per_group * lights;
+    if (photons > kMaxScenePhotons)
+        throw_input_error(scene.path, "/settings/photons",
+                          "groups (" + std::to_string(p.groups) + ") × photons_per_group (" +
+                              std::to_string(p.photons_per_group) + ") × lights (" +
+                              std::to_string(lights) + ") = " + std::to_string(photons) +
+                              " photons; expected at most " + std::to_string(kMaxScenePhotons));
+    const int64_t caustic = int64_t(scene.settings.caustics.photons) * lights;
+    if (caustic > kMaxScenePhotons)
+        throw_input_error(scene.path, "/settings/caustics/photons",
+                          std::to_string(scene.settings.caustics.photons) + " × lights (" +
+                              std::to_string(lights) + ") = " + std::to_string(caustic) +
+                              " caustic photons; expected at most " +
+                              std::to_string(kMaxScenePhotons));
+}
+
 }  // namespace ag

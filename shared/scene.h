@@ -157,4 +157,11 @@ int light_sample_count(const Scene& scene);
 // GPU frame holds no more, and dropping lights silently would change the image.
 void check_light_samples(const Scene& scene);
 
+// Upper bound on photons traced per load: groups × photons_per_group × lights, and caustic photons
+// × lights (docs/scene-format.md). Beyond it the photon arrays alone would need many GiB.
+inline constexpr int64_t kMaxScenePhotons = 100'000'000;
+// Throws InputError, naming scene.path and the setting, where either product exceeds
+// kMaxScenePhotons.
+void check_photon_budget(const Scene& scene);
+
 }  // namespace ag

@@ -134,6 +134,7 @@ public:
         read_materials(in_.require(root, "", "materials", "an object of named materials"));
         read_lights(in_.require(root, "", "lights", "an array of lights (may be empty)"));
         check_light_samples(scene_);
+        check_photon_budget(scene_);
         read_objects(in_.require(root, "", "objects", "an array of objects"));
         if (const Json* v = JsonInput::find(root, "script"))
             scene_.script = existing_file(*v, "/script", "Lua script");

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <lua.hpp>
@@ -29,8 +30,10 @@ namespace {
 constexpr const char* kSceneType = "ag.Scene";
 constexpr const char* kObjectType = "ag.Object";
 constexpr const char* kLightType = "ag.Light";
-constexpr const char* kSceneKey = "ag.scene";  // registry slot of the one scene userdata
-constexpr int kHookStep = 1000;                // instructions between budget checks (~3% cost)
+constexpr const char* kSceneKey = "ag.scene";        // registry slot of the one scene userdata
+constexpr size_t kMaxScriptBytes = size_t(1) << 20;  // script files, checked before reading
+constexpr size_t kMaxMessageChars = 2000;            // script errors as shown to users
+constexpr int kHookStep = 1000;  // instructions between budget checks (~3% cost)
 
 // Left out of the sandbox. Naming one raises an error that says why, rather than the puzzling
 // "attempt to index a nil value".
@@ -234,6 +237,37 @@ int blocked_global(lua_State* L) {
                                   key);
     }
     return 0;  // other unknown globals are nil, as usual
+}
+
+// Finalizers run with debug hooks off (in collections and in lua_close), out of reach of the
+// instruction budget, so scripts cannot declare them: setmetatable refuses a __gc field (Lua marks
+// an object for finalization only if __gc is there when the metatable is set).
+int setmetatable_without_gc(lua_State* L) {
+    if (lua_type(L, 2) == LUA_TTABLE) {
+        lua_pushliteral(L, "__gc");
+        if (lua_rawget(L, 2) != LUA_TNIL)
+            return luaL_error(L,
+                              "setmetatable: '__gc' finalizers are not available to scripts "
+                              "(they would run outside the instruction budget)");
+        lua_pop(L, 1);
+    }
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, LUA_MULTRET);
+    return lua_gettop(L);
+}
+
+// Script messages reach terminals and logs: bounded length, control characters made visible.
+std::string printable(const std::string& message) {
+    std::string out;
+    out.reserve(std::min(message.size(), kMaxMessageChars) + 64);
+    for (size_t i = 0; i < message.size() && out.size() < kMaxMessageChars; ++i) {
+        const unsigned char c = (unsigned char)message[i];
+        out += (c < 0x20 && c != '\n' && c != '\t') || c == 0x7f ? '?' : char(c);
+    }
+    if (out.size() < message.size())
+        out += "... (message truncated: " + std::to_string(message.size()) + " characters)";
+    return out;
 }
 
 // print() goes to stderr with the script position, keeping stdout free for the program's output.
@@ -716,6 +750,9 @@ int open_sandbox(lua_State* L) {
     lua_pop(L, 1);
     lua_pushcfunction(L, print_to_stderr);
     lua_setfield(L, -2, "print");
+    lua_getfield(L, -1, "setmetatable");
+    lua_pushcclosure(L, setmetatable_without_gc, 1);
+    lua_setfield(L, -2, "setmetatable");
     // Renders must repeat: math.random starts from a fixed seed, not the clock.
     lua_getfield(L, -1, LUA_MATHLIBNAME);
     lua_getfield(L, -1, "randomseed");
@@ -788,6 +825,18 @@ int full_collect(lua_State* L) {
 }
 
 std::string read_script(const std::string& path) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec))
+        throw_input_error(path, "", "cannot open script (no such file)");
+    if (!std::filesystem::is_regular_file(path, ec))
+        throw_input_error(path, "",
+                          "a script must be a regular file (this is a directory, "
+                          "device or other special file)");
+    const auto size = std::filesystem::file_size(path, ec);
+    if (ec || size > kMaxScriptBytes)
+        throw_input_error(
+            path, "",
+            "script is larger than the limit of " + std::to_string(kMaxScriptBytes >> 20) + " MiB");
     std::ifstream in(path, std::ios::binary);
     if (!in)
         throw_input_error(path, "",
@@ -819,7 +868,7 @@ std::optional<std::string> ScriptState::protected_run(lua_CFunction body, void* 
     } else if (status != LUA_OK) {
         size_t length = 0;
         const char* text = lua_tolstring(L, -1, &length);
-        error = located(text ? std::string(text, length) : std::string("unknown error"));
+        error = printable(located(text ? std::string(text, length) : std::string("unknown error")));
     }
     lua_settop(L, 0);
     return error;

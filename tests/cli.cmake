@@ -109,3 +109,9 @@ set_tests_properties(boundaries PROPERTIES LABELS unit)
 ag_cli_test(bench_settle_bad_entry 2 "bench settle: expected SCENE:SCRIPT, got 'foo'" bench settle foo)
 ag_cli_test(bench_settle_bad_size 2 "--size: expects N or WxH with positive integers up to 16384, got '0x5'"
             bench settle --size 0x5)
+# Scripts must be regular files of bounded size, whether named by --script or by the scene.
+ag_cli_test(render_script_directory 1 "scenes: a script must be a regular file" render
+            scenes/cornell.json --script scenes -o ${CMAKE_CURRENT_BINARY_DIR}/never_written.exr)
+ag_cli_test(render_script_dev_zero 1 "/dev/zero: a script must be a regular file" render
+            scenes/cornell.json --script /dev/zero -o ${CMAKE_CURRENT_BINARY_DIR}/never_written.exr)
+set_tests_properties(cli.render_script_dev_zero PROPERTIES TIMEOUT 20)

@@ -109,6 +109,31 @@ TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
     }
 }
 
+// plane_resolution 1024 is documented as valid: 256 tiles of 1024² would need a 16k² framebuffer
+// (GL_OUT_OF_MEMORY), so the gather takes fewer tiles per pass instead.
+TEST_F(HemiPlaneGatherTest, LargestPlaneResolutionFitsTheFramebuffer) {
+    Scene scene = receiver_under_plane(1.0f, 50.0f, BorderCorrection::renormalize);
+    scene.settings.gather.plane_resolution = 1024;
+    SceneMeshes meshes(scene);
+    LightmapTexture aim(scene.atlas);
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                  glm::vec3(0.0f));
+    std::vector<int> receiver_texels;
+    for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
+        const TexelRecord& t = scene.atlas.texels[size_t(i)];
+        if (t.object == 1)
+            values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = glm::vec3(1.0f);
+        else if (receiver_texels.size() < 2)
+            receiver_texels.push_back(i);
+    }
+    aim.update_all(values);
+    HemiPlaneGather gather(scene, meshes, 256);
+    EXPECT_LE(gather.tiles_per_pass(), 4);  // at most 2×2 tiles of 1024²
+    const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
+    ASSERT_EQ(r.size(), receiver_texels.size());
+    for (const GatherResult& g : r) EXPECT_NEAR(g.iim.x, 1.0, 0.01);
+}
+
 TEST_F(HemiPlaneGatherTest, TexelUnderABackFaceIsFlagged) {
     // The plane above faces up (away from the receiver): the receiver sees only its back.
     Scene scene = receiver_under_plane(1.0f, 50.0f, BorderCorrection::renormalize);

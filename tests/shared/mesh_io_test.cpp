@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 
+#include "deadline.h"
 #include "shared/input_error.h"
 #include "shared/shapes.h"
 #include "temp_dir.h"
@@ -134,6 +135,88 @@ TEST_F(MeshIo, RejectsMissingUnsupportedAndCorruptFiles) {
 
     EXPECT_THROW(save_mesh(make_box(glm::vec3(1.0f)), path("box.xyz")), InputError);
     EXPECT_THROW(save_mesh(make_box(glm::vec3(1.0f)), path("missing_dir/box.obj")), InputError);
+}
+
+// ---- untrusted counts and truncated files: each once hung, ran out of memory or lost faces ----
+
+TEST_F(MeshIo, PlyWithoutEndHeaderIsRejected) {
+    std::string header = "ply\nformat ascii 1.0\nelement vertex 3\n";
+    for (int i = 0; i < 100; ++i) header += "comment no end here\n";
+    std::string err;
+    test::within_deadline(std::chrono::seconds(20),
+                          [&] { err = load_error(write("open.ply", header)); });
+    EXPECT_NE(err.find("open.ply"), std::string::npos) << err;
+    EXPECT_NE(err.find("end_header"), std::string::npos) << err;
+}
+
+TEST_F(MeshIo, PlyCountsAreCheckedAgainstTheFile) {
+    const std::string head = "ply\nformat ascii 1.0\nelement vertex ";
+    const std::string tail =
+        "\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    for (const char* count : {"2147483647", "-5", "4000000000"}) {
+        SCOPED_TRACE(count);
+        const std::string err =
+            load_error(write("big.ply", head + count + tail + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n"));
+        EXPECT_NE(err.find("big.ply: line 3"), std::string::npos) << err;
+    }
+    // Fewer vertices than declared: the face row is read as vertices and the file runs out.
+    std::string err =
+        load_error(write("short.ply", head + "5" + tail +
+                                          "0.0000 0.0000 0.0000\n1.0000 0.0000 0.0000\n"
+                                          "0.0000 1.0000 0.0000\n3 0 1 2\n"));
+    EXPECT_NE(err.find("short.ply: line"), std::string::npos) << err;
+    EXPECT_NE(err.find("file ends"), std::string::npos) << err;
+    err = load_error(write("neg.ply", head + "3" + tail + "0 0 0\n1 0 0\n0 1 0\n-1 0 1 2\n"));
+    EXPECT_NE(err.find("neg.ply: line 13: list count \"-1\""), std::string::npos) << err;
+}
+
+TEST_F(MeshIo, BinaryPlyListCountsAreChecked) {
+    std::string text =
+        "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\n"
+        "property float y\nproperty float z\nelement face 1\n"
+        "property list int int vertex_indices\nend_header\n";
+    text += std::string(36, '\0');
+    text += std::string("\xff\xff\xff\xff", 4) + std::string(12, '\0');  // count -1
+    const std::string err = load_error(write("neg_bin.ply", text));
+    EXPECT_NE(err.find("neg_bin.ply: byte"), std::string::npos) << err;
+}
+
+TEST_F(MeshIo, OffCountsAreChecked) {
+    std::string err = load_error(write("only.off", "OFF\n"));
+    EXPECT_NE(err.find("only.off: line"), std::string::npos) << err;
+    EXPECT_NE(err.find("counts"), std::string::npos) << err;
+    // 4 vertices declared, 8 listed: the fifth vertex line is read as a face.
+    std::string text = "OFF\n4 1 0\n";
+    for (int i = 0; i < 8; ++i) text += "0.5 0.25 " + std::to_string(i) + "\n";
+    text += "3 0 1 2\n";
+    err = load_error(write("extra.off", text));
+    EXPECT_NE(err.find("extra.off: line 7"), std::string::npos) << err;
+    test::within_deadline(std::chrono::seconds(20), [&] {
+        err = load_error(write("garbage.off", "OFF BINARY\n" + std::string(64, '\xff')));
+    });
+    EXPECT_NE(err.find("garbage.off: byte"), std::string::npos) << err;
+}
+
+TEST_F(MeshIo, TruncatedStlAndObjAreRejected) {
+    const Mesh cube = make_box(glm::vec3(1.0f));
+    for (const char* ext : {".stl", ".obj"}) {
+        SCOPED_TRACE(ext);
+        const std::string file = path(std::string("cube") + ext);
+        save_mesh(cube, file);
+        const auto size = fs::file_size(file);
+        std::ifstream in(file, std::ios::binary);
+        std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+        // Cut the faces-or-vertices part short, as an interrupted copy would.
+        const std::string cut =
+            write(std::string("cut") + ext,
+                  std::string(ext) == ".obj"
+                      ? text.substr(0, text.find("\nv ") + 1) + text.substr(text.find("\nf ") + 1)
+                      : text.substr(0, size * 2 / 3));
+        const std::string err = load_error(cut);
+        EXPECT_NE(err.find("cut"), std::string::npos) << err;
+        EXPECT_NE(err.find("truncated"), std::string::npos) << err;
+    }
 }
 
 }  // namespace

@@ -522,6 +522,20 @@ TEST_F(SceneFile, MoreLightSamplesThanTheGpuFrameHoldsAreRejected) {
     EXPECT_NE(err.find("area_light_samples = 64"), std::string::npos) << err;
 }
 
+TEST_F(SceneFile, AbsurdPhotonCountsAreRejectedAtLoad) {
+    // 1e6 × 1e6 photons would be a bare std::bad_alloc at the first frame.
+    Json j = base_scene();
+    j["settings"]["photons"]["groups"] = 1000000;
+    j["settings"]["photons"]["photons_per_group"] = 1000000;
+    std::string err = load_error("many.json", j.dump(2));
+    EXPECT_NE(err.find("many.json: /settings/photons: "), std::string::npos) << err;
+    EXPECT_NE(err.find("expected at most 100000000"), std::string::npos) << err;
+    j = base_scene();
+    j["settings"]["caustics"]["photons"] = 100000000;
+    err = load_error("caustic.json", j.dump(2));
+    EXPECT_NE(err.find("caustic.json: /settings/caustics/photons: "), std::string::npos) << err;
+}
+
 TEST_F(SceneFile, DuplicateJsonKeysAreRejected) {
     const std::string err = load_error(
         "dup.json", R"({"camera": {"eye": [0, 0, 1], "eye": [0, 0, 2], "target": [0, 0, 0]}})");

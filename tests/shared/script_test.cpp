@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "deadline.h"
 #include "external_scenes.h"
 #include "shared/input_error.h"
 #include "shared/scene_edit.h"
@@ -327,6 +328,60 @@ TEST_F(ScriptFiles, MissingFileIsAnInputError) {
     } catch (const InputError& e) {
         EXPECT_THAT(e.what(), StartsWith(path("absent.lua") + ": cannot open script"));
     }
+}
+
+TEST_F(ScriptFiles, OnlyRegularFilesOfBoundedSizeAreRead) {
+    fs::create_directories(path("dir.lua"));
+    for (const std::string& bad : {path("dir.lua"), std::string("/dev/zero")}) {
+        try {
+            Script s(bad);
+            FAIL() << "expected an InputError for " << bad;
+        } catch (const InputError& e) {
+            EXPECT_THAT(e.what(), StartsWith(bad + ": a script must be a regular file"));
+        }
+    }
+    const std::string big = write("big.lua", "-- " + std::string(2 << 20, 'x') + "\n");
+    try {
+        Script s(big);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_THAT(e.what(), HasSubstr("larger than the limit"));
+    }
+}
+
+// Finalizers run with hooks off, outside the budget: scripts cannot declare them.
+TEST(Script, GcFinalizersAreRefused) {
+    test::within_deadline(std::chrono::seconds(20), [] {
+        try {
+            script("setmetatable({}, {__gc = function() while true do end end})");
+            ADD_FAILURE() << "expected an InputError";
+        } catch (const InputError& e) {
+            EXPECT_THAT(e.what(), StartsWith("test.lua:1: "));
+            EXPECT_THAT(e.what(), HasSubstr("__gc"));
+        }
+    });
+    Scene scene = small_scene();
+    Script s = script(
+        "function on_frame(scene)\n"
+        "  local t = setmetatable({}, {__index = function() return 7 end})\n"
+        "  assert(t.x == 7)\n"
+        "  setmetatable({}, {__gc = false})\n"
+        "end\n");
+    EXPECT_FALSE(s.on_frame(scene, 0, 0.0));
+    EXPECT_THAT(error_of(s), HasSubstr("test.lua:4: setmetatable: '__gc'"));
+}
+
+TEST(Script, LongAndControlCharacterMessagesAreSanitised) {
+    Scene scene = small_scene();
+    Script s = script(
+        "function on_frame(scene)\n"
+        "  error('\\27[31m' .. string.rep('x', 100000) .. '\\n\\27[0m')\n"
+        "end\n");
+    EXPECT_FALSE(s.on_frame(scene, 0, 0.0));
+    const std::string error = error_of(s);
+    EXPECT_LT(error.size(), 2200u);
+    EXPECT_EQ(error.find('\x1b'), std::string::npos);
+    EXPECT_THAT(error, HasSubstr("message truncated"));
 }
 
 TEST(Script, ErrorsInTopLevelCodeAreInputErrors) {
