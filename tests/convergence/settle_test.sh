@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # settle_test.sh AFTERGLOW WORK: the cube jump on the Cornell scene at 48x48, selective against
-# full-budget at the same --frame-ms 33; counts frames (not time) from the jump until the indirect
-# error is back within 10% of its settled value. Exit 77 (skipped) without a GL context or without
+# full-budget at the same frame-time target; counts frames (not time) from the jump until the
+# indirect error is back within 10% of its settled value. The target (2 s) is one neither mode is
+# bound by on any machine, the sanitizer build included, so the count does not depend on timing:
+# what it holds is that selective, with immediate invalidation, loses no frame to the baseline that
+# redoes everything. Exit 77 (skipped) without a GL context or without
 # Debian's python3.
 set -uo pipefail
 bin="$1"; work="$2"
@@ -9,7 +12,7 @@ bin="$1"; work="$2"
 [ -x /usr/bin/python3 ] || { echo "no /usr/bin/python3: skipped"; exit 77; }
 mkdir -p "$work"
 common=(scenes/cornell.json --script scenes/cornell_cube_jump.lua --size 48x48 --frames 70
-        --frame-ms 33 --ref-spp 16 --ref-photons 200000 --cache "$work/settle-cache" --plot "" -q)
+        --frame-ms 2000 --ref-spp 16 --ref-photons 200000 --cache "$work/settle-cache" --plot "" -q)
 "$bin" converge "${common[@]}" --csv "$work/jump.selective.csv" || exit 1
 "$bin" converge "${common[@]}" --baseline full-budget --csv "$work/jump.full-budget.csv" || exit 1
 /usr/bin/python3 tests/convergence/check_settle.py "$work/jump.selective.csv" "$work/jump.full-budget.csv"
