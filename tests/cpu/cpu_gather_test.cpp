@@ -14,6 +14,7 @@
 #include "cpu/aim.h"
 #include "cpu/iim.h"
 #include "cpu/photon_simulation.h"
+#include "gather_scenes.h"
 #include "shared/lightmap_sample.h"
 #include "test_scenes.h"
 
@@ -21,58 +22,14 @@ namespace ag::cpu {
 
 namespace {
 
-size_t atlas_index(const LightmapAtlas& atlas, const TexelRecord& t) {
-    return size_t(t.y) * size_t(atlas.width) + size_t(t.x);
-}
-
-std::vector<glm::vec3> atlas_values(const Scene& scene) {
-    return std::vector<glm::vec3>(size_t(scene.atlas.width) * size_t(scene.atlas.height),
-                                  glm::vec3(0.0f));
-}
-
-std::vector<int> all_texels(const Scene& scene) {
-    std::vector<int> ids(scene.atlas.texels.size());
-    std::iota(ids.begin(), ids.end(), 0);
-    return ids;
-}
-
-glm::vec3 world_position(const Scene& scene, const TexelRecord& t) {
-    return scene.objects[size_t(t.object)].transform.apply_point(t.position);
-}
-
-Object quad_object(const std::string& name, float size, const glm::vec3& translation,
-                   const glm::quat& rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) {
-    Object o;
-    o.name = name;
-    o.mesh = make_quad(size, size);
-    o.transform.translation = translation;
-    o.transform.rotation = rotation;
-    return o;
-}
-
-const glm::quat kFacingDown = glm::angleAxis(float(std::numbers::pi), glm::vec3(1.0f, 0.0f, 0.0f));
-
-Scene finish(Scene s, float texel_size) {
-    s.settings.lightmap.texel_size = texel_size;
-    init_versions(s);
-    make_surfaces_and_atlas(s);
-    return s;
-}
-
-// Cosine-weighted fraction of the hemisphere of a point covered by a parallel rectangle at
-// distance 1 with one corner straight above the point and sides X, Y (signed; the function is
-// odd in each), the classic differential-area-to-rectangle form factor.
-double corner_form_factor(double x, double y) {
-    const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
-    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * std::numbers::pi);
-}
-
-// Form factor of a point at (px, pz) to the square [-a, a]² at height h above it.
-double square_form_factor(double px, double pz, double a, double h) {
-    const double x0 = (-a - px) / h, x1 = (a - px) / h, y0 = (-a - pz) / h, y1 = (a - pz) / h;
-    return corner_form_factor(x1, y1) - corner_form_factor(x0, y1) - corner_form_factor(x1, y0) +
-           corner_form_factor(x0, y0);
-}
+using test::all_texels;
+using test::atlas_index;
+using test::atlas_values;
+using test::finish;
+using test::kFacingDown;
+using test::quad_object;
+using test::square_form_factor;
+using test::world_position;
 
 // Photons traced and AIMs built for a scene file, ready to gather.
 struct Simulated {

@@ -8,6 +8,7 @@
 #include <numbers>
 #include <numeric>
 
+#include "../cpu/gather_scenes.h"
 #include "../gpu/gl_fixture.h"
 #include "cpu/aim.h"
 #include "cpu/cpu_gather.h"
@@ -25,45 +26,12 @@
 namespace ag {
 namespace {
 
-constexpr double kPi = std::numbers::pi;
-
-size_t atlas_index(const LightmapAtlas& atlas, const TexelRecord& t) {
-    return size_t(t.y) * size_t(atlas.width) + size_t(t.x);
-}
-
-std::vector<int> all_texels(const Scene& scene) {
-    std::vector<int> ids(scene.atlas.texels.size());
-    std::iota(ids.begin(), ids.end(), 0);
-    return ids;
-}
-
-glm::vec3 world_position(const Scene& scene, const TexelRecord& t) {
-    return scene.objects[size_t(t.object)].transform.apply_point(t.position);
-}
-
-Object quad_object(const std::string& name, float size, const glm::vec3& translation,
-                   const glm::quat& rotation = glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) {
-    Object o;
-    o.name = name;
-    o.mesh = make_quad(size, size);
-    o.transform.translation = translation;
-    o.transform.rotation = rotation;
-    return o;
-}
-
-const glm::quat kFacingDown = glm::angleAxis(float(kPi), glm::vec3(1.0f, 0.0f, 0.0f));
-
-// Differential-area-to-parallel-rectangle form factor, one corner straight above the point.
-double corner_form_factor(double x, double y) {
-    const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
-    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * kPi);
-}
-
-double square_form_factor(double px, double pz, double a) {
-    const double x0 = -a - px, x1 = a - px, y0 = -a - pz, y1 = a - pz;
-    return corner_form_factor(x1, y1) - corner_form_factor(x0, y1) - corner_form_factor(x1, y0) +
-           corner_form_factor(x0, y0);
-}
+using test::all_texels;
+using test::atlas_index;
+using test::kFacingDown;
+using test::quad_object;
+using test::square_form_factor;
+using test::world_position;
 
 // One backend, built the way the pipeline builds it: bound to the AIM as values (CPU) and as a
 // texture (GL), used only through ag::Gatherer.
@@ -109,10 +77,8 @@ TEST_P(GatherBackendTest, FacingSquareMatchesFormFactor) {
     s.objects.push_back(quad_object("emitter", 2.0f * a, glm::vec3(0.0f, 1.0f, 0.0f), kFacingDown));
     s.settings.gather.cpu_rays = 16384;
     s.settings.gather.plane_resolution = 256;
-    s.settings.lightmap.texel_size = 0.125f;
-    init_versions(s);
-    make_surfaces_and_atlas(s);
-    std::vector<glm::vec3> aim(size_t(s.atlas.width) * size_t(s.atlas.height), glm::vec3(0.0f));
+    s = test::finish(s, 0.125f);
+    std::vector<glm::vec3> aim = test::atlas_values(s);
     std::vector<int> receivers;
     const glm::vec3 radiance(2.0f, 1.0f, 0.5f);
     for (int r = 0; r < int(s.atlas.texels.size()); ++r) {
@@ -129,7 +95,7 @@ TEST_P(GatherBackendTest, FacingSquareMatchesFormFactor) {
     for (size_t k = 0; k < receivers.size(); ++k) {
         const TexelRecord& t = s.atlas.texels[size_t(receivers[k])];
         const glm::vec3 p = world_position(s, t);
-        const double f = square_form_factor(p.x, p.z, a);
+        const double f = square_form_factor(p.x, p.z, a, 1.0);
         EXPECT_EQ(got[k].back_fraction, 0.0f);
         for (int c = 0; c < 3; ++c) {
             const double rel = std::abs(got[k].iim[c] / (radiance[c] * f) - 1.0);
@@ -153,11 +119,9 @@ TEST_P(GatherBackendTest, TexelsInsideGeometryAreInvalidAndRepaired) {
     cube.mesh = make_box(glm::vec3(1.5f));
     cube.transform.translation = glm::vec3(0.5f, -0.4f, 0.5f);  // x, z in [-0.25, 1.25]
     s.objects.push_back(cube);
-    s.settings.lightmap.texel_size = 0.25f;
-    init_versions(s);
-    make_surfaces_and_atlas(s);
+    s = test::finish(s, 0.25f);
     const float cube_radiance = 50.0f;
-    std::vector<glm::vec3> aim(size_t(s.atlas.width) * size_t(s.atlas.height), glm::vec3(0.0f));
+    std::vector<glm::vec3> aim = test::atlas_values(s);
     std::vector<int> floor;
     for (int r = 0; r < int(s.atlas.texels.size()); ++r) {
         const TexelRecord& t = s.atlas.texels[size_t(r)];

@@ -156,12 +156,8 @@ TEST_F(PipelineTest, BruteForceRedoesEverythingEveryFrame) {
     }
 }
 
-TEST_F(PipelineTest, TheFrameLoopOwnsTheScriptClock) {
-    Scene scene = cornell();
-    const int cube = scene.find_object("cube");
-    const glm::vec3 start = scene.objects[size_t(cube)].transform.translation;
-    // Moves the cube 1 mm per frame on frames 2 and 3 only, and records the time it was given.
-    Script script = Script::from_string(R"(
+// Moves the cube 1 mm per frame on frames 2 and 3 only, and records the time it was given.
+constexpr const char* kClockScript = R"(
 local cube
 function on_start(scene) cube = scene:object("cube") end
 function on_frame(scene, frame, time)
@@ -169,8 +165,13 @@ function on_frame(scene, frame, time)
         local x, y, z = cube:position()
         cube:set_position(x + 1, y, z + time)
     end
-end)",
-                                        "clock.lua");
+end)";
+
+TEST_F(PipelineTest, TheFrameLoopOwnsTheScriptClock) {
+    Scene scene = cornell();
+    const int cube = scene.find_object("cube");
+    const glm::vec3 start = scene.objects[size_t(cube)].transform.translation;
+    Script script = Script::from_string(kClockScript, "clock.lua");
     Pipeline pipeline(scene, PipelineOptions{32, 32});
     std::vector<int> edited;
     run_frames(pipeline, &script, 6, [&](const FrameEvent& e) {
@@ -184,16 +185,7 @@ end)",
 
     // The same script run ahead on a copy reaches the same state without a pipeline.
     Scene ahead = cornell();
-    Script again = Script::from_string(R"(
-local cube
-function on_start(scene) cube = scene:object("cube") end
-function on_frame(scene, frame, time)
-    if frame == 2 or frame == 3 then
-        local x, y, z = cube:position()
-        cube:set_position(x + 1, y, z + time)
-    end
-end)",
-                                       "clock.lua");
+    Script again = Script::from_string(kClockScript, "clock.lua");
     run_script_ahead(again, ahead, 6);
     EXPECT_EQ(ahead.objects[size_t(cube)].transform.translation, end);
 }
