@@ -3,12 +3,11 @@
 #pragma once
 
 #include <cmath>
+#include <glm/gtc/quaternion.hpp>
 #include <numbers>
 #include <numeric>
 #include <string>
 #include <vector>
-
-#include <glm/gtc/quaternion.hpp>
 
 #include "shared/charts.h"
 #include "shared/scene.h"
