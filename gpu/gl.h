@@ -79,6 +79,7 @@
     X(PFNGLBINDTEXTUREPROC, BindTexture)                         \
     X(PFNGLACTIVETEXTUREPROC, ActiveTexture)                     \
     X(PFNGLTEXIMAGE2DPROC, TexImage2D)                           \
+    X(PFNGLTEXSTORAGE3DPROC, TexStorage3D)                       \
     X(PFNGLTEXSUBIMAGE2DPROC, TexSubImage2D)                     \
     X(PFNGLTEXPARAMETERIPROC, TexParameteri)                     \
     X(PFNGLGENERATEMIPMAPPROC, GenerateMipmap)                   \
@@ -87,6 +88,7 @@
     X(PFNGLDELETEFRAMEBUFFERSPROC, DeleteFramebuffers)           \
     X(PFNGLBINDFRAMEBUFFERPROC, BindFramebuffer)                 \
     X(PFNGLFRAMEBUFFERTEXTURE2DPROC, FramebufferTexture2D)       \
+    X(PFNGLFRAMEBUFFERTEXTURELAYERPROC, FramebufferTextureLayer) \
     X(PFNGLFRAMEBUFFERRENDERBUFFERPROC, FramebufferRenderbuffer) \
     X(PFNGLCHECKFRAMEBUFFERSTATUSPROC, CheckFramebufferStatus)   \
     X(PFNGLGENRENDERBUFFERSPROC, GenRenderbuffers)               \

@@ -115,16 +115,26 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     while (resolution_ < scene.settings.gather.plane_resolution) resolution_ *= 2;  // mip alignment
     level_ = 0;
     while ((1 << level_) < resolution_) ++level_;
-    // The tile framebuffer is (tiles_x·R)²: at R = 1024 and 256 tiles that is 16k², more than GL
-    // allows or memory holds (GL_OUT_OF_MEMORY). Fewer tiles per pass keep every documented R.
-    GLint max_texture = 0;
+    // Each texel's hemi-plane is one layer of an R×R 2D-array texture, drawn at the viewport
+    // origin: rasterisation is then the same for a texel in any batch and at any place in it (at
+    // a tile offset inside one big framebuffer, a GPU snaps vertices differently), and each
+    // layer's mip chain reduces that layer alone. The layers of one pass are bounded like the
+    // tiles of a (tiles_x·R)² framebuffer were: at R = 1024, 256 layers would be 4 GiB.
+    GLint max_texture = 0, max_layers = 0;
     gl::GetIntegerv(GL_MAX_TEXTURE_SIZE, &max_texture);
+    gl::GetIntegerv(GL_MAX_ARRAY_TEXTURE_LAYERS, &max_layers);
     const int max_side = std::min(kMaxFramebufferSide, std::max(int(max_texture), resolution_));
     tiles_x_ = std::clamp(int(std::ceil(std::sqrt(double(tiles)))), 1,
                           std::max(1, max_side / resolution_));
-    const int size = tiles_x_ * resolution_;
+    layers_ = std::min(tiles_x_ * tiles_x_, std::max(1, int(max_layers)));
     program_ = Program("hemi-plane gather", kVertex, kFragment);
-    color_ = make_float_texture(size, size, true);
+    color_ = make_texture();
+    gl::BindTexture(GL_TEXTURE_2D_ARRAY, color_.get());
+    gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, level_ + 1, GL_RGBA32F, resolution_, resolution_,
+                     layers_);
+    gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+    gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+    gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
     const std::vector<float> w =
         hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
                            scene.settings.gather.border_correction);
@@ -133,10 +143,10 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
     depth_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_.get());
-    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, size, size);
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, resolution_, resolution_);
     fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
-    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, color_.get(), 0);
+    gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0, 0);
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("hemi-plane gather: framebuffer incomplete");
@@ -154,9 +164,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels,
                                                   GLuint aim_texture, GLuint chart_texture) {
     std::vector<GatherResult> out(texels.size());
-    const int size = tiles_x_ * resolution_;
-    const int per_pass =
-        max_per_pass_ > 0 ? std::min(max_per_pass_, tiles_x_ * tiles_x_) : tiles_x_ * tiles_x_;
+    const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, layers_) : layers_;
     const float a = scene_.settings.gather.plane_half_width;
     const float diagonal = scene_.diagonal();
     // A gather at the edge of a wall sees the adjacent wall at distances far below the texel
@@ -196,10 +204,10 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         gl::BindTexture(GL_TEXTURE_2D, weights_.get());
         gl::ActiveTexture(GL_TEXTURE2);
         gl::BindTexture(GL_TEXTURE_2D, chart_texture);
-        gl::Viewport(0, 0, size, size);
+        gl::Viewport(0, 0, resolution_, resolution_);
         gl::ClearColor(0, 0, 0, 0);
         gl::ClearDepth(0.0);
-        gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+        gl::Uniform2i(program_.location("tile_origin"), 0, 0);
         for (size_t k = 0; k < count; ++k) {
             const TexelRecord& t = scene_.atlas.texels[size_t(texels[first + k])];
             const Object& owner = scene_.objects[size_t(t.object)];
@@ -209,9 +217,9 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
             const glm::mat4 view =
                 glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
             const glm::mat4 vp = projection * view;
-            const int tx = int(k) % tiles_x_, ty = int(k) / tiles_x_;
-            gl::Viewport(tx * resolution_, ty * resolution_, resolution_, resolution_);
-            gl::Uniform2i(program_.location("tile_origin"), tx * resolution_, ty * resolution_);
+            gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0,
+                                        GLint(k));
+            gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
             program_.set("view_projection", vp);
             for (size_t o = 0; o < scene_.objects.size(); ++o) {
                 program_.set("model", model_matrix(scene_.objects[o]));
@@ -220,20 +228,20 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
                 meshes_.draw(o);
             }
         }
-        // One reduction for the whole batch: level log2(R) holds every tile's mean.
+        // One reduction for the whole batch: level log2(R) of each layer holds its texel's mean.
         // Mesa 22.3 (llvmpipe) regenerates stale levels if the texture is still attached to the
         // bound framebuffer: unbind it first.
         gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
         gl::ActiveTexture(GL_TEXTURE3);
-        gl::BindTexture(GL_TEXTURE_2D, color_.get());
-        gl::GenerateMipmap(GL_TEXTURE_2D);
-        std::vector<float> means(size_t(tiles_x_) * size_t(tiles_x_) * 4);
-        gl::GetTexImage(GL_TEXTURE_2D, level_, GL_RGBA, GL_FLOAT, means.data());
-        gl::BindTexture(GL_TEXTURE_2D, 0);  // never leave the render target bound for sampling
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, color_.get());
+        gl::GenerateMipmap(GL_TEXTURE_2D_ARRAY);
+        std::vector<float> means(size_t(layers_) * 4);
+        gl::GetTexImage(GL_TEXTURE_2D_ARRAY, level_, GL_RGBA, GL_FLOAT, means.data());
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);  // never leave the target bound for sampling
         gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         const float pixels = float(resolution_) * float(resolution_);
         for (size_t k = 0; k < count; ++k) {
-            const float* m = &means[4 * k];  // tile k is at (k % tiles_x, k / tiles_x): row-major
+            const float* m = &means[4 * k];  // layer k
             out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
             out[first + k].back_fraction = pixels * m[3];
         }

@@ -45,7 +45,7 @@ public:
                                      GLuint chart_texture = 0);
 
     int resolution() const { return resolution_; }
-    int tiles_per_pass() const { return tiles_x_ * tiles_x_; }
+    int tiles_per_pass() const { return layers_; }
     // Limits a pass to `n` texels (1 = unbatched, for benchmarks); 0 = all tiles.
     void set_max_per_pass(int n) { max_per_pass_ = n; }
 
@@ -53,7 +53,7 @@ private:
     const Scene& scene_;
     const SceneMeshes& meshes_;
     const LightmapTexture* aim_;
-    int resolution_, tiles_x_, level_;
+    int resolution_, tiles_x_, level_, layers_;
     int max_per_pass_ = 0;
     Program program_;
     Texture color_, weights_;
