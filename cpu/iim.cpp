@@ -19,6 +19,11 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     shown_.assign(n, glm::vec3(0.0f));
     blend_start_.assign(n, -1);
     for (int t = 0; t < int(records); ++t) pending_.push_back(t);
+    surface_texels_.resize(scene_.surfaces.size());
+    for (int t = 0; t < int(records); ++t) {
+        const int s = scene_.atlas.texels[size_t(t)].surface;
+        if (s >= 0 && size_t(s) < surface_texels_.size()) surface_texels_[size_t(s)].push_back(t);
+    }
 }
 
 void Iim::schedule(PhotonMaps& maps) {
@@ -37,8 +42,9 @@ void Iim::schedule(PhotonMaps& maps) {
     });
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
-        for (int t = 0; t < int(scene_.atlas.texels.size()); ++t)
-            if (scene_.atlas.texels[size_t(t)].surface == s && !is_pending_[size_t(t)]) {
+        if (size_t(s) >= surface_texels_.size()) continue;
+        for (int t : surface_texels_[size_t(s)])
+            if (!is_pending_[size_t(t)]) {
                 is_pending_[size_t(t)] = 1;
                 pending_.push_back(t);
             }

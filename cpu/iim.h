@@ -73,6 +73,7 @@ private:
     std::vector<int> changed_;      // returned by blend()
     int aim_generation_ = 0;
     std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
+    std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;
 };
 

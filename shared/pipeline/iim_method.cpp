@@ -108,6 +108,15 @@ void IimMethod::hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) 
     stats.iim_texels_pending = iim_.pending();
 }
 
+void IimMethod::prime(cpu::PhotonSimulation& photons, uint64_t frame) {
+    iim_.aim_changed();
+    iim_.schedule(photons.maps());  // consumes every surface's Δi
+    iim_.invalidate_all();
+    moved_regions();  // consumes the scene changes
+    iim_.gather(gatherer(backend_), int(scene_.atlas.texels.size()), frame);
+    texture_.update(iim_.shown(), iim_.blend(frame, 1));
+}
+
 gpu::IndirectTerm IimMethod::term() const {
     return gpu::IndirectTerm{texture_.id(), gpu::IndirectSpace::lightmap};
 }

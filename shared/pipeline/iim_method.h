@@ -28,6 +28,7 @@ public:
     void update(const IndirectInputs& in, PipelineStats& stats) override;
     void hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) override;
     void invalidate_all() override { iim_.invalidate_all(); }
+    void prime(cpu::PhotonSimulation& photons, uint64_t frame) override;
     gpu::IndirectTerm term() const override;
     bool settled() const override { return iim_.settled(); }
 

@@ -42,6 +42,10 @@ public:
     virtual void hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) = 0;
     // Forget everything: the next update() recomputes the whole term (brute-force baseline).
     virtual void invalidate_all() = 0;
+    // Untimed, with the workers idle and the AIM texture current: compute the whole term from
+    // `photons` now and show it at once, consuming every pending delta and scene change (the
+    // converged state a benchmark measures an edit from).
+    virtual void prime(cpu::PhotonSimulation& photons, uint64_t frame) = 0;
     // The term for this frame's compose.
     virtual gpu::IndirectTerm term() const = 0;
     // Nothing left to repair or refine.

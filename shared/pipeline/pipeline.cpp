@@ -165,6 +165,28 @@ void Pipeline::hand_over(PipelineStats& stats) {
     indirect_->hand_over(*photons_, stats);
 }
 
+int Pipeline::prime(int max_frames) {
+    sync();
+    photons_->invalidate_all();
+    photons_->trace_all();
+    aim_->rebuild_all(photons_->maps());
+    for (int a : aim_->take_dirty_texels()) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
+    std::vector<int> all(staged_aim_.size());
+    for (size_t a = 0; a < all.size(); ++a) all[a] = int(a);
+    aim_texture_.update(staged_aim_, all);
+    aim_dirty_.clear();
+    indirect_->prime(*photons_, frame_);
+    // Caustic photons are traced a slice a frame: plain frames finish them (and anything the
+    // bulk work left), each cheap now that nothing else is out of date.
+    int frames = 0;
+    while (!converged() && frames < max_frames) {
+        frame();
+        ++frames;
+    }
+    sync();
+    return frames;
+}
+
 GLuint Pipeline::iim_texture() const {
     const IimMethod* m = iim_method();
     return m ? m->texture() : 0;

@@ -57,6 +57,11 @@ public:
     PipelineStats frame();
     // Waits for the photon work in flight (call before editing the scene).
     void sync();
+    // Untimed: brings everything to the converged state of the current scene at once (all
+    // photons traced, every AIM and indirect texel computed and shown, caustics complete), so
+    // that a benchmark measures an edit from where an interactive user would make it. Returns
+    // the frames it ran after the bulk work (caustics and hand-overs), at most `max_frames`.
+    int prime(int max_frames = 64);
 
     Scene& scene() { return scene_; }
     PipelineMode mode() const { return mode_; }

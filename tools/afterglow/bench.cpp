@@ -69,6 +69,8 @@ const Command kBenchCommand{
         integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
                 400000),
         flag("quick", "'settle': only the cornell scene (for tests)"),
+        flag("no-prime",
+             "'settle': start each run from nothing instead of the converged state of frame 0"),
     },
     1,
     16,

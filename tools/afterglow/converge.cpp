@@ -58,6 +58,9 @@ const Command kConvergeCommand{
         frame_ms_option(),
         settings_option(),
         integer("threads", "N", "worker threads (default: settings.threads)", 0, 1024),
+        flag("prime",
+             "start from the converged state (untimed: every photon, AIM and IIM texel "
+             "computed before frame 0), so the run measures the edits alone"),
         flag("quiet,q", "no progress bar"),
     },
     1,
@@ -101,7 +104,7 @@ int run_converge(const Args& args) {
     Progress progress("converge", frames, !args.has("quiet"));
     const ConvergenceRun run = run_convergence(
         scene, script_path, PipelineMode(args.get_choice("baseline")), frames, width, height,
-        component, reference, threads, [&](int done) { progress.update(done); });
+        component, reference, threads, args.has("prime"), [&](int done) { progress.update(done); });
     progress.finish();
     std::filesystem::create_directories(std::filesystem::absolute(csv_path).parent_path());
     write_file_atomically(csv_path, convergence_csv(run));

@@ -108,14 +108,16 @@ Image read_reference(const std::string& reference_path, const std::string& compo
     return reference;
 }
 
-SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames) {
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target) {
     SettleAnalysis a;
     if (frames.empty()) return a;
     const size_t n = frames.size();
-    // Settled value: the mean of the last tenth of the frames (at least 3).
+    // Settled value: the converged state's error, else the mean of the last tenth of the frames
+    // (at least 3).
     const size_t tail = std::min(n, std::max<size_t>(3, n / 10));
     for (size_t i = n - tail; i < n; ++i) a.settled += frames[i].relmse;
     a.settled /= double(tail);
+    if (target > 0.0) a.settled = target;
     for (size_t i = 0; i < n; ++i)
         if (frames[i].edited) {
             if (a.first_edit < 0) a.first_edit = int(i);
@@ -134,7 +136,7 @@ SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames) {
 
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
                                int frames, int width, int height, const std::string& component,
-                               const Image& reference, int threads,
+                               const Image& reference, int threads, bool prime,
                                const std::function<void(int)>& on_frame) {
     scene.camera.width = width;
     scene.camera.height = height;
@@ -143,6 +145,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
     std::optional<Script> script;
     if (!script_path.empty()) script.emplace(script_path);
     Pipeline pipeline(scene, PipelineOptions{width, height, threads, mode});
+    // Untimed: start from the converged state of frame 0, where a user would make the edit.
+    if (prime) pipeline.prime();
 
     ConvergenceRun run;
     run.mode = mode;
@@ -177,6 +181,25 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
     run.wall_s = wall;
     run.settle = analyse_settle(run.frames);
     return run;
+}
+
+double converged_error(const Scene& scene, const std::string& script_path, int frames, int width,
+                       int height, const std::string& component, const Image& reference,
+                       int threads) {
+    Scene final_state = scene;
+    if (!script_path.empty()) {
+        Script ahead(script_path);
+        run_script_ahead(ahead, final_state, frames);
+    }
+    final_state.camera.width = width;
+    final_state.camera.height = height;
+    const std::optional<FrameTerm> term =
+        component == "full" ? std::nullopt : parse_frame_term(component);
+    Pipeline pipeline(final_state,
+                      PipelineOptions{width, height, threads, PipelineMode::selective});
+    pipeline.prime();
+    const gpu::FrameImages images = pipeline.images();
+    return compare_images(term ? images.aov[size_t(*term)] : images.frame, reference).rel_mse;
 }
 
 std::string convergence_csv(const ConvergenceRun& run) {

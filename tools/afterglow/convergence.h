@@ -68,7 +68,16 @@ struct ConvergenceRun {
     double wall_s = 0.0;  // of the whole run
 };
 
-SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames);
+// With `target` > 0 (the error of the converged final state, converged_error()) a run settles
+// when its error is back within 10% of that; otherwise within 10% of its own plateau.
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target = 0.0);
+
+// The relMSE against `reference` of the converged final state: `scene` after `frames` frames of
+// the script, primed at once (Pipeline::prime) and drawn. Every mode converges to it (repair ==
+// rebuild), so it is the settled value that runs of different modes are measured against.
+double converged_error(const Scene& scene, const std::string& script_path, int frames, int width,
+                       int height, const std::string& component, const Image& reference,
+                       int threads);
 
 // Runs `frames` frames of `scene` (a copy; its camera size is overwritten by width × height) with
 // the script (may be empty) in `mode`, comparing `component` ("full" or a frame term) with
@@ -77,7 +86,7 @@ SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames);
 // with the number done. threads < 0: settings.threads.
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
                                int frames, int width, int height, const std::string& component,
-                               const Image& reference, int threads,
+                               const Image& reference, int threads, bool prime,
                                const std::function<void(int)>& on_frame = {});
 
 // The CSV of a run as `afterglow converge` writes it (header and one row a frame).
