@@ -69,6 +69,10 @@ const Command kBenchCommand{
         integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
                 400000),
         flag("quick", "'settle': only the cornell scene (for tests)"),
+        text("modes", "LIST",
+             "'settle': the modes to run, comma-separated (selective, full, full-budget); "
+             "selective's speed-up needs full-budget",
+             "selective,full,full-budget"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },

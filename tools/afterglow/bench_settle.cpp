@@ -38,8 +38,25 @@ const std::vector<LadderEntry> kLadder = {
     {"scenes/conference.json", "scenes/conference_box_jump.lua", 240},
 };
 
-constexpr std::array kModes = {PipelineMode::selective, PipelineMode::full,
-                               PipelineMode::full_budget};
+std::vector<PipelineMode> parse_modes(const std::string& list) {
+    std::vector<PipelineMode> modes;
+    std::stringstream in(list);
+    for (std::string name; std::getline(in, name, ',');) {
+        bool found = false;
+        for (size_t m = 0; m < kPipelineModeNames.size(); ++m)
+            if (name == kPipelineModeNames[m]) {
+                if (std::find(modes.begin(), modes.end(), PipelineMode(m)) == modes.end())
+                    modes.push_back(PipelineMode(m));
+                found = true;
+            }
+        if (!found)
+            throw CliError("afterglow bench settle: --modes: expected selective, full or "
+                           "full-budget, got '" +
+                           name + "'");
+    }
+    if (modes.empty()) throw CliError("afterglow bench settle: --modes: no mode given");
+    return modes;
+}
 
 // What one mode did on one scene × script.
 struct SettleResult {
@@ -129,6 +146,7 @@ std::string fixed(double v, int decimals, bool valid = true) {
 
 int bench_settle(const Args& args, int width, int height) {
     const int frames_flag = args.has("frames") ? args.get_int("frames") : 0;
+    const std::vector<PipelineMode> modes = parse_modes(args.get("modes"));
     const double frame_ms = args.get_double("frame-ms", 33.0);
     const std::string csv_path = args.get("csv", "out/bench-settle.csv");
     const std::string plot_path = args.get("plot", "out/bench-settle.png");
@@ -205,7 +223,7 @@ int bench_settle(const Args& args, int width, int height) {
                                                       component, reference, threads)
                                     : 0.0;
         std::vector<ConvergenceRun> runs;
-        for (PipelineMode mode : kModes) {
+        for (PipelineMode mode : modes) {
             runs.push_back(run_convergence(scene, entry.script, mode, frames, width, height,
                                            component, reference, threads, prime));
             runs.back().settle = analyse_settle(runs.back().frames, target);
@@ -232,11 +250,13 @@ int bench_settle(const Args& args, int width, int height) {
         auto settled = [&](const SettleResult& r) {
             return r.settle.settled_ok() && r.settle.settled <= 1.1 * best;
         };
-        const SettleResult& budget = results[size_t(PipelineMode::full_budget)];
+        const SettleResult* budget = nullptr;
+        for (const SettleResult& r : results)
+            if (r.mode == PipelineMode::full_budget) budget = &r;
         for (const SettleResult& r : results) {
             const bool ok = settled(r);
-            const bool speedup_ok = ok && settled(budget) && r.settle.seconds > 0;
-            const double speedup = speedup_ok ? budget.settle.seconds / r.settle.seconds : 0.0;
+            const bool speedup_ok = ok && budget && settled(*budget) && r.settle.seconds > 0;
+            const double speedup = speedup_ok ? budget->settle.seconds / r.settle.seconds : 0.0;
             const char* mode = kPipelineModeNames[size_t(r.mode)];
             std::printf(
                 "%-10s %8zu %-22s %-11s %9.5f %6s %8s %7.1f/%-7.1f %7.1f/%-7.1f %9llu %9llu "
