@@ -36,6 +36,7 @@ const std::vector<LadderEntry> kLadder = {
     {"scenes/two_rooms.json", "scenes/two_rooms_light_off_step.lua"},
     {"scenes/bumpy_133k_box.json", "scenes/bumpy_133k_jump.lua", 120},
     {"scenes/conference.json", "scenes/conference_box_jump.lua", 240},
+    {"scenes/conference.json", "scenes/conference_lamp_off_step.lua", 240},
 };
 
 std::vector<PipelineMode> parse_modes(const std::string& list) {
