@@ -59,19 +59,29 @@ int FrameScheduler::aim_texels_left(const Settings& settings, double elapsed_ms)
 }
 
 void FrameScheduler::measure(const PipelineStats& s) {
-    // gather_ms holds the gathers and the uploads around them; with enough texels to be a
-    // measurement, the per-texel cost; the rest is counted as drawing.
+    // A unit's cost is measured as the time over the units; with few units the fixed costs of a
+    // batch dominate, so such a sample is only an upper bound of the unit cost. It is taken when
+    // it is below the estimate (the estimate is then provably too high): otherwise one slow frame
+    // (an edit's first gather, a BVH rebuild) could shrink a budget below the size that measures,
+    // and the budget would never grow back.
+    auto sample = [](RunningCost& cost, double ms, int units, int enough) {
+        if (units <= 0) return;
+        const double per_unit = ms / units;
+        if (units >= enough || (cost.known() && per_unit < cost.value())) cost.add(per_unit);
+    };
+    // gather_ms holds the gathers and the uploads around them; the per-texel cost, and the rest
+    // is counted as drawing.
     const int texels = s.iim_texels_gathered;
-    if (texels >= 4) gather_ms_per_texel_.add(s.gather_ms / texels);
+    sample(gather_ms_per_texel_, s.gather_ms, texels, 4);
     const double gather_part =
         gather_ms_per_texel_.known() ? texels * gather_ms_per_texel_.value() : 0.0;
     draw_ms_.add(s.draw_ms + std::max(0.0, s.gather_ms - gather_part));
     // Only frames that re-traced groups measure a photon's cost: a frame of verification alone
     // (one photon a group) is dominated by its fixed costs (edits, the moved-object query).
     const int photons = s.photons.photons_verified + s.photons.photons_retraced;
-    if (s.photons.photons_retraced >= 500) photon_ms_.add(s.photon_ms / photons);
-    if (s.photons.aim_texels_rebuilt >= 4)
-        aim_ms_per_texel_.add(s.aim_ms / s.photons.aim_texels_rebuilt);
+    if (s.photons.photons_retraced > 0)
+        sample(photon_ms_, s.photon_ms, photons, s.photons.photons_retraced >= 500 ? 1 : 1 << 30);
+    sample(aim_ms_per_texel_, s.aim_ms, s.photons.aim_texels_rebuilt, 4);
     caustic_ms_.add(s.caustic_ms);
 }
 

@@ -51,9 +51,10 @@ std::vector<PipelineMode> parse_modes(const std::string& list) {
                 found = true;
             }
         if (!found)
-            throw CliError("afterglow bench settle: --modes: expected selective, full or "
-                           "full-budget, got '" +
-                           name + "'");
+            throw CliError(
+                "afterglow bench settle: --modes: expected selective, full or "
+                "full-budget, got '" +
+                name + "'");
     }
     if (modes.empty()) throw CliError("afterglow bench settle: --modes: no mode given");
     return modes;
