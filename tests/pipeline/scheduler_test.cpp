@@ -36,6 +36,23 @@ TEST(FrameScheduler, WithoutATargetTheFixedCountsHold) {
     EXPECT_EQ(scheduler.aim_texels_left(settings, 0.0), FrameBudgets::kUnlimited);
 }
 
+// One slow frame (an edit's first gather) must not starve a budget for good: a small batch
+// cannot measure the unit cost (its fixed costs dominate), but one cheaper than the estimate
+// proves the estimate too high.
+TEST(FrameScheduler, ABudgetShrunkByASlowFrameGrowsBack) {
+    Settings settings;
+    settings.schedule.frame_ms = 33.0f;
+    FrameScheduler scheduler;
+    scheduler.measure(measured(10.0, 20, 500.0, 1000, 5.0, 100, 1.0));  // 25 ms a texel
+    EXPECT_EQ(scheduler.budgets(settings, 1000).iim_texels, 1);
+    for (int f = 0; f < 30; ++f) {
+        const int texels = scheduler.budgets(settings, 1000).iim_texels;
+        scheduler.measure(measured(10.0, texels, 0.5 + 0.1 * texels, 1000, 5.0, 100, 1.0));
+    }
+    // 0.5 ms a batch + 0.1 ms a texel: the budget is back near (33 − 10 − 0.5) / 0.1.
+    EXPECT_GT(scheduler.budgets(settings, 1000).iim_texels, 150);
+}
+
 TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     Settings settings;
     settings.schedule.frame_ms = 33.0f;
