@@ -40,15 +40,25 @@ void Iim::schedule(PhotonMaps& maps) {
     std::stable_sort(surfaces.begin(), surfaces.end(), [&](int a, int b) {
         return maps.surface(a).delta_i > maps.surface(b).delta_i;
     });
+    if (surfaces.empty()) return;
+    // The photons say where the light changed: those texels go before everything queued by
+    // proximity to a moved object or by a sweep, largest Δi first (a texel already queued moves
+    // up to its surface's place).
+    std::deque<int> first;
+    std::vector<char> moved(is_pending_.size(), 0);
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
         if (size_t(s) >= surface_texels_.size()) continue;
-        for (int t : surface_texels_[size_t(s)])
-            if (!is_pending_[size_t(t)]) {
-                is_pending_[size_t(t)] = 1;
-                pending_.push_back(t);
-            }
+        for (int t : surface_texels_[size_t(s)]) {
+            if (moved[size_t(t)]) continue;
+            moved[size_t(t)] = 1;
+            is_pending_[size_t(t)] = 1;
+            first.push_back(t);
+        }
     }
+    for (int t : pending_)
+        if (!moved[size_t(t)]) first.push_back(t);
+    pending_.swap(first);
 }
 
 void Iim::invalidate_all() {

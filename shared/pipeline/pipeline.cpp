@@ -167,15 +167,26 @@ void Pipeline::hand_over(PipelineStats& stats) {
 
 int Pipeline::prime(int max_frames) {
     sync();
+    const Clock::time_point t0 = Clock::now();
     photons_->invalidate_all();
     photons_->trace_all();
-    aim_->rebuild_all(photons_->maps());
+    const Clock::time_point t1 = Clock::now();
+    const int aim_texels = aim_->rebuild_all(photons_->maps());
+    const Clock::time_point t2 = Clock::now();
     for (int a : aim_->take_dirty_texels()) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     std::vector<int> all(staged_aim_.size());
     for (size_t a = 0; a < all.size(); ++a) all[a] = int(a);
     aim_texture_.update(staged_aim_, all);
     aim_dirty_.clear();
+    const Clock::time_point t3 = Clock::now();
     indirect_->prime(*photons_, frame_);
+    gpu::gl::Finish();
+    int enabled = 0;
+    for (const Light& l : scene_.lights) enabled += l.enabled ? 1 : 0;
+    scheduler_.seed(
+        int(scene_.atlas.texels.size()), ms_since(t3),
+        enabled * scene_.settings.photons.groups * scene_.settings.photons.photons_per_group,
+        ms_between(t0, t1), aim_texels, ms_between(t1, t2));
     // Caustic photons are traced a slice a frame: plain frames finish them (and anything the
     // bulk work left), each cheap now that nothing else is out of date.
     int frames = 0;

@@ -58,6 +58,13 @@ int FrameScheduler::aim_texels_left(const Settings& settings, double elapsed_ms)
                            FrameBudgets::kUnlimited));
 }
 
+void FrameScheduler::seed(int texels, double gather_ms, int photons, double photon_ms,
+                          int aim_texels, double aim_ms) {
+    if (texels > 0) gather_ms_per_texel_.add(gather_ms / texels);
+    if (photons > 0) photon_ms_.add(photon_ms / photons);
+    if (aim_texels > 0) aim_ms_per_texel_.add(aim_ms / aim_texels);
+}
+
 void FrameScheduler::measure(const PipelineStats& s) {
     // A unit's cost is measured as the time over the units; with few units the fixed costs of a
     // batch dominate, so such a sample is only an upper bound of the unit cost. It is taken when

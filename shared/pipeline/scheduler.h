@@ -45,6 +45,11 @@ public:
     int aim_texels_left(const Settings& settings, double elapsed_ms) const;
     // Learns from a finished frame.
     void measure(const PipelineStats& stats);
+    // Learns unit costs from bulk work done outside the frames (Pipeline::prime): batches large
+    // enough that their fixed costs are amortised, so the first frame after them (often an
+    // edit's, with its one-time costs) does not have to be the first measurement.
+    void seed(int texels, double gather_ms, int photons, double photon_ms, int aim_texels,
+              double aim_ms);
 
     const RunningCost& draw_ms() const { return draw_ms_; }
     const RunningCost& gather_ms_per_texel() const { return gather_ms_per_texel_; }
