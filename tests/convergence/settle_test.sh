@@ -4,15 +4,15 @@
 # indirect error is back within 10% of its settled value. The target (2 s) is one neither mode is
 # bound by on any machine, the sanitizer build included, so the count does not depend on timing:
 # what it holds is that selective, with immediate invalidation, loses no frame to the baseline that
-# redoes everything. Exit 77 (skipped) without a GL context or without
-# Debian's python3.
+# redoes everything. Both start from the converged state of frame 0 (--prime). Exit 77 (skipped)
+# without a GL context or without Debian's python3.
 set -uo pipefail
 bin="$1"; work="$2"
 "$bin" glinfo >/dev/null 2>&1 || { echo "no GL context: skipped"; exit 77; }
 [ -x /usr/bin/python3 ] || { echo "no /usr/bin/python3: skipped"; exit 77; }
 mkdir -p "$work"
 common=(scenes/cornell.json --script scenes/cornell_cube_jump.lua --size 48x48 --frames 70
-        --frame-ms 2000 --ref-spp 16 --ref-photons 200000 --cache "$work/settle-cache" --plot "" -q)
+        --frame-ms 2000 --prime --ref-spp 16 --ref-photons 200000 --cache "$work/settle-cache" --plot "" -q)
 "$bin" converge "${common[@]}" --csv "$work/jump.selective.csv" || exit 1
 "$bin" converge "${common[@]}" --baseline full-budget --csv "$work/jump.full-budget.csv" || exit 1
 /usr/bin/python3 tests/convergence/check_settle.py "$work/jump.selective.csv" "$work/jump.full-budget.csv"
