@@ -64,6 +64,39 @@ Scene lens_scene(int size) {
     return s;
 }
 
+// A mirror ball (radius 1) resting on a floor, a point light straight above, the camera level
+// with the ball's centre: the ball's lower rim reflects the floor around the contact point, which
+// lies in the ball's own shadow (radius 6·tan(asin(1/5)) ≈ 1.22 around it).
+Scene mirror_scene(int size) {
+    Scene s;
+    s.path = "specular_test";
+    Object floor;
+    floor.name = "floor";
+    floor.mesh = make_quad(30.0f, 30.0f);
+    floor.material.albedo = glm::vec3(0.8f);
+    s.objects.push_back(floor);
+    Object ball;
+    ball.name = "ball";
+    ball.mesh = make_sphere(1.0f, 4);
+    ball.material.type = MaterialType::mirror;
+    ball.transform.translation = {0.0f, 1.0f, 0.0f};
+    ball.dynamic = true;
+    s.objects.push_back(ball);
+    Light l;
+    l.name = "lamp";
+    l.position = {0.0f, 6.0f, 0.0f};
+    l.intensity = glm::vec3(30.0f);
+    s.lights.push_back(l);
+    s.camera.eye = {0.0f, 1.0f, -8.0f};
+    s.camera.target = {0.0f, 1.0f, 0.0f};
+    s.camera.fov_y = 18.0f;
+    s.camera.width = s.camera.height = size;
+    s.settings.lightmap.texel_size = 4.0f;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
 Image render_specular(const Scene& scene) {
     SceneMeshes meshes(scene);
     LightmapTexture iim(scene.atlas);  // zero: no indirect light
@@ -74,7 +107,7 @@ Image render_specular(const Scene& scene) {
 
 // Mean colour over pixels inside the disc of radius `r` (pixels) around the image centre,
 // within the quadrant given by the signs of dx, dy (0: any).
-glm::dvec3 disc_mean(const Image& img, double r, int sx, int sy) {
+glm::dvec3 disc_mean(const Image& img, double r, int sx, int sy, double below = -1e9) {
     glm::dvec3 sum(0.0);
     int n = 0;
     const double c = 0.5 * img.width;
@@ -82,7 +115,7 @@ glm::dvec3 disc_mean(const Image& img, double r, int sx, int sy) {
         for (int x = 0; x < img.width; ++x) {
             const double dx = x + 0.5 - c, dy = y + 0.5 - c;
             if (dx * dx + dy * dy > r * r) continue;
-            if (sx * dx < 0.0 || sy * dy < 0.0) continue;
+            if (sx * dx < 0.0 || sy * dy < 0.0 || dy < below) continue;
             sum += glm::dvec3(img.rgb(x, y));
             ++n;
         }
@@ -136,6 +169,37 @@ TEST_F(SpecularTest, GlassBallInvertsTheBackdropAsPathTracingDoes) {
             std::printf("quadrant %+d,%+d: frame %.4f, pt %.4f\n", sx, sy, sa, sb);
             EXPECT_NEAR(sa / sb, 1.0, 0.05) << "quadrant " << sx << "," << sy;
         }
+}
+
+}  // namespace ag::gpu
+
+namespace ag::gpu {
+
+// The cube map holds shadowed direct light: the ball's lower rim shows the contact shadow, as in
+// pt (which adds a little light the frame has no IIM for here: the floor lit through the mirror).
+TEST_F(SpecularTest, MirrorBallShowsItsOwnContactShadow) {
+    const Scene scene = mirror_scene(48);
+    const Image frame = render_specular(scene);
+    Scene unshadowed = scene;
+    unshadowed.settings.direct.shadows = false;
+    const Image lit = render_specular(unshadowed);
+    ThreadPool pool(2);
+    cpu::ReferenceSettings settings;
+    settings.spp = 64;
+    const Image pt =
+        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::specular)];
+    const double r = 24.0 * std::tan(std::asin(1.0 / 8.0)) / std::tan(glm::radians(9.0));
+    // The rim below 0.6 r (image rows go down): the floor within ~0.3 of the contact point.
+    const double f = disc_mean(frame, 0.95 * r, 0, 1, 0.6 * r).x,
+                 p = disc_mean(pt, 0.95 * r, 0, 1, 0.6 * r).x,
+                 u = disc_mean(lit, 0.95 * r, 0, 1, 0.6 * r).x;
+    const double whole_f = disc_mean(frame, 0.95 * r, 0, 0).x,
+                 whole_p = disc_mean(pt, 0.95 * r, 0, 0).x;
+    std::printf("lower rim: frame %.4f, pt %.4f, unshadowed %.4f; ball: frame %.4f, pt %.4f\n", f,
+                p, u, whole_f, whole_p);
+    EXPECT_LT(f, 0.5 * u) << "the contact shadow is missing";
+    EXPECT_NEAR(f, p, 0.1 * u);
+    EXPECT_NEAR(whole_f / whole_p, 1.0, 0.05);
 }
 
 }  // namespace ag::gpu
