@@ -97,7 +97,6 @@ uniform sampler2D splat;    // rgb: photon power; a: photon count
 uniform sampler2D surface;  // rgb: albedo; a: the pixel's world area (0: receives nothing)
 uniform int k;
 uniform ivec2 size;
-const int kMaxK = 32;
 float cone(int i, int j, int h) { return sqrt(1.0 + 2.0 * float(h * h) - float(i * i + j * j)); }
 bool inside(ivec2 q) { return q.x >= 0 && q.y >= 0 && q.x < size.x && q.y < size.y; }
 )";
@@ -111,15 +110,14 @@ void main() {
     if (texelFetch(splat, p, 0).a <= 0.0) return;
     int h = k;
     if (kernel_photons > 0 && k > 0) {
-        // Photons in each ring max(|i|, |j|) = r, then the first window holding kernel_photons.
-        float ring[kMaxK + 1];
-        for (int r = 0; r <= k; ++r) ring[r] = 0.0;
-        for (int j = -k; j <= k; ++j)
-            for (int i = -k; i <= k; ++i)
-                if (inside(p + ivec2(i, j))) ring[max(abs(i), abs(j))] += texelFetch(splat, p + ivec2(i, j), 0).a;
+        // Grow the window ring by ring (max(|i|, |j|) = r) until it holds kernel_photons.
         float count = 0.0;
         for (int r = 0; r <= k; ++r) {
-            count += ring[r];
+            for (int i = -r; i <= r; ++i)
+                for (int j = -r; j <= r; j += (abs(i) == r || r == 0) ? 1 : 2 * r) {
+                    ivec2 q = p + ivec2(i, j);
+                    if (inside(q)) count += texelFetch(splat, q, 0).a;
+                }
             if (count >= float(kernel_photons)) { h = r; break; }
         }
     }

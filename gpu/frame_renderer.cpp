@@ -67,7 +67,7 @@ float trace_map(samplerCube map, vec3 o, vec3 d, float t_max, int steps, float s
             fa = f;
         } else if (inside) {
             float b = t, fb = f;
-            for (int j = 0; j < 8; ++j) {
+            for (int j = 0; j < 5; ++j) {
                 float m = a + (b - a) * clamp(fa / (fa - fb), 0.02, 0.98);
                 float fm = beyond(map, o + m * d);
                 if (fm < 0.0) { a = m; fa = fm; } else { b = m; fb = fm; }
@@ -80,7 +80,7 @@ float trace_map(samplerCube map, vec3 o, vec3 d, float t_max, int steps, float s
 // Radiance arriving at x (world) from direction d, from the environment map.
 vec3 environment_radiance(vec3 x, vec3 d) {
     vec3 o = x - centre;
-    float t = trace_map(environment, o, d, scene_size, 48, 2.0);
+    float t = trace_map(environment, o, d, scene_size, 24, 2.0);
     return textureLod(environment, t > 0.0 ? o + t * d : d, 0.0).rgb;
 }
 // Radiance carried out of glass by a ray refracted in at p along d: at each exit the Fresnel
@@ -89,7 +89,7 @@ vec3 through_glass(vec3 p, vec3 d) {
     vec3 o = p - centre, sum = vec3(0.0);
     float weight = 1.0;
     for (int bounce = 0; bounce < 3 && weight > 1e-3; ++bounce) {
-        float t = trace_map(inner, o, d, 2.0 * object_radius, 16, 1.0);
+        float t = trace_map(inner, o, d, 2.0 * object_radius, 8, 1.0);
         if (t < 0.0) break;
         o += t * d;
         vec3 n = normalize(textureLod(inner, o, 0.0).rgb);  // outward
@@ -118,8 +118,10 @@ vec3 specular_radiance(vec3 p, vec3 n) {
 }
 )";
 
-// G-buffer pass: emission → direct, ρ·IIM → indirect, cube-map lookups → specular, caustics.
-const std::string kGbufferFragment = std::string(kSpecularGlsl) + R"(
+// G-buffer pass, diffuse objects: emission → direct, ρ·IIM → indirect, caustics. Mirrors and
+// glass have their own program (below): llvmpipe runs the code of an untaken branch with an
+// empty mask, so the cube-map searches in this shader cost every diffuse pixel 5× the frame.
+const char* kGbufferFragment = R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -135,20 +137,30 @@ layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
 void main() {
-    vec3 n = normalize(v_normal);
-    out_direct = vec4(0.0, 0.0, 0.0, 1.0);
-    out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
-    out_specular = vec4(0.0, 0.0, 0.0, 1.0);
-    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
-    if (material != kMaterialDiffuse) {
-        out_specular.rgb = specular_radiance(v_world, n);
-        return;
-    }
-    out_direct.rgb = emission;
+    out_direct = vec4(emission, 1.0);
     // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
     vec3 e = iim_in_screen != 0 ? texture(iim, gl_FragCoord.xy / screen).rgb : texture(iim, v_uv).rgb;
-    out_indirect.rgb = albedo * e;
+    out_indirect = vec4(albedo * e, 1.0);
+    out_specular = vec4(0.0, 0.0, 0.0, 1.0);
+    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
     if (has_caustics != 0) out_caustics.rgb = texture(caustics, gl_FragCoord.xy / screen).rgb;
+}
+)";
+
+// G-buffer pass, mirrors and glass: their radiance through the cube maps → specular.
+const std::string kGbufferSpecularFragment = std::string(kSpecularGlsl) + R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+void main() {
+    out_direct = vec4(0.0, 0.0, 0.0, 1.0);
+    out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
+    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
+    out_specular = vec4(specular_radiance(v_world, normalize(v_normal)), 1.0);
 }
 )";
 
@@ -245,6 +257,8 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     check_light_samples(scene);
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
+    gbuffer_specular_ =
+        Program("frame g-buffer, mirrors and glass", kSceneVertex, kGbufferSpecularFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
     environment_ = Program("cube-map environment", kSceneVertex, kEnvironmentFragment);
@@ -480,29 +494,36 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     gbuffer_.set("iim", 0);
     gbuffer_.set("iim_in_screen", in_screen ? 1 : 0);
     gbuffer_.set("caustics", 1);
-    gbuffer_.set("environment", 2);
-    gbuffer_.set("inner", 3);
-    gbuffer_.set("scene_size", 2.0f * scene_.diagonal());
     gbuffer_.set("has_caustics", caustics ? 1 : 0);
     gbuffer_.set("screen", glm::vec2(float(width_), float(height_)));
-    gbuffer_.set("eye", camera.eye);
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, iim);
     gl::ActiveTexture(GL_TEXTURE1);
     gl::BindTexture(GL_TEXTURE_2D, caustics);
     for (size_t o = 0; o < scene_.objects.size(); ++o) {
         const Object& obj = scene_.objects[o];
+        if (obj.material.type != MaterialType::diffuse) continue;
         gbuffer_.set("model", model_matrix(obj));
         gbuffer_.set("albedo", obj.material.albedo);
         gbuffer_.set("emission", obj.material.emission);
-        gbuffer_.set("material", int(obj.material.type));
-        gbuffer_.set("ior", obj.material.ior);
-        if (cube_maps_[o]) {
-            gbuffer_.set("centre", cube_centre(o));
-            gbuffer_.set("object_radius", cube_radii_[o]);
-        }
+        meshes_.draw(o);
+    }
+    gbuffer_specular_.use();
+    gbuffer_specular_.set("view_projection", view_projection);
+    gbuffer_specular_.set("environment", 2);
+    gbuffer_specular_.set("inner", 3);
+    gbuffer_specular_.set("scene_size", 2.0f * scene_.diagonal());
+    gbuffer_specular_.set("eye", camera.eye);
+    for (size_t o = 0; o < scene_.objects.size(); ++o) {
+        const Object& obj = scene_.objects[o];
+        if (obj.material.type == MaterialType::diffuse) continue;
+        gbuffer_specular_.set("model", model_matrix(obj));
+        gbuffer_specular_.set("material", int(obj.material.type));
+        gbuffer_specular_.set("ior", obj.material.ior);
+        gbuffer_specular_.set("centre", cube_centre(o));
+        gbuffer_specular_.set("object_radius", cube_radii_[o]);
         gl::ActiveTexture(GL_TEXTURE2);
-        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o] ? cube_maps_[o].get() : 0);
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o].get());
         gl::ActiveTexture(GL_TEXTURE3);
         gl::BindTexture(GL_TEXTURE_CUBE_MAP, inner_maps_[o] ? inner_maps_[o].get() : 0);
         meshes_.draw(o);

@@ -76,7 +76,7 @@ private:
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int width_, height_;
-    Program gbuffer_, lighting_, volume_, environment_, inner_;
+    Program gbuffer_, gbuffer_specular_, lighting_, volume_, environment_, inner_;
     void compose();
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
