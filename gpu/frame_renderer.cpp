@@ -90,11 +90,15 @@ vec3 through_glass(vec3 p, vec3 d) {
     float weight = 1.0;
     for (int bounce = 0; bounce < 3 && weight > 1e-3; ++bounce) {
         float t = trace_map(inner, o, d, 2.0 * object_radius, 8, 1.0);
-        if (t < 0.0) break;
-        o += t * d;
-        vec3 n = normalize(textureLod(inner, o, 0.0).rgb);  // outward
+        vec3 n = t > 0.0 ? normalize(textureLod(inner, o + t * d, 0.0).rgb) : vec3(0.0);  // outward
         float cos_i = dot(d, n);
-        if (cos_i <= 0.0) break;  // the map's face does not face the ray (not star-shaped)
+        if (t <= 0.0 || cos_i <= 0.0) {
+            // No exit found (a grazing chord shorter than a step) or the map's face there does
+            // not face the ray (not star-shaped): the ray leaves as it goes, not as black.
+            sum += weight * environment_radiance(o + centre, d);
+            break;
+        }
+        o += t * d;
         float f = fresnel(cos_i, ior);
         if (f < 1.0) sum += weight * (1.0 - f) * environment_radiance(o + centre, refract(d, -n, ior));
         weight *= f;
