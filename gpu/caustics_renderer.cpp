@@ -31,6 +31,7 @@ in vec3 v_normal;
 uniform vec3 eye;
 uniform vec3 albedo;
 uniform float pixel_at_unit_distance;  // 2 tan(fov_y / 2) / height
+uniform int diffuse;  // 0: mirror or glass, which receives no caustic (area 0)
 layout(location = 0) out vec4 out_position;
 layout(location = 1) out vec4 out_surface;
 void main() {
@@ -39,21 +40,37 @@ void main() {
     float cos_n = abs(dot(normalize(v_normal), to_eye / d));
     float side = d * pixel_at_unit_distance;
     out_position = vec4(v_world, 1.0);
-    out_surface = vec4(albedo, side * side / max(cos_n, 0.05));
+    out_surface = vec4(albedo, diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
 }
 )";
 
+// A photon is splatted where it lands if it lies on the surface its pixel shows: not farther from
+// the eye than that surface at the pixel's centre plus the depth one pixel's footprint spans there
+// (side / cos θ = area / side). A depth test against the centre alone loses the photons on the far
+// part of every pixel of a surface seen at a grazing angle: half of a low-resolution floor's.
 const char* kSplatVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 power;
 uniform mat4 view_projection;
 uniform vec3 eye;
-uniform float pull;  // towards the eye, a fraction of the distance: wins the depth test on its surface
+uniform sampler2D position_map;  // the visible surface's world position per pixel (w = 1)
+uniform sampler2D surface_map;   // its albedo and, in w, the world area of the pixel there
+uniform float pixel_at_unit_distance;
+uniform ivec2 size;
 out vec3 v_power;
 void main() {
     v_power = power;
-    vec3 p = position + pull * (eye - position);
-    gl_Position = view_projection * vec4(p, 1.0);
+    vec4 clip = view_projection * vec4(position, 1.0);
+    gl_Position = vec4(2.0, 2.0, 2.0, 1.0);  // outside the clip volume: not drawn
+    if (clip.w <= 0.0) return;
+    ivec2 pixel = ivec2(floor((clip.xy / clip.w * 0.5 + 0.5) * vec2(size)));
+    if (any(lessThan(pixel, ivec2(0))) || any(greaterThanEqual(pixel, size))) return;
+    vec4 seen = texelFetch(position_map, pixel, 0);
+    if (seen.w <= 0.0) return;
+    float d_seen = length(seen.xyz - eye), side = d_seen * pixel_at_unit_distance;
+    float depth_span = texelFetch(surface_map, pixel, 0).w / side;
+    if (length(position - eye) > d_seen + depth_span + 1e-4 * d_seen) return;
+    gl_Position = vec4(clip.xy / clip.w, 0.0, 1.0);
 }
 )";
 const char* kSplatFragment = R"(
@@ -67,20 +84,63 @@ out vec4 color;
 void main() { color = vec4(0.0); }
 )";
 
-// Eq. 12.1 with s = 1/Σw, then E = c / A_pixel and L = ρ/π · E.
-const char* kFilterFragment = R"(
-uniform sampler2D splat;
-uniform sampler2D surface;
+// Eq. 12.1 as a scatter: each pixel q holding photons spreads their power over the pixels within
+// its half-size h_q with weights t(i, j) = √(1 + 2h² − (i² + j²)) normalised over the pixels that
+// receive caustics (diffuse surfaces), so no power is lost on glass, mirrors or the background
+// next to a caustic (at low resolution a focus lies within k pixels of its lens's silhouette), and
+// E = c / A_pixel (eq. 12.2), L = ρ/π · E. h_q is k (the thesis), or with `kernel_photons` > 0 the
+// smallest window around q holding that many photons (a k-nearest-neighbour radius in pixels): a
+// dense focus is not spread over (2k+1)² pixels, sparse photons keep the full kernel. Two passes
+// in gather form: h_q and the normalisation W_q per photon pixel, then the sum at each pixel.
+const char* kFilterCommon = R"(
+uniform sampler2D splat;    // rgb: photon power; a: photon count
+uniform sampler2D surface;  // rgb: albedo; a: the pixel's world area (0: receives nothing)
 uniform int k;
 uniform ivec2 size;
-uniform int block_level;  // mip level whose texels are 8×8-pixel blocks of the splats
+float cone(int i, int j, int h) { return sqrt(1.0 + 2.0 * float(h * h) - float(i * i + j * j)); }
+bool inside(ivec2 q) { return q.x >= 0 && q.y >= 0 && q.x < size.x && q.y < size.y; }
+)";
+
+const std::string kFootprintFragment = std::string(kFilterCommon) + R"(
+uniform int kernel_photons;
+out vec4 color;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    color = vec4(0.0);
+    if (texelFetch(splat, p, 0).a <= 0.0) return;
+    int h = k;
+    if (kernel_photons > 0 && k > 0) {
+        // Grow the window ring by ring (max(|i|, |j|) = r) until it holds kernel_photons.
+        float count = 0.0;
+        for (int r = 0; r <= k; ++r) {
+            for (int i = -r; i <= r; ++i)
+                for (int j = -r; j <= r; j += (abs(i) == r || r == 0) ? 1 : 2 * r) {
+                    ivec2 q = p + ivec2(i, j);
+                    if (inside(q)) count += texelFetch(splat, q, 0).a;
+                }
+            if (count >= float(kernel_photons)) { h = r; break; }
+        }
+    }
+    float w = 0.0;
+    for (int j = -h; j <= h; ++j)
+        for (int i = -h; i <= h; ++i) {
+            ivec2 q = p + ivec2(i, j);
+            if (inside(q) && texelFetch(surface, q, 0).a > 0.0) w += cone(i, j, h);
+        }
+    color = vec4(float(h), w, 0.0, 0.0);
+}
+)";
+
+const std::string kFilterFragment = std::string(kFilterCommon) + R"(
+uniform sampler2D footprint;  // per photon pixel: r = h, g = W (Σ of its weights that land)
+uniform int block_level;      // mip level whose texels are 8×8-pixel blocks of the splats
 out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     vec4 s = texelFetch(surface, p, 0);
     if (s.a <= 0.0) { color = vec4(0.0); return; }
     // Photons are sparse: if no 8×8 block the kernel touches holds one (their mean count, in
-    // alpha, is 0), the result is exactly 0 and the 49 fetches are skipped.
+    // alpha, is 0), the result is exactly 0 and the kernel's fetches are skipped.
     if (block_level > 0) {
         ivec2 lo = max(p - ivec2(k), ivec2(0)) >> 3, hi = min(p + ivec2(k), size - 1) >> 3;
         float any = 0.0;
@@ -89,17 +149,18 @@ void main() {
         if (any <= 0.0) { color = vec4(0.0); return; }
     }
     vec3 sum = vec3(0.0);
-    float weights = 0.0;
     for (int j = -k; j <= k; ++j)
         for (int i = -k; i <= k; ++i) {
-            float w = sqrt(1.0 + 2.0 * float(k * k) - float(i * i + j * j));
-            weights += w;
             ivec2 q = p + ivec2(i, j);
-            if (q.x < 0 || q.y < 0 || q.x >= size.x || q.y >= size.y) continue;
-            sum += w * texelFetch(splat, q, 0).rgb;
+            if (!inside(q)) continue;
+            vec4 t = texelFetch(splat, q, 0);
+            if (t.a <= 0.0) continue;
+            vec2 f = texelFetch(footprint, q, 0).xy;
+            int h = int(f.x + 0.5);
+            if (max(abs(i), abs(j)) > h || f.y <= 0.0) continue;
+            sum += cone(i, j, h) / f.y * t.rgb;
         }
-    vec3 irradiance = sum / (weights * s.a);
-    color = vec4(s.rgb / 3.14159265358979 * irradiance, 1.0);
+    color = vec4(s.rgb / 3.14159265358979 * sum / s.a, 1.0);
 }
 )";
 
@@ -133,16 +194,19 @@ CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes
     splat_ = Program("caustics splat", kSplatVertex, kSplatFragment);
     query_ = Program("caustics tile query", kFullScreenTriangleVertex, kQueryFragment);
     filter_ = Program("caustics filter", kFullScreenTriangleVertex, kFilterFragment);
+    footprint_ = Program("caustics footprint", kFullScreenTriangleVertex, kFootprintFragment);
     position_ = make_float_texture(width, height);
     surface_ = make_float_texture(width, height);
     splat_texture_ = make_float_texture(width, height, true);
     result_ = make_float_texture(width, height);
+    footprint_texture_ = make_float_texture(width, height);
     depth_stencil_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height);
     geometry_fbo_ = framebuffer_with({position_.get(), surface_.get()}, depth_stencil_.get());
     splat_fbo_ = framebuffer_with({splat_texture_.get()}, depth_stencil_.get());
     result_fbo_ = framebuffer_with({result_.get()}, 0);
+    footprint_fbo_ = framebuffer_with({footprint_texture_.get()}, 0);
     photon_vbo_ = make_buffer();
     photon_vao_ = make_vertex_array();
     gl::BindVertexArray(photon_vao_.get());
@@ -187,6 +251,7 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
         geometry_.set("model", model_matrix(obj));
         geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? obj.material.albedo
                                                                            : glm::vec3(0.0f));
+        geometry_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
         meshes_.draw(o);
     }
 
@@ -201,7 +266,7 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     gl::DrawBuffers(1, &one);
     gl::Clear(GL_COLOR_BUFFER_BIT);
     gl::DepthMask(GL_FALSE);
-    gl::DepthFunc(GL_LEQUAL);
+    gl::Disable(GL_DEPTH_TEST);  // visibility is decided per photon against the positions
     gl::Enable(GL_BLEND);
     gl::BlendFunc(GL_ONE, GL_ONE);
     gl::Enable(GL_STENCIL_TEST);
@@ -211,7 +276,15 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
         splat_.use();
         splat_.set("view_projection", vp);
         splat_.set("eye", camera.eye);
-        splat_.set("pull", 2e-3f);  // 2e-4 lost a quarter of the photons to depth precision
+        splat_.set("position_map", 0);
+        splat_.set("surface_map", 1);
+        splat_.set("pixel_at_unit_distance",
+                   2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
+        gl::Uniform2i(splat_.location("size"), width_, height_);
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, position_.get());
+        gl::ActiveTexture(GL_TEXTURE1);
+        gl::BindTexture(GL_TEXTURE_2D, surface_.get());
         gl::BindVertexArray(photon_vao_.get());
         gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
         gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(),
@@ -263,32 +336,53 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
     gl::GenerateMipmap(GL_TEXTURE_2D);
-    gl::BindFramebuffer(GL_FRAMEBUFFER, result_fbo_.get());
-    gl::DrawBuffers(1, &one);
     gl::Viewport(0, 0, width_, height_);
-    gl::Clear(GL_COLOR_BUFFER_BIT);
-    filter_.use();
-    filter_.set("splat", 0);
-    filter_.set("surface", 1);
-    filter_.set("k", scene_.settings.caustics.kernel_k);
-    // Level 3 is an exact 8×8 box only when both sides divide by 8.
-    filter_.set("block_level", width_ % 8 == 0 && height_ % 8 == 0 ? 3 : 0);
-    gl::Uniform2i(filter_.location("size"), width_, height_);
+    gl::BindVertexArray(empty_vao_.get());
+    auto over_kept_tiles = [&]() {
+        int n = 0;
+        for (int ty = 0; ty < tiles_y_; ++ty)
+            for (int tx = 0; tx < tiles_x_; ++tx) {
+                if (!keep[size_t(ty * tiles_x_ + tx)]) continue;
+                ++n;
+                gl::Viewport(tx * tile_, ty * tile_, tile_, tile_);
+                gl::DrawArrays(GL_TRIANGLES, 0, 3);
+            }
+        gl::Viewport(0, 0, width_, height_);
+        return n;
+    };
+    auto bind_common = [&](const Program& p) {
+        p.use();
+        p.set("splat", 0);
+        p.set("surface", 1);
+        p.set("k", scene_.settings.caustics.kernel_k);
+        gl::Uniform2i(p.location("size"), width_, height_);
+    };
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
     gl::ActiveTexture(GL_TEXTURE1);
     gl::BindTexture(GL_TEXTURE_2D, surface_.get());
-    gl::BindVertexArray(empty_vao_.get());
-    tiles_filtered_ = 0;
-    for (int ty = 0; ty < tiles_y_; ++ty)
-        for (int tx = 0; tx < tiles_x_; ++tx) {
-            if (!keep[size_t(ty * tiles_x_ + tx)]) continue;
-            ++tiles_filtered_;
-            gl::Viewport(tx * tile_, ty * tile_, tile_, tile_);
-            gl::DrawArrays(GL_TRIANGLES, 0, 3);
-        }
+    // 4a. Each photon pixel's half-size and normalisation.
+    gl::BindFramebuffer(GL_FRAMEBUFFER, footprint_fbo_.get());
+    gl::DrawBuffers(1, &one);
+    gl::Clear(GL_COLOR_BUFFER_BIT);
+    bind_common(footprint_);
+    footprint_.set("kernel_photons", scene_.settings.caustics.kernel_photons);
+    over_kept_tiles();
+    // 4b. The filter.
+    gl::BindFramebuffer(GL_FRAMEBUFFER, result_fbo_.get());
+    gl::DrawBuffers(1, &one);
+    gl::Clear(GL_COLOR_BUFFER_BIT);
+    bind_common(filter_);
+    filter_.set("footprint", 2);
+    // Level 3 is an exact 8×8 box only when both sides divide by 8.
+    filter_.set("block_level", width_ % 8 == 0 && height_ % 8 == 0 ? 3 : 0);
+    gl::ActiveTexture(GL_TEXTURE2);
+    gl::BindTexture(GL_TEXTURE_2D, footprint_texture_.get());
+    tiles_filtered_ = over_kept_tiles();
     gl::Finish();
     filter_ms_ = elapsed_ms(t);
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+    gl::ActiveTexture(GL_TEXTURE1);
     gl::BindTexture(GL_TEXTURE_2D, 0);
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, 0);

@@ -42,10 +42,10 @@ private:
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int width_, height_, tiles_x_, tiles_y_, tile_;
-    Program geometry_, splat_, query_, filter_;
-    Texture position_, surface_, splat_texture_, result_;
+    Program geometry_, splat_, query_, footprint_, filter_;
+    Texture position_, surface_, splat_texture_, result_, footprint_texture_;
     Renderbuffer depth_stencil_;
-    Framebuffer geometry_fbo_, splat_fbo_, result_fbo_;
+    Framebuffer geometry_fbo_, splat_fbo_, result_fbo_, footprint_fbo_;
     Buffer photon_vbo_;
     VertexArray photon_vao_, empty_vao_;
     std::vector<GLuint> queries_;

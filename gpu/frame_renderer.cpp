@@ -27,9 +27,19 @@ vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
 }
 )";
 
+// Mirrors and glass (Larsen ch. 13) through distance cube maps ("distance impostors", Szirmay-Kalos
+// et al. 2005): each specular object's environment map holds, beside the radiance, the distance
+// from the object's centre to what it shows, so a ray leaving any point of the object (not only
+// the centre) finds the surface it meets by a search along it. Glass also holds a map of its own
+// surface (outward normal, distance), so a ray refracted in is followed to where it leaves:
+// refraction at both interfaces, with internal reflections, and a ball lens inverts the image.
 const char* kSpecularGlsl = R"(
-uniform samplerCube environment;
-uniform int material;   // kMaterialDiffuse, kMaterialMirror or kMaterialGlass
+uniform samplerCube environment;  // rgb: radiance; a: distance from `centre` (1e30: nothing)
+uniform samplerCube inner;        // glass: rgb its outward face normal; a: distance from `centre`
+uniform vec3 centre;              // the cube maps' centre (world)
+uniform float object_radius;      // bounding radius of the object around `centre`
+uniform float scene_size;         // longer than any ray from the object to the scene
+uniform int material;             // kMaterialDiffuse, kMaterialMirror or kMaterialGlass
 uniform float ior;
 uniform vec3 eye;
 float fresnel(float cos_i, float eta) {
@@ -40,21 +50,82 @@ float fresnel(float cos_i, float eta) {
     float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     return 0.5 * (rs * rs + rp * rp);
 }
+// > 0 where x (relative to the centre) lies beyond the surface the map shows in its direction.
+float beyond(samplerCube map, vec3 x) { return length(x) - textureLod(map, x, 0.0).a; }
+// The first t in (0, t_max] where o + t·d (relative to the centre) crosses from inside the map's
+// surface to beyond it: a linear search on steps spaced as (i/n)^spacing, then secant steps.
+// −1 where it never does.
+float trace_map(samplerCube map, vec3 o, vec3 d, float t_max, int steps, float spacing) {
+    float a = 0.0, fa = 0.0;
+    bool inside = false;
+    for (int i = 1; i <= steps; ++i) {
+        float t = t_max * pow(float(i) / float(steps), spacing);
+        float f = beyond(map, o + t * d);
+        if (f < 0.0) {
+            inside = true;
+            a = t;
+            fa = f;
+        } else if (inside) {
+            float b = t, fb = f;
+            for (int j = 0; j < 5; ++j) {
+                float m = a + (b - a) * clamp(fa / (fa - fb), 0.02, 0.98);
+                float fm = beyond(map, o + m * d);
+                if (fm < 0.0) { a = m; fa = fm; } else { b = m; fb = fm; }
+            }
+            return 0.5 * (a + b);
+        }
+    }
+    return -1.0;
+}
+// Radiance arriving at x (world) from direction d, from the environment map.
+vec3 environment_radiance(vec3 x, vec3 d) {
+    vec3 o = x - centre;
+    float t = trace_map(environment, o, d, scene_size, 24, 2.0);
+    return textureLod(environment, t > 0.0 ? o + t * d : d, 0.0).rgb;
+}
+// Radiance carried out of glass by a ray refracted in at p along d: at each exit the Fresnel
+// share leaves (refracted), the rest is reflected inside and followed again (3 exits).
+vec3 through_glass(vec3 p, vec3 d) {
+    vec3 o = p - centre, sum = vec3(0.0);
+    float weight = 1.0;
+    for (int bounce = 0; bounce < 3 && weight > 1e-3; ++bounce) {
+        float t = trace_map(inner, o, d, 2.0 * object_radius, 8, 1.0);
+        vec3 n = t > 0.0 ? normalize(textureLod(inner, o + t * d, 0.0).rgb) : vec3(0.0);  // outward
+        float cos_i = dot(d, n);
+        if (t <= 0.0 || cos_i <= 0.0) {
+            // No exit found (a grazing chord shorter than a step) or the map's face there does
+            // not face the ray (not star-shaped): the ray leaves as it goes, not as black.
+            sum += weight * environment_radiance(o + centre, d);
+            break;
+        }
+        o += t * d;
+        float f = fresnel(cos_i, ior);
+        if (f < 1.0) sum += weight * (1.0 - f) * environment_radiance(o + centre, refract(d, -n, ior));
+        weight *= f;
+        d = reflect(d, -n);
+    }
+    return sum;
+}
 vec3 specular_radiance(vec3 p, vec3 n) {
     vec3 v = normalize(p - eye);
     vec3 nf = dot(v, n) < 0.0 ? n : -n;
-    vec3 reflected = texture(environment, reflect(v, nf)).rgb;
+    vec3 reflected = environment_radiance(p, reflect(v, nf));
     if (material == kMaterialMirror) return reflected;
-    float eta = dot(v, n) < 0.0 ? 1.0 / ior : ior;
+    bool entering = dot(v, n) < 0.0;
+    float eta = entering ? 1.0 / ior : ior;
     float f = fresnel(-dot(v, nf), eta);
+    if (f >= 1.0) return reflected;
     vec3 t = refract(v, nf, eta);
-    vec3 refracted = f < 1.0 ? texture(environment, t).rgb : vec3(0.0);
+    // Seen from inside the glass (the camera in it): one refraction, as no exit is to be found.
+    vec3 refracted = entering ? through_glass(p, t) : environment_radiance(p, t);
     return f * reflected + (1.0 - f) * refracted;
 }
 )";
 
-// G-buffer pass: emission → direct, ρ·IIM → indirect, cube-map lookups → specular, caustics.
-const std::string kGbufferFragment = std::string(kSpecularGlsl) + R"(
+// G-buffer pass, diffuse objects: emission → direct, ρ·IIM → indirect, caustics. Mirrors and
+// glass have their own program (below): llvmpipe runs the code of an untaken branch with an
+// empty mask, so the cube-map searches in this shader cost every diffuse pixel 5× the frame.
+const char* kGbufferFragment = R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -70,20 +141,30 @@ layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
 void main() {
-    vec3 n = normalize(v_normal);
-    out_direct = vec4(0.0, 0.0, 0.0, 1.0);
-    out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
-    out_specular = vec4(0.0, 0.0, 0.0, 1.0);
-    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
-    if (material != kMaterialDiffuse) {
-        out_specular.rgb = specular_radiance(v_world, n);
-        return;
-    }
-    out_direct.rgb = emission;
+    out_direct = vec4(emission, 1.0);
     // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
     vec3 e = iim_in_screen != 0 ? texture(iim, gl_FragCoord.xy / screen).rgb : texture(iim, v_uv).rgb;
-    out_indirect.rgb = albedo * e;
+    out_indirect = vec4(albedo * e, 1.0);
+    out_specular = vec4(0.0, 0.0, 0.0, 1.0);
+    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
     if (has_caustics != 0) out_caustics.rgb = texture(caustics, gl_FragCoord.xy / screen).rgb;
+}
+)";
+
+// G-buffer pass, mirrors and glass: their radiance through the cube maps → specular.
+const std::string kGbufferSpecularFragment = std::string(kSpecularGlsl) + R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+void main() {
+    out_direct = vec4(0.0, 0.0, 0.0, 1.0);
+    out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
+    out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
+    out_specular = vec4(specular_radiance(v_world, normalize(v_normal)), 1.0);
 }
 )";
 
@@ -110,9 +191,10 @@ out vec4 color;
 void main() { color = vec4(0.0); }
 )";
 
-// What a mirror or glass object sees: the diffuse scene with emission, indirect and unshadowed
-// direct light (cube maps are rendered every frame, Larsen ch. 13).
-const std::string kEnvironmentFragment = std::string(kLightsGlsl) + R"(
+// What a mirror or glass object sees: the diffuse scene with emission and indirect light, and in
+// alpha the distance from the cube map's centre (the lights' shadowed direct light is added by
+// the same passes as in the frame).
+const char* kEnvironmentFragment = R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -120,14 +202,23 @@ uniform sampler2D iim;
 uniform vec3 albedo;
 uniform vec3 emission;
 uniform int diffuse;
+uniform vec3 centre;
 out vec4 color;
 void main() {
-    if (diffuse == 0) { color = vec4(0.0, 0.0, 0.0, 1.0); return; }
-    vec3 n = normalize(v_normal);
-    vec3 c = emission + albedo * texture(iim, v_uv).rgb;
-    for (int i = 0; i < light_count; ++i) c += direct_from(i, v_world, n, albedo);
-    color = vec4(c, 1.0);
+    float distance = length(v_world - centre);
+    if (diffuse == 0) { color = vec4(0.0, 0.0, 0.0, distance); return; }
+    color = vec4(emission + albedo * texture(iim, v_uv).rgb, distance);
 }
+)";
+
+// A glass object's own surface seen from its centre: outward face normal and distance.
+const char* kInnerFragment = R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform vec3 centre;
+out vec4 color;
+void main() { color = vec4(normalize(v_normal), length(v_world - centre)); }
 )";
 
 // Eq. 13.2 on the GPU: the displayed frame is the sum of the four terms.
@@ -170,9 +261,12 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     check_light_samples(scene);
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
+    gbuffer_specular_ =
+        Program("frame g-buffer, mirrors and glass", kSceneVertex, kGbufferSpecularFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
     environment_ = Program("cube-map environment", kSceneVertex, kEnvironmentFragment);
+    inner_ = Program("glass inner map", kSceneVertex, kInnerFragment);
 
     fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
@@ -208,23 +302,36 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::BindVertexArray(0);
 
     const int cube = scene.settings.specular.cube_map_size;
-    cube_maps_.resize(scene.objects.size());
-    for (size_t o = 0; o < scene.objects.size(); ++o) {
-        if (scene.objects[o].material.type == MaterialType::diffuse) continue;
-        cube_maps_[o] = make_texture();
-        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o].get());
+    auto make_cube = [&](GLenum filter) {
+        Texture t = make_texture();
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, t.get());
         for (int f = 0; f < 6; ++f)
-            gl::TexImage2D(GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f), 0, GL_RGBA16F, cube, cube, 0,
+            gl::TexImage2D(GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f), 0, GL_RGBA32F, cube, cube, 0,
                            GL_RGBA, GL_FLOAT, nullptr);
-        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MIN_FILTER, GLint(filter));
+        gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_MAG_FILTER, GLint(filter));
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
         gl::TexParameteri(GL_TEXTURE_CUBE_MAP, GL_TEXTURE_WRAP_R, GL_CLAMP_TO_EDGE);
+        return t;
+    };
+    gl::Enable(GL_TEXTURE_CUBE_MAP_SEAMLESS);  // no seams where a lookup crosses a face edge
+    cube_maps_.resize(scene.objects.size());
+    inner_maps_.resize(scene.objects.size());
+    cube_radii_.assign(scene.objects.size(), 0.0f);
+    for (size_t o = 0; o < scene.objects.size(); ++o) {
+        const Object& obj = scene.objects[o];
+        if (obj.material.type == MaterialType::diffuse) continue;
+        cube_maps_[o] = make_cube(GL_LINEAR);
+        // Nearest: a face's normal is not blended with its neighbours' (the references see facets).
+        if (obj.material.type == MaterialType::glass) inner_maps_[o] = make_cube(GL_NEAREST);
+        const glm::vec3 c = mesh_bounds(obj.mesh).center();
+        for (const glm::vec3& p : obj.mesh.positions)
+            cube_radii_[o] = std::max(cube_radii_[o], glm::length(p - c));
     }
     cube_depth_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, cube_depth_.get());
-    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, cube, cube);
+    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, cube, cube);
     cube_fbo_ = make_framebuffer();
     near_ = 1e-3f * scene.diagonal();
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
@@ -243,41 +350,51 @@ void FrameRenderer::set_light_uniforms(const Program& p,
     }
 }
 
+glm::vec3 FrameRenderer::cube_centre(size_t object) const {
+    const Object& o = scene_.objects[object];
+    return o.transform.apply_point(mesh_bounds(o.mesh).center());
+}
+
 void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>& lights) {
     const int size = scene_.settings.specular.cube_map_size;
-    const float far_plane = 4.0f * scene_.diagonal();
     // Face order +X −X +Y −Y +Z −Z with the GL cube-map conventions for up vectors.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
     const glm::vec3 ups[6] = {{0, -1, 0}, {0, -1, 0}, {0, 0, 1},
                               {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
-    const glm::mat4 projection = glm::perspective(glm::radians(90.0f), 1.0f, near_, far_plane);
-    environment_.use();
-    environment_.set("iim", 0);
-    set_light_uniforms(environment_, lights);
-    gl::ActiveTexture(GL_TEXTURE0);
-    gl::BindTexture(GL_TEXTURE_2D, iim);
+    // Infinite far plane, as in the frame: shadow volumes extruded to w = 0 are never clipped.
+    const glm::mat4 projection = glm::infinitePerspective(glm::radians(90.0f), 1.0f, near_);
     gl::BindFramebuffer(GL_FRAMEBUFFER, cube_fbo_.get());
-    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER,
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
                                 cube_depth_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
-    gl::DrawBuffers(1, &draw);
-    gl::Viewport(0, 0, size, size);
-    gl::Enable(GL_DEPTH_TEST);
-    gl::DepthFunc(GL_LESS);
-    gl::Disable(GL_BLEND);
-    gl::Disable(GL_STENCIL_TEST);
     for (size_t s = 0; s < scene_.objects.size(); ++s) {
         if (!cube_maps_[s]) continue;
-        const glm::vec3 centre =
-            scene_.objects[s].transform.apply_point(mesh_bounds(scene_.objects[s].mesh).center());
+        const glm::vec3 centre = cube_centre(s);
         for (int f = 0; f < 6; ++f) {
-            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0,
-                                     GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f),
+            const glm::mat4 view_projection =
+                projection * glm::lookAt(centre, centre + dirs[f], ups[f]);
+            const GLenum face = GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f);
+            if (inner_maps_[s]) {
+                // The object's own surface (only it): its normals and distances.
+                gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, face,
+                                         inner_maps_[s].get(), 0);
+                begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0, 0, 0, 0));
+                inner_.use();
+                inner_.set("view_projection", view_projection);
+                inner_.set("centre", centre);
+                inner_.set("model", model_matrix(scene_.objects[s]));
+                meshes_.draw(s);
+            }
+            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, face,
                                      cube_maps_[s].get(), 0);
-            gl::ClearColor(0, 0, 0, 1);
-            gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-            environment_.set("view_projection",
-                             projection * glm::lookAt(centre, centre + dirs[f], ups[f]));
+            // Alpha 1e30: no surface in that direction (a lookup then uses the direction alone).
+            begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0, 0, 0, 1e30f));
+            environment_.use();
+            environment_.set("iim", 0);
+            environment_.set("centre", centre);
+            environment_.set("view_projection", view_projection);
+            gl::ActiveTexture(GL_TEXTURE0);
+            gl::BindTexture(GL_TEXTURE_2D, iim);
             for (size_t o = 0; o < scene_.objects.size(); ++o) {
                 if (o == s) continue;  // an object does not see itself in its own cube map
                 const Object& obj = scene_.objects[o];
@@ -287,6 +404,9 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
                 environment_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
                 meshes_.draw(o);
             }
+            // Direct light with the frame's shadow volumes (every object casts, this one too:
+            // a mirror ball shows its own contact shadow).
+            add_direct_light(lights, view_projection, draw);
         }
     }
     check_gl("FrameRenderer::render_cube_maps");
@@ -306,6 +426,47 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
     volume_.set("view_projection", view_projection);
     gl::BindVertexArray(volume_vao_.get());
     gl::DrawArrays(GL_TRIANGLES, 0, GLsizei(triangles.size()));
+}
+
+void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
+                                     const glm::mat4& view_projection, GLenum draw_buffer) {
+    gl::DepthMask(GL_FALSE);
+    gl::Enable(GL_STENCIL_TEST);
+    gl::Enable(GL_DEPTH_CLAMP);
+    for (size_t i = 0; i < lights.size(); ++i) {
+        gl::Clear(GL_STENCIL_BUFFER_BIT);
+        if (scene_.settings.direct.shadows) {
+            gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            gl::DepthFunc(GL_LESS);
+            gl::StencilFunc(GL_ALWAYS, 0, 0xFF);
+            gl::StencilOpSeparate(GL_BACK, GL_KEEP, GL_INCR_WRAP, GL_KEEP);
+            gl::StencilOpSeparate(GL_FRONT, GL_KEEP, GL_DECR_WRAP, GL_KEEP);
+            draw_shadow_volumes(lights[i], view_projection);
+            gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+        }
+        gl::DrawBuffers(1, &draw_buffer);
+        gl::StencilFunc(GL_EQUAL, 0, 0xFF);
+        gl::StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
+        gl::DepthFunc(GL_LEQUAL);
+        gl::Enable(GL_BLEND);
+        gl::BlendFunc(GL_ONE, GL_ONE);  // alpha + 0: a cube map's distances stay
+        lighting_.use();
+        lighting_.set("view_projection", view_projection);
+        set_light_uniforms(lighting_, {lights[i]});
+        lighting_.set("light_index", 0);
+        for (size_t o = 0; o < scene_.objects.size(); ++o) {
+            const Object& obj = scene_.objects[o];
+            if (obj.material.type != MaterialType::diffuse) continue;
+            lighting_.set("model", model_matrix(obj));
+            lighting_.set("albedo", obj.material.albedo);
+            meshes_.draw(o);
+        }
+        gl::Disable(GL_BLEND);
+    }
+    gl::Disable(GL_DEPTH_CLAMP);
+    gl::Disable(GL_STENCIL_TEST);
+    gl::DepthMask(GL_TRUE);
+    gl::DepthFunc(GL_LESS);
 }
 
 void FrameRenderer::render(GLuint iim, GLuint caustics) {
@@ -337,67 +498,45 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     gbuffer_.set("iim", 0);
     gbuffer_.set("iim_in_screen", in_screen ? 1 : 0);
     gbuffer_.set("caustics", 1);
-    gbuffer_.set("environment", 2);
     gbuffer_.set("has_caustics", caustics ? 1 : 0);
     gbuffer_.set("screen", glm::vec2(float(width_), float(height_)));
-    gbuffer_.set("eye", camera.eye);
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, iim);
     gl::ActiveTexture(GL_TEXTURE1);
     gl::BindTexture(GL_TEXTURE_2D, caustics);
     for (size_t o = 0; o < scene_.objects.size(); ++o) {
         const Object& obj = scene_.objects[o];
+        if (obj.material.type != MaterialType::diffuse) continue;
         gbuffer_.set("model", model_matrix(obj));
         gbuffer_.set("albedo", obj.material.albedo);
         gbuffer_.set("emission", obj.material.emission);
-        gbuffer_.set("material", int(obj.material.type));
-        gbuffer_.set("ior", obj.material.ior);
+        meshes_.draw(o);
+    }
+    gbuffer_specular_.use();
+    gbuffer_specular_.set("view_projection", view_projection);
+    gbuffer_specular_.set("environment", 2);
+    gbuffer_specular_.set("inner", 3);
+    gbuffer_specular_.set("scene_size", 2.0f * scene_.diagonal());
+    gbuffer_specular_.set("eye", camera.eye);
+    for (size_t o = 0; o < scene_.objects.size(); ++o) {
+        const Object& obj = scene_.objects[o];
+        if (obj.material.type == MaterialType::diffuse) continue;
+        gbuffer_specular_.set("model", model_matrix(obj));
+        gbuffer_specular_.set("material", int(obj.material.type));
+        gbuffer_specular_.set("ior", obj.material.ior);
+        gbuffer_specular_.set("centre", cube_centre(o));
+        gbuffer_specular_.set("object_radius", cube_radii_[o]);
         gl::ActiveTexture(GL_TEXTURE2);
-        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o] ? cube_maps_[o].get() : 0);
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, cube_maps_[o].get());
+        gl::ActiveTexture(GL_TEXTURE3);
+        gl::BindTexture(GL_TEXTURE_CUBE_MAP, inner_maps_[o] ? inner_maps_[o].get() : 0);
         meshes_.draw(o);
     }
 
     // 2. Per light: shadow volumes into the stencil (depth-fail), then add its light where the
     //    count is zero (eq. 13.2).
-    gl::DepthMask(GL_FALSE);
-    gl::Enable(GL_STENCIL_TEST);
-    gl::Enable(GL_DEPTH_CLAMP);
-    const GLenum direct_only = GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect);
-    for (size_t i = 0; i < lights.size(); ++i) {
-        gl::Clear(GL_STENCIL_BUFFER_BIT);
-        if (scene_.settings.direct.shadows) {
-            gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
-            gl::DepthFunc(GL_LESS);
-            gl::StencilFunc(GL_ALWAYS, 0, 0xFF);
-            gl::StencilOpSeparate(GL_BACK, GL_KEEP, GL_INCR_WRAP, GL_KEEP);
-            gl::StencilOpSeparate(GL_FRONT, GL_KEEP, GL_DECR_WRAP, GL_KEEP);
-            draw_shadow_volumes(lights[i], view_projection);
-            gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
-        }
-        gl::DrawBuffers(1, &direct_only);
-        gl::StencilFunc(GL_EQUAL, 0, 0xFF);
-        gl::StencilOp(GL_KEEP, GL_KEEP, GL_KEEP);
-        gl::DepthFunc(GL_LEQUAL);
-        gl::Enable(GL_BLEND);
-        gl::BlendFunc(GL_ONE, GL_ONE);
-        lighting_.use();
-        lighting_.set("view_projection", view_projection);
-        set_light_uniforms(lighting_, {lights[i]});
-        lighting_.set("light_index", 0);
-        for (size_t o = 0; o < scene_.objects.size(); ++o) {
-            const Object& obj = scene_.objects[o];
-            if (obj.material.type != MaterialType::diffuse) continue;
-            lighting_.set("model", model_matrix(obj));
-            lighting_.set("albedo", obj.material.albedo);
-            meshes_.draw(o);
-        }
-        gl::Disable(GL_BLEND);
-        gl::DrawBuffers(4, all);
-    }
-    gl::Disable(GL_DEPTH_CLAMP);
-    gl::Disable(GL_STENCIL_TEST);
-    gl::DepthMask(GL_TRUE);
-    gl::DepthFunc(GL_LESS);
+    add_direct_light(lights, view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
+    gl::DrawBuffers(4, all);
     compose();
     gl::BindVertexArray(0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -2,7 +2,8 @@
 // + Σ_lights L_direct(i)·shadow(i). Each term is rendered into its own float attachment, so the
 // component images (thesis Fig. 13.1) sum exactly to the frame. Direct light is shaded per pixel
 // for every point light (quad lights as a grid of point lights) with hard shadows from stencil
-// shadow volumes; indirect light is IIM × albedo; mirrors and glass look up a dynamic cube map.
+// shadow volumes; indirect light is IIM × albedo; mirrors and glass trace through dynamic
+// distance cube maps (both glass interfaces; the cube maps hold shadowed direct light).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -64,13 +65,18 @@ public:
 
 private:
     void render_cube_maps(GLuint iim, const std::vector<LightSample>& lights);
+    glm::vec3 cube_centre(size_t object) const;  // where its cube maps are rendered from (world)
+    // Adds each light's direct light on the diffuse objects into `draw_buffer` of the bound
+    // framebuffer, outside its shadow volumes (the depth buffer must hold the scene).
+    void add_direct_light(const std::vector<LightSample>& lights, const glm::mat4& view_projection,
+                          GLenum draw_buffer);
     void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
     void set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const;
 
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int width_, height_;
-    Program gbuffer_, lighting_, volume_, environment_;
+    Program gbuffer_, gbuffer_specular_, lighting_, volume_, environment_, inner_;
     void compose();
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
@@ -85,6 +91,9 @@ private:
     VertexArray volume_vao_;
     // Cube maps, one per specular object (index by object; empty for diffuse objects).
     std::vector<Texture> cube_maps_;
+    // Glass only: its own surface seen from the centre (outward normal, distance).
+    std::vector<Texture> inner_maps_;
+    std::vector<float> cube_radii_;  // bounding radius around the centre
     Renderbuffer cube_depth_;
     Framebuffer cube_fbo_;
     float near_ = 1.0f;

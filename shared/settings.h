@@ -70,7 +70,10 @@ struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
     int kernel_k = 3;     // filter half-size k of eq. 12.1
-    int tile_size = 32;   // screen tile edge for occlusion-query culling, pixels
+    // Per photon pixel, the half-size shrinks to the smallest window (≤ k) holding this many
+    // photons, so a dense focus keeps its size at low resolution; 0: always k, as in the thesis.
+    int kernel_photons = 8;
+    int tile_size = 32;  // screen tile edge for occlusion-query culling, pixels
 };
 
 struct DirectSettings {
@@ -177,6 +180,8 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(
         Field<int>{"frames", s.caustics.frames, 1, 1000, "frames to re-trace all caustic photons"});
     v.field(Field<int>{"kernel_k", s.caustics.kernel_k, 0, 32, "filter half-size k (eq. 12.1)"});
+    v.field(Field<int>{"kernel_photons", s.caustics.kernel_photons, 0, 1000000,
+                       "photons a pixel's filter window must hold before it stops shrinking"});
     v.field(Field<int>{"tile_size", s.caustics.tile_size, 4, 512,
                        "tile edge for occlusion-query culling"});
     v.end_section();

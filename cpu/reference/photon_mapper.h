@@ -56,6 +56,8 @@ private:
                std::vector<Photon>& out) const;
     void emit_global(int light, int count, int first, int n, std::vector<Photon>& out) const;
     void emit_caustic(int light, int count, int first, int n, std::vector<Photon>& out) const;
+    // ΣΦ/(π r²) over the k nearest photons facing the same way, r the k-th's distance (capped at
+    // √max_r2 when > 0); the k-th, on the circle, counts half.
     glm::vec3 estimate(const PhotonMap& map, const glm::vec3& p, const glm::vec3& n, int k,
                        float max_r2) const;
     // Cosine-weighted mean of the radiance arriving at (p, n) that has met a diffuse surface:

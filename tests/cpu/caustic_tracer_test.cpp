@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <numbers>
 
+#include "ball_lens.h"
 #include "test_scenes.h"
 
 namespace ag::cpu {
@@ -96,6 +97,32 @@ TEST(CausticTracer, BallLensFocusesNearTheParaxialFocus) {
     EXPECT_LT(spots[1].r50, spots[2].r50);
     EXPECT_GT(spots[1].peak, spots[0].peak);
     EXPECT_GT(spots[1].peak, spots[2].peak);
+}
+
+// Against the exact ball lens (tests/cpu/ball_lens.h): the photons' total power on the plane
+// (transmission with Fresnel losses at both interfaces, internal and external reflections) and
+// the spot's radii at the paraxial focus. The tracer sees an icosphere of 20,480 flat facets.
+TEST(CausticTracer, BallLensPowerAndSpotMatchTheExactSphere) {
+    test::BallLens lens;
+    const double focus = lens.paraxial_image_distance();
+    lens.centre_height = focus;  // the plane at the paraxial focus
+    const test::CausticSpot exact = test::spot_of(test::exact_caustic(lens, 200000));
+    Scene scene = test::ball_lens_scene(lens, 5);
+    scene.settings.caustics.photons = 100000;
+    ThreadPool pool(2);
+    CausticTracer tracer(scene, pool);
+    tracer.trace_all();
+    test::RadialPower photons;
+    for (const CausticPhoton& p : tracer.photons())
+        if (p.power != glm::vec3(0.0f))
+            photons.emplace_back(std::hypot(double(p.position.x), double(p.position.z)),
+                                 double(p.power.x));
+    const test::CausticSpot got = test::spot_of(photons);
+    std::printf("power %.4f (exact %.4f), r50 %.4f (%.4f), r90 %.4f (%.4f)\n", got.power,
+                exact.power, got.r50, exact.r50, got.r90, exact.r90);
+    EXPECT_NEAR(got.power / exact.power, 1.0, 0.02);
+    EXPECT_NEAR(got.r50 / exact.r50, 1.0, 0.10);
+    EXPECT_NEAR(got.r90 / exact.r90, 1.0, 0.10);
 }
 
 TEST(CausticTracer, OnlySpecularPathsAreStoredAndPowerIsConserved) {

@@ -10,6 +10,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <numbers>
 
+#include "cpu/reference/photon_mapper.h"
 #include "shared/camera.h"
 #include "shared/metrics.h"
 #include "test_scenes.h"
@@ -179,6 +180,39 @@ TEST(Reference, FurnacePathTracerGivesLeOverOneMinusAlbedo) {
 
 // Direct light in the renderer's units: a plane of albedo ρ at distance h under a point light of
 // intensity I has radiance ρ/π · I cosθ / d² (d, θ from the light to the pixel's point).
+// The photon map's density estimates are unbiased: on a plane under a point light, the kNN
+// irradiance at arbitrary points and the one precomputed at photons (what final-gather rays read)
+// average to I cosθ / d² within 1.5% (noise ~0.6%) with k = 20, where ΣΦ/(π r²) over the k
+// nearest, the k-th counted whole, read +3.5% and +2.6%.
+TEST(Reference, PhotonMapIrradianceEstimatesAreUnbiased) {
+    const float height = 1.0f, intensity = 10.0f;
+    const Scene scene = test::plane_under_light(2.0f, height, intensity, 0.5f);
+    ReferenceSettings settings = pm(1, 400000, 1);
+    settings.knn = 20;
+    settings.caustic_photons = 0;
+    ThreadPool pool(2);
+    const RayTracer rays(scene);
+    const PhotonMapper mapper(scene, rays, settings, pool);
+    const glm::vec3 up(0.0f, 1.0f, 0.0f), light(0.0f, height, 0.0f);
+    double at_points = 0.0, cached = 0.0;
+    constexpr int kGrid = 40;
+    for (int j = 0; j < kGrid; ++j)
+        for (int i = 0; i < kGrid; ++i) {
+            const glm::vec3 p((float(i) + 0.5f) / kGrid - 0.5f, 0.0f,
+                              (float(j) + 0.5f) / kGrid - 0.5f);
+            const float d2 = glm::dot(p - light, p - light);
+            const double expected = intensity * height / (d2 * std::sqrt(d2));
+            at_points += mapper.global_irradiance(p, up).x / expected;
+            cached += mapper.cached_irradiance(p, up).x / expected;
+        }
+    at_points /= kGrid * kGrid;
+    cached /= kGrid * kGrid;
+    std::printf("mean estimate / exact: at points %.4f, precomputed at photons %.4f\n", at_points,
+                cached);
+    EXPECT_NEAR(at_points, 1.0, 0.015);
+    EXPECT_NEAR(cached, 1.0, 0.015);
+}
+
 TEST(Reference, PointLightDirectMatchesAnalytic) {
     const float height = 2.0f, intensity = 10.0f, albedo = 0.6f;
     Scene scene = test::plane_under_light(20.0f, height, intensity, albedo);
