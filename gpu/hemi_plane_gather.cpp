@@ -39,10 +39,14 @@ uniform int use_charts;
 uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int specular;
+uniform float specular_tag;
 out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
+    // A mirror or glass pixel adds w × specular_tag to alpha, more than 1 even for the smallest
+    // pixel weight, so a tile's alpha above 1 says the view met one (back faces add at most 1).
+    if (specular != 0 && specular_tag > 0.0) { color = vec4(0.0, 0.0, 0.0, w * specular_tag); return; }
     if (!gl_FrontFacing) { color = vec4(0.0, 0.0, 0.0, w); return; }
     vec3 radiance = specular != 0 ? vec3(0.0) : (use_charts != 0 ? chart_lightmap(aim, charts, v_uv, v_chart)
                                                     : texture(aim, v_uv).rgb);
@@ -131,6 +135,12 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     std::vector<float> rgba(w.size() * 4, 0.0f);
     for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
     weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
+    if (scene.settings.gather.specular_bounces > 0) {
+        float smallest = 1.0f;
+        for (float v : w)
+            if (v > 0.0f) smallest = std::min(smallest, v);
+        specular_tag_ = 4.0f / smallest;
+    }
     depth_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, size, size);
@@ -179,6 +189,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.set("weights", 1);
     program_.set("charts", 2);
     program_.set("use_charts", chart_texture ? 1 : 0);
+    program_.set("specular_tag", specular_tag_);
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;
@@ -235,7 +246,13 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         for (size_t k = 0; k < count; ++k) {
             const float* m = &means[4 * k];  // tile k is at (k % tiles_x, k / tiles_x): row-major
             out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
-            out[first + k].back_fraction = pixels * m[3];
+            const float alpha = pixels * m[3];
+            if (specular_tag_ > 0.0f && alpha > 2.0f) {
+                out[first + k].sees_specular = true;  // alpha holds the tag: no back share
+                out[first + k].back_fraction = 0.0f;
+            } else {
+                out[first + k].back_fraction = alpha;
+            }
         }
     }
     gl::BindTexture(GL_TEXTURE_2D, 0);

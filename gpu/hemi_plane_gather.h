@@ -35,6 +35,8 @@ public:
                     const LightmapTexture* aim = nullptr);
 
     GatherBackend backend() const override { return GatherBackend::gl; }
+    // Texels whose plane shows a mirror or glass come back with sees_specular set when
+    // settings.gather.specular_bounces > 0 (ag::SpecularRoutedGather hands them to the rays).
     std::vector<GatherResult> gather(const std::vector<int>& texels) override;
 
     // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
@@ -55,6 +57,7 @@ private:
     const LightmapTexture* aim_;
     int resolution_, tiles_x_, level_;
     int max_per_pass_ = 0;
+    float specular_tag_ = 0.0f;  // alpha per unit weight of mirror/glass pixels; 0 = not tagged
     Program program_;
     Texture color_, weights_;
     Renderbuffer depth_;

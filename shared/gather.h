@@ -14,6 +14,9 @@ namespace ag {
 struct GatherResult {
     glm::vec3 iim{0.0f};         // E_indirect / π: a diffuse surface reflects albedo × iim
     float back_fraction = 0.0f;  // weighted share of the view that shows back faces
+    // GL: the hemi-plane showed a mirror or glass, which it cannot see through; the result is
+    // then to be replaced by the CPU gather's (settings.gather.specular_bounces > 0 only).
+    bool sees_specular = false;
 };
 
 class Gatherer {
@@ -23,6 +26,37 @@ public:
     // Gathers the texel records `texels` (indices into scene.atlas.texels) from the current scene
     // and the AIMs as they are now; results in the same order. Deterministic for any thread count.
     virtual std::vector<GatherResult> gather(const std::vector<int>& texels) = 0;
+};
+
+// A GL gather whose texels that see mirrors or glass are gathered again by a CPU gather, which
+// follows the specular bounces: light through glass and off mirrors counts at the cost of rays
+// for those texels only.
+class SpecularRoutedGather final : public Gatherer {
+public:
+    SpecularRoutedGather(Gatherer& plane, Gatherer& rays) : plane_(plane), rays_(rays) {}
+    GatherBackend backend() const override { return plane_.backend(); }
+    std::vector<GatherResult> gather(const std::vector<int>& texels) override {
+        std::vector<GatherResult> out = plane_.gather(texels);
+        std::vector<int> again;
+        std::vector<size_t> where;
+        for (size_t k = 0; k < out.size(); ++k)
+            if (out[k].sees_specular) {
+                again.push_back(texels[k]);
+                where.push_back(k);
+            }
+        if (!again.empty()) {
+            const std::vector<GatherResult> traced = rays_.gather(again);
+            for (size_t j = 0; j < where.size(); ++j) out[where[j]] = traced[j];
+        }
+        routed_ = int(again.size());
+        return out;
+    }
+    int last_routed() const { return routed_; }  // texels the last call handed to the rays
+
+private:
+    Gatherer& plane_;
+    Gatherer& rays_;
+    int routed_ = 0;
 };
 
 }  // namespace ag
