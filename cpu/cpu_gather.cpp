@@ -142,6 +142,11 @@ void CpuGather::prepare() {
     }
 }
 
+std::vector<GatherResult> CpuGather::gather_points(const std::vector<GatherPoint>& points) {
+    assert(aim_ && "CpuGather: gather_points(points) needs the AIM given at construction");
+    return gather_points(points, *aim_);
+}
+
 std::vector<GatherResult> CpuGather::gather_points(const std::vector<GatherPoint>& points,
                                                    const std::vector<glm::vec3>& aim_radiance) {
     assert(aim_radiance.size() == size_t(scene_.atlas.width) * size_t(scene_.atlas.height));
@@ -151,7 +156,8 @@ std::vector<GatherResult> CpuGather::gather_points(const std::vector<GatherPoint
         points.size(),
         [&](size_t i) {
             // Shifts of their own (another seed), apart from every texel record's.
-            const glm::vec2 shift = texel_shift(scene_.settings.seed ^ 0x5bd1e995u, int(i));
+            const glm::vec2 shift =
+                texel_shift(scene_.settings.seed ^ 0x5bd1e995u, int(points[i].key));
             results[i] = gather_point(points[i], shift, aim_radiance);
         },
         4);

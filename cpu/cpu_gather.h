@@ -22,12 +22,6 @@ struct CpuGatherStats {
     uint64_t rays = 0;  // rays cast by the last call
 };
 
-// A world-space point and the normal of the side to gather over.
-struct GatherPoint {
-    glm::vec3 position{0.0f};
-    glm::vec3 normal{0.0f};
-};
-
 class CpuGather final : public Gatherer {
 public:
     // Casts rays with `rays`, which must reflect the scene's current transforms when gather()
@@ -48,7 +42,8 @@ public:
     // glass bounces.
     std::vector<GatherResult> gather(const std::vector<int>& texels,
                                      const std::vector<glm::vec3>& aim_radiance);
-    // The same gather at arbitrary surface points (per-pixel gathering, docs/fidelity.md).
+    // The same gather at arbitrary surface points (texel footprints, per-pixel gathering).
+    std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points) override;
     std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points,
                                             const std::vector<glm::vec3>& aim_radiance);
     const CpuGatherStats& last_stats() const { return stats_; }

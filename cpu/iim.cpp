@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shared/charts.h"
 #include "shared/lightmap_sample.h"
 
 namespace ag::cpu {
@@ -18,6 +19,7 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     to_.assign(n, glm::vec3(0.0f));
     shown_.assign(n, glm::vec3(0.0f));
     blend_start_.assign(n, -1);
+    footprint_.resize(records);
     for (int t = 0; t < int(records); ++t) pending_.push_back(t);
 }
 
@@ -118,6 +120,7 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
         valid_[size_t(batch[k])] = valid;
         if (!valid) invalid.push_back(batch[k]);
     }
+    stats.relocated = relocate(gatherer, invalid);
     if (!invalid.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, invalid);
 
     for (int r : batch) {
@@ -132,6 +135,49 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
     stats.invalid = int(invalid.size());
     last_gathered_ = batch;
     return stats;
+}
+
+int Iim::relocate(Gatherer& gatherer, std::vector<int>& invalid) {
+    // A texel whose centre lies inside geometry (the floor under a box) still has part of its
+    // footprint outside: gather at the footprint point nearest the centre that sees few back
+    // faces. Its value is then the light beside the contact, not its neighbours' (which would
+    // carry the open floor's light up to the box, a leak of 50% in the box's shadow).
+    std::vector<GatherPoint> points;
+    std::vector<std::pair<int, int>> range;  // per invalid texel: [first, end) in points
+    for (int r : invalid) {
+        if (footprint_[size_t(r)].empty())
+            footprint_[size_t(r)] = texel_footprint_points(scene_, r);
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+        const Transform& transform = scene_.objects[size_t(t.object)].transform;
+        const int first = int(points.size());
+        uint32_t k = 0;
+        for (const FootprintPoint& f : footprint_[size_t(r)])
+            points.push_back({transform.apply_point(f.position), transform.apply_vector(f.normal),
+                              uint32_t(r) * 9u + ++k});
+        range.emplace_back(first, int(points.size()));
+    }
+    if (points.empty()) return 0;
+    const std::vector<GatherResult> results = gatherer.gather_points(points);
+    const int w = scene_.atlas.width;
+    std::vector<int> still;
+    int relocated = 0;
+    for (size_t j = 0; j < invalid.size(); ++j) {
+        const int r = invalid[j];
+        bool found = false;
+        for (int i = range[j].first; i < range[j].second && !found; ++i)
+            if (results[size_t(i)].back_fraction <= kBackFaceInvalidFraction) {
+                const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+                raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[size_t(i)].iim;
+                valid_[size_t(r)] = 1;
+                found = true;
+            }
+        if (found)
+            ++relocated;
+        else
+            still.push_back(r);
+    }
+    invalid.swap(still);
+    return relocated;
 }
 
 const std::vector<int>& Iim::blend(uint64_t frame, int blend_frames) {

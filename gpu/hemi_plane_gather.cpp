@@ -161,8 +161,27 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     return gather(texels, aim_->id(), aim_->charts());
 }
 
+std::vector<GatherResult> HemiPlaneGather::gather_points(const std::vector<GatherPoint>& points) {
+    if (!aim_)
+        throw GlError(
+            "HemiPlaneGather: gather_points(points) needs the AIM texture given at construction");
+    return gather_views(points, aim_->id(), aim_->charts());
+}
+
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels,
                                                   GLuint aim_texture, GLuint chart_texture) {
+    std::vector<GatherPoint> views(texels.size());
+    for (size_t k = 0; k < texels.size(); ++k) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(texels[k])];
+        const Object& owner = scene_.objects[size_t(t.object)];
+        views[k] = {owner.transform.apply_point(t.position),
+                    owner.transform.apply_vector(t.normal)};
+    }
+    return gather_views(views, aim_texture, chart_texture);
+}
+
+std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<GatherPoint>& texels,
+                                                        GLuint aim_texture, GLuint chart_texture) {
     std::vector<GatherResult> out(texels.size());
     const int size = tiles_x_ * resolution_;
     const int per_pass =
@@ -212,10 +231,9 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         gl::ClearDepth(0.0);
         gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
         for (size_t k = 0; k < count; ++k) {
-            const TexelRecord& t = scene_.atlas.texels[size_t(texels[first + k])];
-            const Object& owner = scene_.objects[size_t(t.object)];
-            const glm::vec3 n = glm::normalize(owner.transform.apply_vector(t.normal));
-            const glm::vec3 p = owner.transform.apply_point(t.position) + offset * n;
+            const GatherPoint& at = texels[first + k];
+            const glm::vec3 n = glm::normalize(at.normal);
+            const glm::vec3 p = at.position + offset * n;
             const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
             const glm::mat4 view =
                 glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));

@@ -45,6 +45,8 @@ public:
     // dilated atlas. Results in the same order.
     std::vector<GatherResult> gather(const std::vector<int>& texels, GLuint aim_texture,
                                      GLuint chart_texture = 0);
+    // The same at arbitrary points, with the AIM texture given at construction.
+    std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points) override;
 
     int resolution() const { return resolution_; }
     int tiles_per_pass() const { return tiles_x_ * tiles_x_; }
@@ -52,6 +54,10 @@ public:
     void set_max_per_pass(int n) { max_per_pass_ = n; }
 
 private:
+    // The views of one gather: world-space centre (before the offset) and normal per texel.
+    std::vector<GatherResult> gather_views(const std::vector<GatherPoint>& views,
+                                           GLuint aim_texture, GLuint chart_texture);
+
     const Scene& scene_;
     const SceneMeshes& meshes_;
     const LightmapTexture* aim_;

@@ -8,6 +8,7 @@
 
 #include "cpu/aim.h"
 #include "cpu/cpu_gather.h"
+#include "cpu/iim.h"
 #include "cpu/photon_simulation.h"
 #include "cpu/ray_tracer.h"
 #include "cpu/reference/point_reference.h"
@@ -176,22 +177,32 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
         }
     }
 
-    // What the pipeline gathers with these settings: the CPU rays, or the GL hemi-plane with
-    // texels that see mirrors or glass handed to the rays.
-    std::vector<GatherResult> pipeline_gather;
+    // What the pipeline gathers with these settings (the CPU rays, or the GL hemi-plane with
+    // texels that see mirrors or glass handed to the rays), through cpu::Iim as the pipeline
+    // does: invalid texels gathered at their footprint or repaired from neighbours.
+    std::vector<glm::vec3> iim;
     {
         cpu::CpuGather rays_gather(scene, rays, pool, &aim_radiance);
+        cpu::Iim map(scene);
         if (options.gl && saved.gather.backend != GatherBackend::cpu) {
             gpu::HemiPlaneGather plane(scene, *meshes, 256, aim_texture.get());
             SpecularRoutedGather routed(plane, rays_gather);
-            pipeline_gather =
-                saved.gather.specular_bounces > 0 ? routed.gather(all) : plane.gather(all);
-            report.routed = routed.last_routed();
+            if (saved.gather.specular_bounces > 0) {
+                map.gather_records(routed, all, 0);
+                report.routed = routed.total_routed();
+            } else {
+                map.gather_records(plane, all, 0);
+            }
         } else {
-            pipeline_gather = rays_gather.gather(all);
+            map.gather_records(rays_gather, all, 0);
         }
+        iim = map.gathered();
     }
-    values["pipeline"] = iim_of(pipeline_gather);
+    std::vector<glm::vec3> pipeline(records);
+    for (size_t r = 0; r < records; ++r)
+        pipeline[r] =
+            iim[size_t(atlas.texels[r].y) * size_t(atlas.width) + size_t(atlas.texels[r].x)];
+    values["pipeline"] = pipeline;
 
     // Rows per stage, for the whole scene and per object.
     std::vector<std::string> regions = {"all"};
@@ -221,16 +232,8 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
 
     if (!options.gl) return report;
 
-    // (d) The IIM as the camera sees it: the pipeline's gathers at the texel centres, invalid
-    // ones repaired, uploaded (dilated) and read by the frame, against gathering at every pixel.
-    std::vector<glm::vec3> iim(size_t(atlas.width) * size_t(atlas.height), glm::vec3(0.0f));
-    std::vector<char> valid(records);
-    for (size_t r = 0; r < records; ++r) {
-        const TexelRecord& t = atlas.texels[r];
-        iim[size_t(t.y) * size_t(atlas.width) + size_t(t.x)] = pipeline_gather[r].iim;
-        valid[r] = pipeline_gather[r].back_fraction <= kBackFaceInvalidFraction;
-    }
-    repair_invalid_texels(atlas, iim, valid);
+    // (d) The IIM as the camera sees it: the pipeline's IIM above uploaded (dilated) and read by
+    // the frame, against gathering at every pixel.
     gpu::LightmapTexture iim_texture(atlas);
     iim_texture.update_all(iim);
     const int w = options.width, h = options.height;
@@ -244,7 +247,7 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     // Pixels that see a diffuse front face, and the regions each belongs to: its object, the
     // object's part in the shadow of another object (a shadow ray to some light blocked by it),
     // and its part within one texel of another object's bounds (contacts, beside thin walls).
-    std::vector<cpu::GatherPoint> pixel_points;
+    std::vector<GatherPoint> pixel_points;
     std::vector<std::pair<int, int>> pixel_of;
     std::vector<glm::vec3> pixel_albedo;
     std::map<std::string, Image> region_masks;
@@ -259,6 +262,24 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
         it->second.set_rgb(x, y, glm::vec3(1.0f));
     };
     region_masks.emplace("all", Image(w, h));
+    // Object per pixel centre first: regions other than "all" leave out pixels on an object's
+    // outline, where a box-filtered reference mixes two surfaces into one pixel.
+    std::vector<int> object_at(size_t(w) * size_t(h), -1);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 d =
+                camera_ray_direction(scene.camera, float(x) + 0.5f, float(y) + 0.5f);
+            const cpu::RayHit hit = rays.intersect({scene.camera.eye, d, 0.0f, 1e30f});
+            object_at[size_t(y) * size_t(w) + size_t(x)] = hit.hit ? hit.object : -1;
+        }
+    auto outline = [&](int x, int y) {
+        const int self = object_at[size_t(y) * size_t(w) + size_t(x)];
+        for (const auto& [dx, dy] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}}) {
+            const int nx = std::clamp(x + dx, 0, w - 1), ny = std::clamp(y + dy, 0, h - 1);
+            if (object_at[size_t(ny) * size_t(w) + size_t(nx)] != self) return true;
+        }
+        return false;
+    };
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const glm::vec3 d =
@@ -267,11 +288,12 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
             if (!hit.hit) continue;
             const Material& m = scene.objects[size_t(hit.object)].material;
             if (m.type != MaterialType::diffuse || glm::dot(d, hit.normal) >= 0.0f) continue;
-            pixel_points.push_back({hit.position, hit.normal});
+            pixel_points.push_back({hit.position, hit.normal, uint32_t(y * w + x)});
             pixel_of.emplace_back(x, y);
             pixel_albedo.push_back(m.albedo);
             const std::string& name = scene.objects[size_t(hit.object)].name;
             mark("all", x, y);
+            if (outline(x, y)) continue;
             mark(name, x, y);
             const glm::vec3 origin = hit.position + rays.epsilon() * hit.normal;
             std::vector<char> shadowed_by(scene.objects.size(), 0);

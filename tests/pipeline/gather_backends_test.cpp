@@ -161,6 +161,7 @@ TEST_P(GatherBackendTest, TexelsInsideGeometryAreInvalidAndRepaired) {
     }
     EXPECT_GE(inside, 16);
     EXPECT_EQ(stats.invalid, invalid);
+    EXPECT_GT(stats.relocated, 0);  // centre inside, part of the footprint outside
     EXPECT_GT(valid_min, 0.0f);
     EXPECT_LT(valid_max, 0.8f * cube_radiance);
 }
