@@ -39,7 +39,7 @@ struct PhotonSettings {
 };
 
 struct LightmapSettings {
-    float texel_size = 0.0f;  // world units per texel; 0 = longest scene extent / 5 (thesis: 5×5)
+    float texel_size = 0.0f;     // world units per texel; 0 = longest scene extent / 10
     float crease_angle = 30.0f;  // degrees: adjacent faces closer than this share a surface
     float chart_cone = 30.0f;    // degrees: a chart's normals stay within this of its mean
     int gutter = 1;              // free texels around every chart in the atlas
@@ -144,7 +144,7 @@ void visit_settings(Settings& s, Visitor& v) {
     v.end_section();
     v.section("lightmap", "surfaces and charts, Larsen ch. 8");
     v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30,
-                         "world units per texel; 0 = longest scene extent / 5"});
+                         "world units per texel; 0 = longest scene extent / 10"});
     v.field(Field<float>{"crease_angle", s.lightmap.crease_angle, 0, 180,
                          "degrees; adjacent faces closer than this share a surface"});
     v.field(Field<float>{"chart_cone", s.lightmap.chart_cone, 1, 60,

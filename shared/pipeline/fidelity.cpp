@@ -68,12 +68,16 @@ FidelityRow compare_pixels(const std::string& stage, const std::string& test,
         for (int x = 0; x < t.width; ++x) {
             if (mask.at(x, y)[0] == 0.0f) continue;
             const double lt = luminance(t.rgb(x, y)), lr = luminance(r.rgb(x, y));
+            row.test_mean += glm::dvec3(t.rgb(x, y));
+            row.reference_mean += glm::dvec3(r.rgb(x, y));
             st += lt;
             sr += lr;
             if (lr > 0.0) se += (lt - lr) * (lt - lr) / (lr * lr);
             ++row.count;
         }
     if (row.count == 0) return row;
+    row.test_mean /= double(row.count);
+    row.reference_mean /= double(row.count);
     row.mean_ratio = sr > 0.0 ? st / sr : 0.0;
     row.rms = std::sqrt(se / row.count);
     row.rel_mse = compare_images(t, r, &mask).rel_mse;
@@ -330,6 +334,24 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     }
     const bool with_pt =
         options.reference_indirect.width == w && options.reference_indirect.height == h;
+    // Shadows split at their mean column: the two halves' tints say whether the light seen
+    // through a glass ball lands on the right side (the Cornell floor under the sphere).
+    for (size_t i = 0, n = region_order.size(); i < n; ++i) {
+        const std::string name = region_order[i];
+        if (name.find("/shadow:") == std::string::npos) continue;
+        const Image& mask = region_masks.at(name);
+        double sum_x = 0.0;
+        int count = 0;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                if (mask.at(x, y)[0] != 0.0f) sum_x += x, ++count;
+        if (count == 0) continue;
+        const double mid = sum_x / count;
+        for (int y = 0; y < h; ++y)
+            for (int x = 0; x < w; ++x)
+                if (region_masks.at(name).at(x, y)[0] != 0.0f)
+                    mark(name + (double(x) < mid ? "/image_left" : "/image_right"), x, y);
+    }
     for (const std::string& region : region_order) {
         const Image& mask = region_masks.at(region);
         int included = 0;

@@ -34,6 +34,7 @@ struct FidelityRow {
     double mean_ratio = 0.0;  // Σ area·lum(test) / Σ area·lum(reference) (pixels: area 1)
     double rms = 0.0;         // RMS relative error of the luminance, √mean(((t − r) / r)²)
     double rel_mse = 0.0;     // image stages: relMSE (shared/metrics.h); texel stages: 0
+    glm::dvec3 test_mean{0.0}, reference_mean{0.0};  // image stages: mean colour (tint)
 };
 
 struct FidelityReport {
