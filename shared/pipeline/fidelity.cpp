@@ -388,10 +388,13 @@ std::string fidelity_table(const FidelityReport& report) {
 
 std::string fidelity_csv(const Scene& scene, const FidelityReport& report) {
     std::ostringstream out;
-    out << "stage,test,reference,region,count,mean_ratio,rms_relative,rel_mse\n";
+    out << "stage,test,reference,region,count,mean_ratio,rms_relative,rel_mse,test_r,test_g,"
+           "test_b,reference_r,reference_g,reference_b\n";
     for (const FidelityRow& r : report.rows)
         out << r.stage << ',' << r.test << ',' << r.reference << ',' << r.region << ',' << r.count
-            << ',' << r.mean_ratio << ',' << r.rms << ',' << r.rel_mse << '\n';
+            << ',' << r.mean_ratio << ',' << r.rms << ',' << r.rel_mse << ',' << r.test_mean.r
+            << ',' << r.test_mean.g << ',' << r.test_mean.b << ',' << r.reference_mean.r << ','
+            << r.reference_mean.g << ',' << r.reference_mean.b << '\n';
     out << "\nrecord,object,x,y,z,nx,ny,nz,valid";
     for (const auto& [name, v] : report.texel_values)
         out << ',' << name << "_r," << name << "_g," << name << "_b";
