@@ -121,15 +121,37 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
         if (!valid) invalid.push_back(batch[k]);
     }
     stats.relocated = relocate(gatherer, invalid);
-    if (!invalid.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, invalid);
+    // Repaired values follow their sources: every invalid texel gathered so far is filled again
+    // from the valid values as they are now, not only this batch's. Otherwise a texel repaired
+    // before a neighbour was re-gathered keeps the old value, and the settled IIM would depend
+    // on the order texels were gathered in (an edited pipeline would not end where a fresh one
+    // does).
+    std::vector<int> repair;
+    for (size_t r = 0; r < valid_.size(); ++r)
+        if (!valid_[r] && texel_generation_[r] >= 0) repair.push_back(int(r));
+    std::vector<char> in_batch(valid_.size(), 0);
+    for (int r : batch) in_batch[size_t(r)] = 1;
+    std::vector<glm::vec3> before(repair.size());
+    for (size_t j = 0; j < repair.size(); ++j) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(repair[j])];
+        before[j] = raw_[size_t(t.y) * size_t(w) + size_t(t.x)];
+    }
+    if (!repair.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, repair);
 
-    for (int r : batch) {
+    auto start_blend = [&](int r) {
         const TexelRecord& t = scene_.atlas.texels[size_t(r)];
         const size_t a = size_t(t.y) * size_t(w) + size_t(t.x);
         from_[a] = shown_[a];
         to_[a] = raw_[a];
         if (blend_start_[a] < 0) blending_.push_back(int(a));
         blend_start_[a] = int(frame);
+    };
+    for (int r : batch) start_blend(r);
+    for (size_t j = 0; j < repair.size(); ++j) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(repair[j])];
+        if (!in_batch[size_t(repair[j])] &&
+            raw_[size_t(t.y) * size_t(w) + size_t(t.x)] != before[j])
+            start_blend(repair[j]);
     }
     stats.gathered = int(batch.size());
     stats.invalid = int(invalid.size());

@@ -487,7 +487,9 @@ TEST(CpuGather, CornellColourBleeding) {
     CpuGather gather(scene, s.sim->rays(), s.pool, &s.aim->radiance());
     const Gathered g = gather_records(scene, gather, all_texels(scene));
     const std::vector<glm::vec3>& iim = g.iim;
-    EXPECT_GT(g.invalid, 0);  // the floor under the cube
+    // The floor under the cube: at 111 mm every such texel reaches out from under the cube and is
+    // gathered at a point of its footprint.
+    EXPECT_GT(g.invalid + g.relocated, 0);
 
     auto nearest = [&](const std::string& object, glm::vec3 target) {
         const int o = scene.find_object(object);
