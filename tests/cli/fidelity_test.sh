@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # fidelity_test.sh AFTERGLOW: the indirect term's error budget on the Cornell box at CI size
 # (docs/fidelity.md, issue #12). A 48² pt reference (64 spp, about a second), then
-# `afterglow fidelity` twice: at the scene's (Larsen's) 111 mm texels for the gather stage
-# (Gautron's Table 4.1 ordering, light through glass) and at 55.5 mm for the image stages. The bounds come
+# `afterglow fidelity` twice: at Larsen's 111 mm texels for the gather stage (Gautron's Table 4.1
+# ordering, light through glass) and at the scene's 55.5 mm for the image stages. The bounds come
 # from measured values and their spread over pt seeds 1-3 (docs/fidelity.md); exit 77 (skipped)
 # without a GL context.
 set -uo pipefail
@@ -11,11 +11,11 @@ d=$(mktemp -d); trap 'rm -rf "$d"' EXIT
 "$bin" glinfo >/dev/null 2>&1 || { echo "no OSMesa context: skipped"; exit 77; }
 "$bin" reference scenes/cornell.json --method pt --size 48x48 --spp 64 --seed 1 \
   -o "$d/pt.exr" >/dev/null 2>&1 || { echo "reference failed" >&2; exit 1; }
-"$bin" fidelity scenes/cornell.json --size 48x48 --pt-paths 64 \
+"$bin" fidelity scenes/cornell.json --set lightmap.texel_size=111 --size 48x48 --pt-paths 64 \
   --reference-rays 1024 --pixel-rays 128 --csv "$d/gather.csv" >/dev/null ||
   { echo "fidelity (111 mm) failed" >&2; exit 1; }
-"$bin" fidelity scenes/cornell.json --set lightmap.texel_size=55.5 --size 48x48 --pt-paths 64 \
-  --reference-rays 1024 --pixel-rays 256 --reference "$d/pt.exr" --csv "$d/image.csv" >/dev/null ||
+"$bin" fidelity scenes/cornell.json --size 48x48 --pt-paths 64 --reference-rays 1024 \
+  --pixel-rays 256 --reference "$d/pt.exr" --csv "$d/image.csv" >/dev/null ||
   { echo "fidelity failed" >&2; exit 1; }
 python3 - "$d/gather.csv" "$d/image.csv" <<'PY'
 import csv, sys
