@@ -38,40 +38,90 @@ CpuGather::CpuGather(const Scene& scene, ThreadPool& pool, const std::vector<glm
 
 CpuGather::~CpuGather() = default;
 
+glm::vec3 CpuGather::radiance_along(const Ray& ray, const std::vector<glm::vec3>& aim_radiance,
+                                    int bounces_left, float weight, bool& back_face) const {
+    const RayHit hit = rays_.intersect(ray);
+    if (!hit.hit) return glm::vec3(0.0f);
+    const Material& m = scene_.objects[size_t(hit.object)].material;
+    if (m.type != MaterialType::diffuse) {
+        // Mirrors and glass have no AIM: follow the bounce to the diffuse surface behind it, both
+        // branches weighted by Fresnel (L D S+ x paths, the light through glass and off mirrors).
+        if (bounces_left <= 0) return glm::vec3(0.0f);
+        const SpecularSplit split = specular_split(m, hit, ray.direction, rays_.epsilon());
+        bool ignored = false;  // back faces behind glass say nothing about the texel's placement
+        glm::vec3 l(0.0f);
+        // Branches that would carry under 1% of the gather ray are dropped: a few bounces carry
+        // nearly everything a glass ball or a mirror shows.
+        constexpr float kMinWeight = 0.01f;
+        const float reflected = weight * split.reflectance, refracted = weight - reflected;
+        if (reflected >= kMinWeight)
+            l += split.reflectance * radiance_along(split.reflected, aim_radiance, bounces_left - 1,
+                                                    reflected, ignored);
+        if (refracted >= kMinWeight)
+            l += (1.0f - split.reflectance) * radiance_along(split.refracted, aim_radiance,
+                                                             bounces_left - 1, refracted, ignored);
+        return l;
+    }
+    // A diffuse back face reflects nothing (photons reaching it are absorbed); seeing many means
+    // the texel's centre is inside or behind geometry.
+    if (glm::dot(ray.direction, hit.normal) > 0.0f) {
+        back_face = true;
+        return glm::vec3(0.0f);
+    }
+    return sample_lightmap(scene_.atlas, aim_radiance, hit.object, hit.triangle, hit.barycentric);
+}
+
 GatherResult CpuGather::gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const {
-    const LightmapAtlas& atlas = scene_.atlas;
-    const TexelRecord& texel = atlas.texels[size_t(record)];
+    const TexelRecord& texel = scene_.atlas.texels[size_t(record)];
     const Transform& transform = scene_.objects[size_t(texel.object)].transform;
-    const glm::vec3 n = glm::normalize(transform.apply_vector(texel.normal));
-    const glm::vec3 origin = transform.apply_point(texel.position) + rays_.epsilon() * n;
+    return gather_point(
+        {transform.apply_point(texel.position), transform.apply_vector(texel.normal)},
+        texel_shift(scene_.settings.seed, record), aim_radiance);
+}
+
+GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
+                                     const std::vector<glm::vec3>& aim_radiance) const {
+    const GatherSettings& settings = scene_.settings.gather;
+    const glm::vec3 n = glm::normalize(point.normal);
+    const glm::vec3 origin = point.position + rays_.epsilon() * n;
     glm::vec3 t, b;
     orthonormal_basis(n, t, b);
-    const glm::vec2 shift = texel_shift(scene_.settings.seed, record);
+    const bool plane = settings.hemisphere == GatherHemisphere::plane;
+    const float a = settings.plane_half_width;
+    const int bounces = std::max(0, settings.specular_bounces);
 
     glm::vec3 sum(0.0f);
-    int back_faces = 0;
+    int back_faces = 0, counted = 0;
     for (const glm::vec2& p : points_) {
         // The concentric map keeps the QMC points' strata compact, which matters at a few hundred
         // rays.
-        const glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
-        const glm::vec3 direction = d.x * t + d.y * b + d.z * n;
-        const RayHit hit = rays_.intersect({origin, direction, 0.0f, 1e30f});
-        if (!hit.hit) continue;
-        // Mirrors and glass have no AIM: light reaching the texel through them (L D S x paths)
-        // is not in the IIM; caustics (ch. 12) and the frame's reflections carry those.
-        if (scene_.objects[size_t(hit.object)].material.type != MaterialType::diffuse) continue;
-        // A diffuse back face reflects nothing (photons reaching it are absorbed); seeing many
-        // means the texel's centre is inside or behind geometry.
-        if (glm::dot(direction, hit.normal) > 0.0f) {
-            ++back_faces;
-            continue;
+        glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
+        if (plane && std::max(std::abs(d.x), std::abs(d.y)) > a * d.z) {
+            // A direction the hemi-plane misses (Larsen ch. 11; Gautron 2006, Table 4.1): none
+            // counts it as black, renormalise leaves it out of the mean, stretch reads the border
+            // point the direction leaves the plane through (same azimuth), as the GL gather's
+            // stretched border pixels do.
+            if (settings.border_correction == BorderCorrection::none) {
+                ++counted;
+                continue;
+            }
+            if (settings.border_correction == BorderCorrection::renormalize) continue;
+            const float r = std::sqrt(d.x * d.x + d.y * d.y);
+            const float edge = a / std::max(std::abs(d.x), std::abs(d.y)) * r;  // border radius
+            d = glm::normalize(glm::vec3(d.x / r * edge, d.y / r * edge, 1.0f));
         }
-        sum += sample_lightmap(atlas, aim_radiance, hit.object, hit.triangle, hit.barycentric);
+        ++counted;
+        const glm::vec3 direction = d.x * t + d.y * b + d.z * n;
+        bool back_face = false;
+        sum += radiance_along({origin, direction, 0.0f, 1e30f}, aim_radiance, bounces, 1.0f,
+                              back_face);
+        back_faces += back_face;
     }
     // Cosine-weighted directions make E = π · mean(L) (eq. 11.1); the IIM holds E / π.
     GatherResult result;
-    result.iim = sum / float(points_.size());
-    result.back_fraction = float(back_faces) / float(points_.size());
+    const float n_rays = float(std::max(1, counted));
+    result.iim = sum / n_rays;
+    result.back_fraction = float(back_faces) / n_rays;
     return result;
 }
 
@@ -80,11 +130,8 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels) {
     return gather(texels, *aim_);
 }
 
-std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
-                                            const std::vector<glm::vec3>& aim_radiance) {
-    assert(aim_radiance.size() == size_t(scene_.atlas.width) * size_t(scene_.atlas.height));
+void CpuGather::prepare() {
     if (own_rays_) own_rays_->update(scene_);
-
     // A 2D Hammersley set: (i + ½)/N against the base-2 radical inverse.
     const int count = std::max(1, scene_.settings.gather.cpu_rays);
     if (int(points_.size()) != count) {
@@ -93,6 +140,35 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
             points_[size_t(i)] =
                 glm::vec2((float(i) + 0.5f) / float(count), float(radical_inverse(2, uint64_t(i))));
     }
+}
+
+std::vector<GatherResult> CpuGather::gather_points(const std::vector<GatherPoint>& points) {
+    assert(aim_ && "CpuGather: gather_points(points) needs the AIM given at construction");
+    return gather_points(points, *aim_);
+}
+
+std::vector<GatherResult> CpuGather::gather_points(const std::vector<GatherPoint>& points,
+                                                   const std::vector<glm::vec3>& aim_radiance) {
+    assert(aim_radiance.size() == size_t(scene_.atlas.width) * size_t(scene_.atlas.height));
+    prepare();
+    std::vector<GatherResult> results(points.size());
+    pool_.parallel_for(
+        points.size(),
+        [&](size_t i) {
+            // Shifts of their own (another seed), apart from every texel record's.
+            const glm::vec2 shift =
+                texel_shift(scene_.settings.seed ^ 0x5bd1e995u, int(points[i].key));
+            results[i] = gather_point(points[i], shift, aim_radiance);
+        },
+        4);
+    return results;
+}
+
+std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
+                                            const std::vector<glm::vec3>& aim_radiance) {
+    assert(aim_radiance.size() == size_t(scene_.atlas.width) * size_t(scene_.atlas.height));
+    prepare();
+    const int count = int(points_.size());
 
     std::vector<GatherResult> results(texels.size());
     pool_.parallel_for(

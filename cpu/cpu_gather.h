@@ -37,13 +37,27 @@ public:
     GatherBackend backend() const override { return GatherBackend::cpu; }
     std::vector<GatherResult> gather(const std::vector<int>& texels) override;
     // The same with an explicit AIM: settings.gather.cpu_rays cosine-distributed QMC rays per
-    // texel read `aim_radiance` where they land.
+    // texel (over the whole hemisphere, or through the hemi-plane: settings.gather.hemisphere)
+    // read `aim_radiance` where they land, through settings.gather.specular_bounces mirror and
+    // glass bounces.
     std::vector<GatherResult> gather(const std::vector<int>& texels,
                                      const std::vector<glm::vec3>& aim_radiance);
+    // The same gather at arbitrary surface points (texel footprints, per-pixel gathering).
+    std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points) override;
+    std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points,
+                                            const std::vector<glm::vec3>& aim_radiance);
     const CpuGatherStats& last_stats() const { return stats_; }
 
 private:
+    void prepare();  // brings the tracer and the point set up to date
     GatherResult gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const;
+    GatherResult gather_point(const GatherPoint& point, glm::vec2 shift,
+                              const std::vector<glm::vec3>& aim_radiance) const;
+    // AIM radiance seen along `ray`, which carries `weight` of its gather ray, through up to
+    // `bounces_left` mirror/glass bounces; sets `back_face` when the ray itself meets the back
+    // of a diffuse surface.
+    glm::vec3 radiance_along(const Ray& ray, const std::vector<glm::vec3>& aim_radiance,
+                             int bounces_left, float weight, bool& back_face) const;
 
     const Scene& scene_;
     std::unique_ptr<RayTracer> own_rays_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "shared/charts.h"
 #include "shared/lightmap_sample.h"
 
 namespace ag::cpu {
@@ -18,6 +19,7 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     to_.assign(n, glm::vec3(0.0f));
     shown_.assign(n, glm::vec3(0.0f));
     blend_start_.assign(n, -1);
+    footprint_.resize(records);
     for (int t = 0; t < int(records); ++t) pending_.push_back(t);
     surface_texels_.resize(scene_.surfaces.size());
     for (int t = 0; t < int(records); ++t) {
@@ -134,20 +136,86 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
         valid_[size_t(batch[k])] = valid;
         if (!valid) invalid.push_back(batch[k]);
     }
-    if (!invalid.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, invalid);
+    stats.relocated = relocate(gatherer, invalid);
+    // Repaired values follow their sources: every invalid texel gathered so far is filled again
+    // from the valid values as they are now, not only this batch's. Otherwise a texel repaired
+    // before a neighbour was re-gathered keeps the old value, and the settled IIM would depend
+    // on the order texels were gathered in (an edited pipeline would not end where a fresh one
+    // does).
+    std::vector<int> repair;
+    for (size_t r = 0; r < valid_.size(); ++r)
+        if (!valid_[r] && texel_generation_[r] >= 0) repair.push_back(int(r));
+    std::vector<char> in_batch(valid_.size(), 0);
+    for (int r : batch) in_batch[size_t(r)] = 1;
+    std::vector<glm::vec3> before(repair.size());
+    for (size_t j = 0; j < repair.size(); ++j) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(repair[j])];
+        before[j] = raw_[size_t(t.y) * size_t(w) + size_t(t.x)];
+    }
+    if (!repair.empty()) repair_invalid_texels(scene_.atlas, raw_, valid_, repair);
 
-    for (int r : batch) {
+    auto start_blend = [&](int r) {
         const TexelRecord& t = scene_.atlas.texels[size_t(r)];
         const size_t a = size_t(t.y) * size_t(w) + size_t(t.x);
         from_[a] = shown_[a];
         to_[a] = raw_[a];
         if (blend_start_[a] < 0) blending_.push_back(int(a));
         blend_start_[a] = int(frame);
+    };
+    for (int r : batch) start_blend(r);
+    for (size_t j = 0; j < repair.size(); ++j) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(repair[j])];
+        if (!in_batch[size_t(repair[j])] &&
+            raw_[size_t(t.y) * size_t(w) + size_t(t.x)] != before[j])
+            start_blend(repair[j]);
     }
     stats.gathered = int(batch.size());
     stats.invalid = int(invalid.size());
     last_gathered_ = batch;
     return stats;
+}
+
+int Iim::relocate(Gatherer& gatherer, std::vector<int>& invalid) {
+    // A texel whose centre lies inside geometry (the floor under a box) still has part of its
+    // footprint outside: gather at the footprint point nearest the centre that sees few back
+    // faces. Its value is then the light beside the contact, not its neighbours' (which would
+    // carry the open floor's light up to the box, a leak of 50% in the box's shadow).
+    std::vector<GatherPoint> points;
+    std::vector<std::pair<int, int>> range;  // per invalid texel: [first, end) in points
+    for (int r : invalid) {
+        if (footprint_[size_t(r)].empty())
+            footprint_[size_t(r)] = texel_footprint_points(scene_, r);
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+        const Transform& transform = scene_.objects[size_t(t.object)].transform;
+        const int first = int(points.size());
+        uint32_t k = 0;
+        for (const FootprintPoint& f : footprint_[size_t(r)])
+            points.push_back({transform.apply_point(f.position), transform.apply_vector(f.normal),
+                              uint32_t(r) * 9u + ++k});
+        range.emplace_back(first, int(points.size()));
+    }
+    if (points.empty()) return 0;
+    const std::vector<GatherResult> results = gatherer.gather_points(points);
+    const int w = scene_.atlas.width;
+    std::vector<int> still;
+    int relocated = 0;
+    for (size_t j = 0; j < invalid.size(); ++j) {
+        const int r = invalid[j];
+        bool found = false;
+        for (int i = range[j].first; i < range[j].second && !found; ++i)
+            if (results[size_t(i)].back_fraction <= kBackFaceInvalidFraction) {
+                const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+                raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[size_t(i)].iim;
+                valid_[size_t(r)] = 1;
+                found = true;
+            }
+        if (found)
+            ++relocated;
+        else
+            still.push_back(r);
+    }
+    invalid.swap(still);
+    return relocated;
 }
 
 const std::vector<int>& Iim::blend(uint64_t frame, int blend_frames) {

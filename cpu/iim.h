@@ -2,7 +2,8 @@
 // E/π gathered from the AIMs. Texels of surfaces whose indirect photon hits changed most (Δi) are
 // re-gathered first; texels gathered with older AIMs are refreshed round robin with what is left
 // of the budget; a gather that saw too many back faces is invalid and repaired from its chart's
-// neighbours; new values fade in over blend_frames so the picture never pops.
+// neighbours (unless part of its footprint can gather, see relocate); new values fade in over
+// blend_frames so the picture never pops.
 #pragma once
 
 #include <cstdint>
@@ -11,15 +12,18 @@
 #include <vector>
 
 #include "cpu/photon_map.h"
+#include "shared/charts.h"
 #include "shared/gather.h"
 #include "shared/scene.h"
 
 namespace ag::cpu {
 
 struct IimFrameStats {
-    int gathered = 0;  // texels gathered this frame
-    int invalid = 0;   // of those, repaired from neighbours (back faces in view)
-    int pending = 0;   // texels still queued by Δi after scheduling
+    int gathered = 0;   // texels gathered this frame
+    int invalid = 0;    // of those, repaired from neighbours (inside geometry, all footprint too)
+    int relocated = 0;  // of those, whose centre saw too many back faces but a point of their
+                        // footprint did not: gathered there instead
+    int pending = 0;    // texels still queued by Δi after scheduling
 };
 
 class Iim {
@@ -63,6 +67,10 @@ public:
     bool complete() const;
 
 private:
+    // Gathers each invalid texel at the nearest point of its footprint that sees few back faces;
+    // those become valid, `invalid` keeps the rest (to repair from neighbours). Returns how many.
+    int relocate(Gatherer& gatherer, std::vector<int>& invalid);
+
     const Scene& scene_;
     std::deque<int> pending_;  // texel records, FIFO, each at most once
     std::vector<char> is_pending_;
@@ -73,6 +81,7 @@ private:
     std::vector<int> blending_;     // atlas texels currently blending
     std::vector<int> changed_;      // returned by blend()
     int aim_generation_ = 0;
+    std::vector<std::vector<FootprintPoint>> footprint_;  // per record, computed when first needed
     std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
     std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;

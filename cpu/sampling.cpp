@@ -114,25 +114,31 @@ float fresnel_dielectric(float cos_i, float eta, float& cos_t) {
     return 0.5f * (rs * rs + rp * rp);
 }
 
-Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
-                    float u, float epsilon) {
+SpecularSplit specular_split(const Material& material, const RayHit& hit,
+                             const glm::vec3& direction, float epsilon) {
     const glm::vec3 d = glm::normalize(direction);
     const bool front = glm::dot(d, hit.normal) < 0.0f;
     const glm::vec3 facing = front ? hit.normal : -hit.normal;  // towards the incoming side
-    Ray out;
+    SpecularSplit out;
+    out.reflected.origin = hit.position + epsilon * facing;
+    out.reflected.direction = glm::reflect(d, facing);
     if (material.type == MaterialType::glass) {
         const float eta = front ? 1.0f / material.ior : material.ior;
         const float cos_i = -glm::dot(d, facing);
         float cos_t = 0.0f;
-        if (u >= fresnel_dielectric(cos_i, eta, cos_t)) {
-            out.origin = hit.position - epsilon * facing;
-            out.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
-            return out;
+        out.reflectance = fresnel_dielectric(cos_i, eta, cos_t);
+        if (out.reflectance < 1.0f) {
+            out.refracted.origin = hit.position - epsilon * facing;
+            out.refracted.direction = glm::normalize(eta * d + (eta * cos_i - cos_t) * facing);
         }
     }
-    out.origin = hit.position + epsilon * facing;
-    out.direction = glm::reflect(d, facing);
     return out;
+}
+
+Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,
+                    float u, float epsilon) {
+    const SpecularSplit split = specular_split(material, hit, direction, epsilon);
+    return u >= split.reflectance ? split.refracted : split.reflected;
 }
 
 }  // namespace ag::cpu

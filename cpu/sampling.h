@@ -53,6 +53,15 @@ glm::vec3 sphere_direction(float u1, float u2);
 glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2);
 // Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t; sets cos_t.
 float fresnel_dielectric(float cos_i, float eta, float& cos_t);
+// Both continuations of a specular bounce, for estimators that follow each with its weight
+// rather than choosing one: `reflected` carries `reflectance` (F; 1 for mirrors and total
+// internal reflection), `refracted` carries 1 − F (glass only). Rays offset by `epsilon`.
+struct SpecularSplit {
+    Ray reflected, refracted;
+    float reflectance = 1.0f;
+};
+SpecularSplit specular_split(const Material& material, const RayHit& hit,
+                             const glm::vec3& direction, float epsilon);
 // A mirror reflects; glass reflects with the Fresnel probability (u < F) and refracts otherwise.
 // Neither absorbs (albedo is unused). Returns the continuing ray, offset by `epsilon`.
 Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3& direction,

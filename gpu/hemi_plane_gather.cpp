@@ -39,10 +39,14 @@ uniform int use_charts;
 uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int specular;
+uniform float specular_tag;
 out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
+    // A mirror or glass pixel adds w × specular_tag to alpha, more than 1 even for the smallest
+    // pixel weight, so a tile's alpha above 1 says the view met one (back faces add at most 1).
+    if (specular != 0 && specular_tag > 0.0) { color = vec4(0.0, 0.0, 0.0, w * specular_tag); return; }
     if (!gl_FrontFacing) { color = vec4(0.0, 0.0, 0.0, w); return; }
     vec3 radiance = specular != 0 ? vec3(0.0) : (use_charts != 0 ? chart_lightmap(aim, charts, v_uv, v_chart)
                                                     : texture(aim, v_uv).rgb);
@@ -141,6 +145,12 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     std::vector<float> rgba(w.size() * 4, 0.0f);
     for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
     weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
+    if (scene.settings.gather.specular_bounces > 0) {
+        float smallest = 1.0f;
+        for (float v : w)
+            if (v > 0.0f) smallest = std::min(smallest, v);
+        specular_tag_ = 4.0f / smallest;
+    }
     depth_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, resolution_, resolution_);
@@ -161,8 +171,27 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     return gather(texels, aim_->id(), aim_->charts());
 }
 
+std::vector<GatherResult> HemiPlaneGather::gather_points(const std::vector<GatherPoint>& points) {
+    if (!aim_)
+        throw GlError(
+            "HemiPlaneGather: gather_points(points) needs the AIM texture given at construction");
+    return gather_views(points, aim_->id(), aim_->charts());
+}
+
 std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels,
                                                   GLuint aim_texture, GLuint chart_texture) {
+    std::vector<GatherPoint> views(texels.size());
+    for (size_t k = 0; k < texels.size(); ++k) {
+        const TexelRecord& t = scene_.atlas.texels[size_t(texels[k])];
+        const Object& owner = scene_.objects[size_t(t.object)];
+        views[k] = {owner.transform.apply_point(t.position),
+                    owner.transform.apply_vector(t.normal)};
+    }
+    return gather_views(views, aim_texture, chart_texture);
+}
+
+std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<GatherPoint>& texels,
+                                                        GLuint aim_texture, GLuint chart_texture) {
     std::vector<GatherResult> out(texels.size());
     const int per_pass = max_per_pass_ > 0 ? std::min(max_per_pass_, layers_) : layers_;
     const float a = scene_.settings.gather.plane_half_width;
@@ -187,6 +216,7 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
     program_.set("weights", 1);
     program_.set("charts", 2);
     program_.set("use_charts", chart_texture ? 1 : 0);
+    program_.set("specular_tag", specular_tag_);
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;
@@ -209,10 +239,9 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         gl::ClearDepth(0.0);
         gl::Uniform2i(program_.location("tile_origin"), 0, 0);
         for (size_t k = 0; k < count; ++k) {
-            const TexelRecord& t = scene_.atlas.texels[size_t(texels[first + k])];
-            const Object& owner = scene_.objects[size_t(t.object)];
-            const glm::vec3 n = glm::normalize(owner.transform.apply_vector(t.normal));
-            const glm::vec3 p = owner.transform.apply_point(t.position) + offset * n;
+            const GatherPoint& at = texels[first + k];
+            const glm::vec3 n = glm::normalize(at.normal);
+            const glm::vec3 p = at.position + offset * n;
             const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
             const glm::mat4 view =
                 glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
@@ -243,7 +272,13 @@ std::vector<GatherResult> HemiPlaneGather::gather(const std::vector<int>& texels
         for (size_t k = 0; k < count; ++k) {
             const float* m = &means[4 * k];  // layer k
             out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
-            out[first + k].back_fraction = pixels * m[3];
+            const float alpha = pixels * m[3];
+            if (specular_tag_ > 0.0f && alpha > 2.0f) {
+                out[first + k].sees_specular = true;  // alpha holds the tag: no back share
+                out[first + k].back_fraction = 0.0f;
+            } else {
+                out[first + k].back_fraction = alpha;
+            }
         }
     }
     gl::BindTexture(GL_TEXTURE_2D, 0);

@@ -35,6 +35,8 @@ public:
                     const LightmapTexture* aim = nullptr);
 
     GatherBackend backend() const override { return GatherBackend::gl; }
+    // Texels whose plane shows a mirror or glass come back with sees_specular set when
+    // settings.gather.specular_bounces > 0 (ag::SpecularRoutedGather hands them to the rays).
     std::vector<GatherResult> gather(const std::vector<int>& texels) override;
 
     // Gathers the given texel records (indices into scene.atlas.texels) with the AIM texture
@@ -43,6 +45,8 @@ public:
     // dilated atlas. Results in the same order.
     std::vector<GatherResult> gather(const std::vector<int>& texels, GLuint aim_texture,
                                      GLuint chart_texture = 0);
+    // The same at arbitrary points, with the AIM texture given at construction.
+    std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points) override;
 
     int resolution() const { return resolution_; }
     int tiles_per_pass() const { return layers_; }
@@ -50,11 +54,16 @@ public:
     void set_max_per_pass(int n) { max_per_pass_ = n; }
 
 private:
+    // The views of one gather: world-space centre (before the offset) and normal per texel.
+    std::vector<GatherResult> gather_views(const std::vector<GatherPoint>& views,
+                                           GLuint aim_texture, GLuint chart_texture);
+
     const Scene& scene_;
     const SceneMeshes& meshes_;
     const LightmapTexture* aim_;
     int resolution_, tiles_x_, level_, layers_;
     int max_per_pass_ = 0;
+    float specular_tag_ = 0.0f;  // alpha per unit weight of mirror/glass pixels; 0 = not tagged
     Program program_;
     Texture color_, weights_;
     Renderbuffer depth_;

@@ -19,4 +19,16 @@ std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int*
 // Deterministic.
 void make_surfaces_and_atlas(Scene& scene);
 
+// A point of a texel's footprint, in its object's space.
+struct FootprintPoint {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};  // unit face normal of the chart triangle it lies on
+};
+
+// Points of texel record `record`'s footprint other than its centre, nearest to the centre first:
+// the atlas positions (x + ½ + dx, y + ½ + dy), dx, dy ∈ {−0.4, 0, 0.4}, that lie on one of its
+// chart's triangles. Where a gather from the centre starts inside geometry (the floor under a
+// box), one of these usually does not, and gathers the light right beside the contact.
+std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record);
+
 }  // namespace ag

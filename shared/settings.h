@@ -22,6 +22,13 @@ inline constexpr std::array kIndirectMethodNames = {"iim"};
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
 
+// What the CPU gather samples: `full`, cosine-weighted rays over the whole hemisphere (no plane,
+// no correction: the exact gather of the AIMs); `plane`, only directions through the hemi-plane
+// of half-width plane_half_width, the rest handled by border_correction exactly as the GL gather
+// does (for comparing the two and for Gautron's Table 4.1). The GL gather is always `plane`.
+enum class GatherHemisphere { full, plane };
+inline constexpr std::array kGatherHemisphereNames = {"full", "plane"};
+
 struct PhotonSettings {
     int groups = 77;               // QMC photon groups per light (Larsen ch. 9, Cornell: 77)
     int photons_per_group = 40;    // photons per group (Cornell: 40)
@@ -32,7 +39,7 @@ struct PhotonSettings {
 };
 
 struct LightmapSettings {
-    float texel_size = 0.0f;  // world units per texel; 0 = longest scene extent / 5 (thesis: 5×5)
+    float texel_size = 0.0f;     // world units per texel; 0 = longest scene extent / 10
     float crease_angle = 30.0f;  // degrees: adjacent faces closer than this share a surface
     float chart_cone = 30.0f;    // degrees: a chart's normals stay within this of its mean
     int gutter = 1;              // free texels around every chart in the atlas
@@ -52,6 +59,11 @@ struct GatherSettings {
     int texels_per_frame = 20;  // IIM texels gathered per frame (thesis: ≤ 20)
     int blend_frames = 4;       // frames over which a new IIM fades in
     int cpu_rays = 256;         // rays per texel for the CPU gather backend
+    GatherHemisphere hemisphere = GatherHemisphere::full;  // CPU gather: whole hemisphere or plane
+    // Mirror/glass bounces a gather ray follows to the diffuse surface it reads (Fresnel-weighted
+    // reflection and refraction); 0 = specular objects are black to the gather. The GL gather
+    // hands texels whose hemi-plane shows a specular object to the CPU gather when this is > 0.
+    int specular_bounces = 6;
 };
 
 // Scheduling by time, not by counts (DESIGN.md): with a frame-time target the pipeline measures
@@ -135,7 +147,7 @@ void visit_settings(Settings& s, Visitor& v) {
     v.end_section();
     v.section("lightmap", "surfaces and charts, Larsen ch. 8");
     v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30,
-                         "world units per texel; 0 = longest scene extent / 5"});
+                         "world units per texel; 0 = longest scene extent / 10"});
     v.field(Field<float>{"crease_angle", s.lightmap.crease_angle, 0, 180,
                          "degrees; adjacent faces closer than this share a surface"});
     v.field(Field<float>{"chart_cone", s.lightmap.chart_cone, 1, 60,
@@ -164,6 +176,11 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
                        "frames over which a new IIM fades in"});
     v.field(Field<int>{"cpu_rays", s.gather.cpu_rays, 1, 1e6, "rays per texel, CPU gather"});
+    v.field(EnumField<GatherHemisphere, 2>{"hemisphere", s.gather.hemisphere,
+                                           kGatherHemisphereNames,
+                                           "CPU gather: full hemisphere or the hemi-plane"});
+    v.field(Field<int>{"specular_bounces", s.gather.specular_bounces, 0, 64,
+                       "mirror/glass bounces a gather ray follows; 0 = specular is black"});
     v.end_section();
     v.section("schedule", "scheduling by frame time (DESIGN.md)");
     v.field(Field<float>{"frame_ms", s.schedule.frame_ms, 0, 1e6,

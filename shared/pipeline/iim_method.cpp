@@ -49,6 +49,8 @@ std::vector<Bounds> IimMethod::moved_regions() {
 
 Gatherer& IimMethod::gatherer(GatherBackend backend) {
     if (backend == GatherBackend::cpu) return cpu_gather_;
+    // Texels that see mirrors or glass go to the rays, which follow the specular bounces.
+    if (scene_.settings.gather.specular_bounces > 0) return routed_gather_;
     return gl_gather_;
 }
 

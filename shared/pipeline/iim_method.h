@@ -54,6 +54,7 @@ private:
     gpu::HemiPlaneGather gl_gather_;
     ThreadPool cpu_pool_{1};  // the CPU gather runs beside the photon work, on its own worker
     cpu::CpuGather cpu_gather_;
+    SpecularRoutedGather routed_gather_{gl_gather_, cpu_gather_};
     GatherBackend backend_ = GatherBackend::gl;
     double gl_us_ = 0.0, cpu_us_ = 0.0;
     PipelineMode mode_ = PipelineMode::selective;  // of the last update()

@@ -405,17 +405,17 @@ TEST(Atlas, TexelAreasSumToSurfaceArea) {
     }
 }
 
-TEST(Atlas, DefaultTexelSizeIsAFifthOfTheScene) {
-    Scene scene = make_scene({make_box({5.0f, 1.0f, 1.0f})}, 0.0f);
+TEST(Atlas, DefaultTexelSizeIsATenthOfTheScene) {
+    Scene scene = make_scene({make_box({10.0f, 2.0f, 2.0f})}, 0.0f);
     EXPECT_FLOAT_EQ(scene.atlas.texel_size, 1.0f);
-    // A 5×1 face gets 5 texels plus a margin column, centred; a 1×1 end 1 plus a margin.
+    // A 10×2 face gets 10 texels plus a margin column, centred; a 2×2 end 2 plus a margin.
     int longest = 0, shortest = 100;
     for (const Chart& chart : scene.atlas.charts) {
         longest = std::max({longest, chart.width, chart.height});
         shortest = std::min({shortest, chart.width, chart.height});
     }
-    EXPECT_EQ(longest, 6);
-    EXPECT_EQ(shortest, 2);
+    EXPECT_EQ(longest, 11);
+    EXPECT_EQ(shortest, 3);
 }
 
 bool same_atlas(const LightmapAtlas& a, const LightmapAtlas& b) {

@@ -23,9 +23,9 @@ std::string read_error(const Json& json) {
     return "";
 }
 
-TEST(Settings, EffectiveTexelSizeDefaultsToAFifthOfTheScene) {
+TEST(Settings, EffectiveTexelSizeDefaultsToATenthOfTheScene) {
     Settings s;
-    EXPECT_FLOAT_EQ(effective_texel_size(s, 555.0f), 111.0f);
+    EXPECT_FLOAT_EQ(effective_texel_size(s, 555.0f), 55.5f);
     s.lightmap.texel_size = 20.0f;
     EXPECT_FLOAT_EQ(effective_texel_size(s, 555.0f), 20.0f);
 }

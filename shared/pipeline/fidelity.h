@@ -1,0 +1,56 @@
+// The per-stage error budget of the indirect term (issue #12, docs/fidelity.md): at the texel
+// centres, (a) the AIM against path-traced outgoing radiance, (b) each gather of the AIMs against a
+// full-hemisphere ray gather of the same AIMs (Gautron 2006, Table 4.1: plane without correction,
+// renormalised, stretched), (c) that against path-traced irradiance; and on the image, (d) the IIM
+// as the camera sees it (interpolation, dilation, repair) against per-pixel gathering.
+#pragma once
+
+#include <glm/glm.hpp>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "shared/image.h"
+#include "shared/parallel.h"
+#include "shared/scene.h"
+
+namespace ag {
+
+struct FidelityOptions {
+    int pt_paths = 4096;        // path-traced irradiance: paths per texel centre
+    int reference_rays = 4096;  // rays of the full-hemisphere gather the plane gathers are held to
+    int pixel_rays = 1024;      // rays of the per-pixel gather of stage (d)
+    int width = 96, height = 96;
+    bool gl = true;  // GL stages (hemi-plane gathers, the frame); needs a current context
+    // Optional: the indirect term of a pt reference at width × height (afterglow reference
+    // --method pt); stage (e) holds the frame's and the per-pixel gather's indirect term to it.
+    Image reference_indirect;
+};
+
+// One comparison: `test` against `reference` over `count` texels (or pixels) of `region`.
+struct FidelityRow {
+    std::string stage, test, reference, region;
+    int count = 0;
+    double mean_ratio = 0.0;  // Σ area·lum(test) / Σ area·lum(reference) (pixels: area 1)
+    double rms = 0.0;         // RMS relative error of the luminance, √mean(((t − r) / r)²)
+    double rel_mse = 0.0;     // image stages: relMSE (shared/metrics.h); texel stages: 0
+    glm::dvec3 test_mean{0.0}, reference_mean{0.0};  // image stages: mean colour (tint)
+};
+
+struct FidelityReport {
+    std::vector<FidelityRow> rows;
+    // Per texel record: every quantity by name (E/π for irradiance, radiance for the AIM).
+    std::map<std::string, std::vector<glm::vec3>> texel_values;
+    std::vector<char> texel_valid;  // the texel's centre sees few back faces
+    int routed = 0;  // texels the pipeline's GL gather handed to the rays (they see specular)
+    Image frame_indirect, pixel_indirect, mask;  // stage (d): what the camera sees, per pixel
+};
+
+// Photons traced to completion and every AIM rebuilt first; the scene's settings otherwise.
+FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, ThreadPool& pool);
+
+// The report as a table (text) and as CSV: rows, then per-texel values.
+std::string fidelity_table(const FidelityReport& report);
+std::string fidelity_csv(const Scene& scene, const FidelityReport& report);
+
+}  // namespace ag
