@@ -57,6 +57,17 @@ int run_info(const Args& args) {
         if (l.type == LightType::point)
             out << "point at " << fmt_vec(l.position) << ", intensity " << fmt_vec(l.intensity)
                 << " W/sr";
+        else if (l.type == LightType::sun)
+            out << "sun along " << fmt_vec(l.direction) << ", irradiance " << fmt_vec(l.irradiance)
+                << ", photon disc radius " << l.sun_radius;
+        else if (l.type == LightType::spot)
+            out << "spot at " << fmt_vec(l.position) << " along " << fmt_vec(l.direction)
+                << ", cone " << l.cone_inner << "-" << l.cone_outer << " deg, intensity "
+                << fmt_vec(l.intensity) << " W/sr";
+        else if (l.type == LightType::mesh)
+            out << "mesh (object " << scene.objects[size_t(l.object)].name << ", "
+                << l.triangle_cdf.size() << " triangles) centred at " << fmt_vec(l.center())
+                << ", area " << l.area() << ", radiance " << fmt_vec(l.radiance);
         else
             out << "quad centred at " << fmt_vec(l.center()) << ", area " << l.quad_area()
                 << ", radiance " << fmt_vec(l.radiance);
