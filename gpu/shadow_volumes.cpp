@@ -50,40 +50,9 @@ ShadowCaster make_closed_caster(const Mesh& mesh) {
             if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
                 return ShadowCaster{};
         }
-    // Small holes (a quad's outline, a box without its bottom) are closed by fans for the shadow
-    // volume only, so thin panels and open boxes still cast shadows. Large boundaries (a floor's
-    // rim) stay open: such a mesh casts no volume.
-    std::map<unsigned, unsigned> boundary_next;
-    for (const auto& [edge, owner] : edges)
-        if (!edges.count({edge.second, edge.first})) {
-            if (!boundary_next.emplace(edge.first, edge.second).second) return ShadowCaster{};
-        }
-    constexpr size_t kMaxHole = 16;
-    while (!boundary_next.empty()) {
-        std::vector<unsigned> loop{boundary_next.begin()->first};
-        for (unsigned v = boundary_next.begin()->second; v != loop.front();
-             v = boundary_next.at(v)) {
-            if (!boundary_next.count(v) || loop.size() > kMaxHole) return ShadowCaster{};
-            loop.push_back(v);
-        }
-        for (unsigned v : loop) boundary_next.erase(v);
-        // The fill runs each boundary edge backwards: a fan (centre, v[i+1], v[i]) around a new
-        // vertex at the loop's centroid, so that no fill edge can repeat an edge of the mesh (a
-        // quad's diagonal, say).
-        glm::vec3 centre(0.0f);
-        for (unsigned v : loop) centre += c.positions[v];
-        const unsigned hub = unsigned(c.positions.size());
-        c.positions.push_back(centre / float(loop.size()));
-        for (size_t i = 0; i < loop.size(); ++i) {
-            const int t = int(c.triangles.size());
-            c.triangles.push_back({hub, loop[(i + 1) % loop.size()], loop[i]});
-            for (int k = 0; k < 3; ++k) {
-                const unsigned a = c.triangles.back()[k], b = c.triangles.back()[(k + 1) % 3];
-                if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
-                    return ShadowCaster{};
-            }
-        }
-    }
+    // An open mesh (a quad panel, a box without its bottom, an atrium open to the sky) is not
+    // closed here: filling its holes would invent geometry (a lid over the atrium), so it casts
+    // per-triangle prisms instead (make_shadow_caster).
     c.neighbours.assign(c.triangles.size(), glm::ivec3(-1));
     for (const auto& [edge, owner] : edges) {
         auto it = edges.find({edge.second, edge.first});

@@ -10,11 +10,10 @@
 
 namespace ag::gpu {
 
-// Edge adjacency of a closed mesh (positions welded exactly). Holes of up to 16 boundary edges
-// are closed by fans around their centroid (a quad panel or a box without its bottom still casts
-// a shadow from its silhouette). A mesh with larger holes or non-manifold edges (`closed` false)
-// casts one prism per triangle instead (`soup`), if it has at most 65536 triangles; larger open
-// meshes cast nothing.
+// Edge adjacency of a closed mesh (positions welded exactly): it casts the volume of its
+// silhouette. A mesh with boundary or non-manifold edges (`closed` false: a quad panel, an open
+// box, an atrium open to the sky) casts one prism per triangle instead (`soup`), each triangle an
+// opaque sheet, if it has at most 65536 triangles; larger open meshes cast nothing.
 struct ShadowCaster {
     bool closed = false;
     bool soup = false;

@@ -156,6 +156,14 @@ struct SceneChange {
     int index = -1;  // object or light index; -1 for the camera
 };
 
+// Where load_scene spent its time, in seconds (afterglow info --timing).
+struct LoadTiming {
+    double files = 0.0;     // JSON, mesh and model files, shapes, lights
+    double surfaces = 0.0;  // crease-angle surfaces and charts, per object
+    double packing = 0.0;   // the atlas: charts shelf-packed
+    double texels = 0.0;    // texel records
+};
+
 struct Scene {
     std::string name;
     std::string path;  // the scene file, for messages and relative paths
@@ -170,6 +178,7 @@ struct Scene {
     std::vector<Surface> surfaces;
     std::vector<std::vector<int>> triangle_surface;  // [object][triangle] -> surface id
     LightmapAtlas atlas;
+    LoadTiming load_timing;
 
     // Versioning: every edit bumps `version` and the touched item's counter and appends a change.
     uint64_t version = 0;

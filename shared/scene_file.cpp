@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -122,6 +123,7 @@ public:
     SceneParser(const std::string& path) : in_(path), base_(fs::path(path).parent_path()) {}
 
     Scene parse(const Json& root) {
+        const auto start = std::chrono::steady_clock::now();
         in_.object(root, "");
         in_.check_keys(
             root, "",
@@ -156,7 +158,10 @@ public:
         if (const Json* v = JsonInput::find(root, "script"))
             scene_.script = existing_file(*v, "/script", "Lua script");
         init_versions(scene_);
+        const double files =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         make_surfaces_and_atlas(scene_);
+        scene_.load_timing.files = files;
         return std::move(scene_);
     }
 
