@@ -47,7 +47,7 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
                                           bool& hit_specular) const {
     hit_specular = false;
     const Light& l = scene_.lights[size_t(light)];
-    if (!l.enabled) return {};
+    if (!l.enabled || l.type == LightType::sun) return {};  // a sun has no centre to aim from
     const glm::vec3 centre = l.center();
     if (cone_cache.empty()) return {};
     const Halton& halton = halton_[size_t(light)];
@@ -69,10 +69,12 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     ray.origin = centre;
     glm::vec3 power;
     const int n = scene_.settings.caustics.photons;
-    if (l.type == LightType::quad) {
-        const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
-        ray.origin = l.corners[0] + float(halton.sample(k, 3)) * e1 +
-                     float(halton.sample(k, 4)) * e3 + rays_->epsilon() * l.quad_normal();
+    glm::vec3 light_normal(0.0f);
+    if (l.is_area()) {
+        const LightPoint at =
+            sample_area_light(scene_, l, float(halton.sample(k, 3)), float(halton.sample(k, 4)));
+        light_normal = at.normal;
+        ray.origin = at.position + rays_->epsilon() * at.normal;
     }
     const glm::vec3 axis = glm::normalize(cone->centre - ray.origin);
     // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without
@@ -83,12 +85,14 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     glm::vec3 u, v;
     orthonormal_basis(axis, u, v);
     ray.direction = glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));
-    if (l.type == LightType::point) {
-        power = l.intensity * total / float(n);  // the flux into all cones, shared by n photons
+    if (l.type == LightType::point || l.type == LightType::spot) {
+        // The flux into all cones, shared by n photons (a spot's by its falloff).
+        power =
+            l.intensity * l.spot_factor(glm::dot(ray.direction, l.direction)) * total / float(n);
     } else {
-        const float cos_l = glm::dot(l.quad_normal(), ray.direction);
+        const float cos_l = glm::dot(light_normal, ray.direction);
         if (cos_l <= 0.0f) return {};
-        power = l.radiance * l.quad_area() * cos_l * total / float(n);
+        power = l.radiance * l.area() * cos_l * total / float(n);
     }
 
     const float eps = rays_->epsilon();

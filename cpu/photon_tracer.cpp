@@ -103,18 +103,13 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
     const float* row = &tables_[size_t(light)][k * kTabulated];
     const glm::vec2 s(row[0], row[1]);
 
-    Ray ray;
-    if (l.type == LightType::point) {
-        ray.origin = l.position;
-        ray.direction = sphere_direction(s.x, s.y);
-    } else {
-        const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
-        const glm::vec3 n = l.quad_normal();
-        ray.origin = l.corners[0] + sample(light, k, 1) * e1 + sample(light, k, 2) * e3 +
-                     rays_.epsilon() * n;
-        ray.direction = cosine_direction(n, s.x, s.y);
-    }
-    glm::vec3 power = photon_power(light);
+    // A sun's group strata lie on its disc (the Hilbert point), its direction is fixed.
+    const glm::vec2 other(sample(light, k, 1), sample(light, k, 2));
+    const bool sun = l.type == LightType::sun;
+    const EmissionRay emitted =
+        emission_ray(scene_, l, sun ? other : s, sun ? s : other, rays_.epsilon());
+    Ray ray = emitted.ray;
+    glm::vec3 power = photon_power(light) * emitted.weight;
     const float eps = rays_.epsilon();
     PathEnds ends;
     ends.origin = ray.origin;

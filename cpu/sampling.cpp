@@ -141,4 +141,43 @@ Ray specular_bounce(const Material& material, const RayHit& hit, const glm::vec3
     return u >= split.reflectance ? split.refracted : split.reflected;
 }
 
+EmissionRay emission_ray(const Scene& scene, const Light& light, const glm::vec2& u,
+                         const glm::vec2& v, float epsilon) {
+    EmissionRay out;
+    switch (light.type) {
+        case LightType::point:
+            out.ray = {light.position, sphere_direction(u.x, u.y)};
+            break;
+        case LightType::spot: {
+            // Uniform in the outer cone (solid angle 2π(1 − cos_o)); the weight turns the mean
+            // flux Φ/N into I·f(θ)·Ω_o/N (Light::power).
+            const float co = light.cos_outer(), ci = light.cos_inner();
+            out.ray = {light.position, cone_direction(light.direction, co, u.x, u.y)};
+            const float mean = (1.0f - ci) + 0.5f * (ci - co);
+            out.weight = mean > 0.0f
+                             ? light.spot_factor(glm::dot(out.ray.direction, light.direction)) *
+                                   (1.0f - co) / mean
+                             : 0.0f;
+            break;
+        }
+        case LightType::sun: {
+            // A disc of the scene's bounding sphere, facing the sun, just outside the sphere.
+            glm::vec3 t, b;
+            orthonormal_basis(light.direction, t, b);
+            const glm::vec3 d = square_to_cosine_hemisphere(v);  // (x, y): uniform in the disc
+            out.ray = {
+                light.sun_center + light.sun_radius * (d.x * t + d.y * b - 1.01f * light.direction),
+                light.direction};
+            break;
+        }
+        case LightType::quad:
+        case LightType::mesh: {
+            const LightPoint at = sample_area_light(scene, light, v.x, v.y);
+            out.ray = {at.position + epsilon * at.normal, cosine_direction(at.normal, u.x, u.y)};
+            break;
+        }
+    }
+    return out;
+}
+
 }  // namespace ag::cpu

@@ -51,6 +51,16 @@ glm::vec3 cosine_direction(const glm::vec3& n, float u1, float u2);
 glm::vec3 sphere_direction(float u1, float u2);
 // Uniform in the cone of directions within angle acos(cos_max) of the unit `axis`.
 glm::vec3 cone_direction(const glm::vec3& axis, float cos_max, float u1, float u2);
+// A photon's emission from `light` (Larsen ch. 6.3): `u` picks the direction (point: the sphere;
+// spot: uniform in its outer cone; quad, mesh: cosine around the normal; sun: its direction),
+// `v` the origin (quad, mesh: a point by area; sun: a point of its disc). `weight` scales the
+// light's mean photon flux Φ/N for this photon (a spot's falloff over its cone); 1 otherwise.
+struct EmissionRay {
+    Ray ray;
+    float weight = 1.0f;
+};
+EmissionRay emission_ray(const Scene& scene, const Light& light, const glm::vec2& u,
+                         const glm::vec2& v, float epsilon);
 // Unpolarised Fresnel reflectance of a dielectric; cos_i > 0, eta = n_i / n_t; sets cos_t.
 float fresnel_dielectric(float cos_i, float eta, float& cos_t);
 // Both continuations of a specular bounce, for estimators that follow each with its weight

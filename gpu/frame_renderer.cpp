@@ -15,14 +15,25 @@ uniform vec3 light_position[kMaxLightSamples];
 uniform vec3 light_intensity[kMaxLightSamples];
 uniform vec3 light_normal[kMaxLightSamples];
 uniform int light_one_sided[kMaxLightSamples];
+uniform int light_directional[kMaxLightSamples];
+uniform vec2 light_cone[kMaxLightSamples];
 const float kPi = 3.14159265358979;
-// Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d².
+// Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d²
+// (a spot's I times its falloff; a sun: ρ/π · E cosθ).
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
+    if (light_directional[i] != 0)
+        return albedo / kPi * light_intensity[i] * max(dot(n, light_position[i]), 0.0);
     vec3 to_light = light_position[i] - p;
     float d2 = max(dot(to_light, to_light), 1e-12);
     vec3 l = to_light * inversesqrt(d2);
     float cos_s = max(dot(n, l), 0.0);
     float cos_l = light_one_sided[i] != 0 ? max(dot(light_normal[i], -l), 0.0) : 1.0;
+    if (light_cone[i].x > -1.5) {  // spot: 1 inside the inner cone, linear in cosθ outside
+        float c = dot(light_normal[i], -l);
+        cos_l = c >= light_cone[i].y ? 1.0
+              : clamp((c - light_cone[i].x) / max(light_cone[i].y - light_cone[i].x, 1e-6),
+                      0.0, 1.0);
+    }
     return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2;
 }
 )";
@@ -242,7 +253,30 @@ std::vector<LightSample> light_samples(const Scene& scene) {
             out.push_back({l.position, l.intensity, glm::vec3(0.0f), false});
             continue;
         }
+        if (l.type == LightType::spot) {
+            out.push_back({l.position, l.intensity, l.direction, false, false,
+                           glm::vec2(l.cos_outer(), l.cos_inner())});
+            continue;
+        }
+        if (l.type == LightType::sun) {
+            out.push_back({-l.direction, l.irradiance, glm::vec3(0.0f), false, true});
+            continue;
+        }
         const int n = quad_light_grid(scene.settings);
+        if (l.type == LightType::mesh) {
+            // n² points spread over the triangles by area (a rank-1 lattice), each standing for
+            // A/n² of the surface; lifted off it so its own mesh does not shadow it.
+            const int count = n * n;
+            const glm::vec3 intensity = l.radiance * (l.area() / float(count));
+            const float lift = 1e-4f * scene.diagonal();
+            for (int j = 0; j < count; ++j) {
+                const LightPoint at =
+                    sample_area_light(scene, l, (float(j) + 0.5f) / float(count),
+                                      std::fmod(float(j) * 0.6180339887f + 0.5f, 1.0f));
+                out.push_back({at.position + lift * at.normal, intensity, at.normal, true});
+            }
+            continue;
+        }
         const glm::vec3 e1 = l.corners[1] - l.corners[0], e3 = l.corners[3] - l.corners[0];
         // Each cell of area A/n² emits I(ω) = L · (A/n²) · cosθ towards the front.
         const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
@@ -347,6 +381,8 @@ void FrameRenderer::set_light_uniforms(const Program& p,
         p.set(("light_intensity" + k).c_str(), lights[i].intensity);
         p.set(("light_normal" + k).c_str(), lights[i].normal);
         p.set(("light_one_sided" + k).c_str(), lights[i].one_sided ? 1 : 0);
+        p.set(("light_directional" + k).c_str(), lights[i].directional ? 1 : 0);
+        p.set(("light_cone" + k).c_str(), lights[i].cone);
     }
 }
 
@@ -416,8 +452,8 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
                                         const glm::mat4& view_projection) {
     std::vector<glm::vec4> triangles;
     for (size_t o = 0; o < scene_.objects.size(); ++o)
-        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]), light.position,
-                             triangles);
+        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]),
+                             glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles);
     if (triangles.empty()) return;
     gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
     gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)),

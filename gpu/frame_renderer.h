@@ -21,11 +21,15 @@ namespace ag::gpu {
 
 // A point light standing in for a light or a piece of a quad light: intensity I (W/sr) towards
 // directions in front of `normal` (one-sided, scaled by the cosine) or everywhere.
+// A sun is a directional sample: `position` holds the unit direction towards it, `intensity` its
+// irradiance E, and there is no 1/d². A spot scales I by its falloff around `normal` (its axis).
 struct LightSample {
     glm::vec3 position{0.0f};
     glm::vec3 intensity{0.0f};
     glm::vec3 normal{0.0f};
     bool one_sided = false;
+    bool directional = false;
+    glm::vec2 cone{-2.0f, -1.0f};  // spot: (cos outer, cos inner); a cone of every direction else
 };
 
 // The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples); at

@@ -1,11 +1,35 @@
 #include "gpu/shadow_volumes.h"
 
+#include <cmath>
 #include <map>
 #include <tuple>
+#include <utility>
 
 namespace ag::gpu {
 
+namespace {
+
+// Meshes that cannot be closed cast one prism per triangle: correct for any triangle soup, at
+// eight triangles each, so only up to this size (a 331k-triangle room casts nothing instead).
+constexpr size_t kMaxSoupTriangles = 65536;
+
+ShadowCaster soup_caster(const Mesh& mesh) {
+    ShadowCaster c;
+    if (mesh.triangles.empty() || mesh.triangles.size() > kMaxSoupTriangles) return c;
+    c.soup = true;
+    c.positions = mesh.positions;
+    c.triangles = mesh.triangles;
+    return c;
+}
+
+}  // namespace
+
 ShadowCaster make_shadow_caster(const Mesh& mesh) {
+    ShadowCaster closed = make_closed_caster(mesh);
+    return closed.closed ? closed : soup_caster(mesh);
+}
+
+ShadowCaster make_closed_caster(const Mesh& mesh) {
     ShadowCaster c;
     std::map<std::tuple<float, float, float>, unsigned> weld;
     std::vector<unsigned> remap(mesh.positions.size());
@@ -26,34 +50,9 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
             if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
                 return ShadowCaster{};
         }
-    // Small holes (a quad's outline, a box without its bottom) are closed by fans for the shadow
-    // volume only, so thin panels and open boxes still cast shadows. Large boundaries (a floor's
-    // rim) stay open: such a mesh casts no volume.
-    std::map<unsigned, unsigned> boundary_next;
-    for (const auto& [edge, owner] : edges)
-        if (!edges.count({edge.second, edge.first})) {
-            if (!boundary_next.emplace(edge.first, edge.second).second) return ShadowCaster{};
-        }
-    constexpr size_t kMaxHole = 16;
-    while (!boundary_next.empty()) {
-        std::vector<unsigned> loop{boundary_next.begin()->first};
-        for (unsigned v = boundary_next.begin()->second; v != loop.front();
-             v = boundary_next.at(v)) {
-            if (!boundary_next.count(v) || loop.size() > kMaxHole) return ShadowCaster{};
-            loop.push_back(v);
-        }
-        for (unsigned v : loop) boundary_next.erase(v);
-        // The fill runs each boundary edge backwards: fan (v0, v[i+1], v[i]).
-        for (size_t i = 1; i + 1 < loop.size(); ++i) {
-            const int t = int(c.triangles.size());
-            c.triangles.push_back({loop[0], loop[i + 1], loop[i]});
-            for (int k = 0; k < 3; ++k) {
-                const unsigned a = c.triangles.back()[k], b = c.triangles.back()[(k + 1) % 3];
-                if (!edges.emplace(std::make_pair(a, b), std::make_pair(t, k)).second)
-                    return ShadowCaster{};
-            }
-        }
-    }
+    // An open mesh (a quad panel, a box without its bottom, an atrium open to the sky) is not
+    // closed here: filling its holes would invent geometry (a lid over the atrium), so it casts
+    // per-triangle prisms instead (make_shadow_caster).
     c.neighbours.assign(c.triangles.size(), glm::ivec3(-1));
     for (const auto& [edge, owner] : edges) {
         auto it = edges.find({edge.second, edge.first});
@@ -66,18 +65,43 @@ ShadowCaster make_shadow_caster(const Mesh& mesh) {
 
 void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
                           const glm::vec3& light, std::vector<glm::vec4>& out) {
-    if (!caster.closed) return;
+    append_shadow_volume(caster, model, glm::vec4(light, 1.0f), out);
+}
+
+void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
+                          const glm::vec4& light_h, std::vector<glm::vec4>& out) {
+    if (!caster.closed && !caster.soup) return;
+    const glm::vec3 light(light_h);
+    const float w = light_h.w;  // 1: a point; 0: a direction towards the light
     std::vector<glm::vec3> p(caster.positions.size());
     for (size_t i = 0; i < p.size(); ++i)
         p[i] = glm::vec3(model * glm::vec4(caster.positions[i], 1.0f));
+    auto far = [&](unsigned v) { return glm::vec4(w * p[v] - light, 0.0f); };
+    auto near = [&](unsigned v) { return glm::vec4(p[v], 1.0f); };
+    if (caster.soup) {
+        // Each triangle, turned to face the light (an opaque sheet blocks from either side), as
+        // its own closed prism: near cap, three sides, far cap.
+        for (const glm::uvec3& t : caster.triangles) {
+            glm::uvec3 tri = t;
+            const glm::vec3 n = glm::cross(p[tri.y] - p[tri.x], p[tri.z] - p[tri.x]);
+            const float facing = glm::dot(n, light - w * p[tri.x]);
+            if (facing == 0.0f || !std::isfinite(facing)) continue;  // edge-on: no volume
+            if (facing < 0.0f) std::swap(tri.y, tri.z);
+            out.insert(out.end(), {near(tri.x), near(tri.y), near(tri.z)});
+            out.insert(out.end(), {far(tri.x), far(tri.z), far(tri.y)});
+            for (int k = 0; k < 3; ++k) {
+                const unsigned a = tri[k], b = tri[(k + 1) % 3];
+                out.insert(out.end(), {near(b), near(a), far(a), near(b), far(a), far(b)});
+            }
+        }
+        return;
+    }
     std::vector<char> lit(caster.triangles.size());
     for (size_t t = 0; t < caster.triangles.size(); ++t) {
         const glm::uvec3 tri = caster.triangles[t];
         const glm::vec3 n = glm::cross(p[tri.y] - p[tri.x], p[tri.z] - p[tri.x]);
-        lit[t] = glm::dot(n, light - p[tri.x]) > 0.0f;
+        lit[t] = glm::dot(n, light - w * p[tri.x]) > 0.0f;
     }
-    auto far = [&](unsigned v) { return glm::vec4(p[v] - light, 0.0f); };
-    auto near = [&](unsigned v) { return glm::vec4(p[v], 1.0f); };
     for (size_t t = 0; t < caster.triangles.size(); ++t) {
         const glm::uvec3 tri = caster.triangles[t];
         if (lit[t]) {

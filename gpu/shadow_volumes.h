@@ -10,21 +10,29 @@
 
 namespace ag::gpu {
 
-// Edge adjacency of a closed mesh (positions welded exactly). Holes of up to 16 boundary edges
-// are closed by fans (a quad panel or a box without its bottom still casts a shadow); a mesh with
-// larger holes or non-manifold edges is not a caster (`closed` false).
+// Edge adjacency of a closed mesh (positions welded exactly): it casts the volume of its
+// silhouette. A mesh with boundary or non-manifold edges (`closed` false: a quad panel, an open
+// box, an atrium open to the sky) casts one prism per triangle instead (`soup`), each triangle an
+// opaque sheet, if it has at most 65536 triangles; larger open meshes cast nothing.
 struct ShadowCaster {
     bool closed = false;
+    bool soup = false;
     std::vector<glm::vec3> positions;    // welded
     std::vector<glm::uvec3> triangles;   // into positions
     std::vector<glm::ivec3> neighbours;  // per triangle edge (k, k+1): the adjacent triangle
 };
 
 ShadowCaster make_shadow_caster(const Mesh& mesh);
+// Only the closed form: `closed` false (and no soup) where the mesh cannot be closed.
+ShadowCaster make_closed_caster(const Mesh& mesh);
 
 // Appends the volume of `caster` (transformed by `model`) for a point light at `light` as
 // homogeneous world-space triangles (w = 0 at infinity), consistently wound outwards.
 void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
                           const glm::vec3& light, std::vector<glm::vec4>& out);
+// The same for a homogeneous light: (position, 1) for a point light, (direction towards the
+// light, 0) for a directional one (a sun), whose volumes are parallel prisms.
+void append_shadow_volume(const ShadowCaster& caster, const glm::mat4& model,
+                          const glm::vec4& light, std::vector<glm::vec4>& out);
 
 }  // namespace ag::gpu

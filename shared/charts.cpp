@@ -5,6 +5,7 @@
 #include <OpenMesh/Core/Mesh/TriMesh_ArrayKernelT.hh>
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -732,6 +733,14 @@ std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int*
 }
 
 void make_surfaces_and_atlas(Scene& scene) {
+    using Clock = std::chrono::steady_clock;
+    Clock::time_point phase = Clock::now();
+    const auto lap = [&] {
+        const Clock::time_point now = Clock::now();
+        const double s = std::chrono::duration<double>(now - phase).count();
+        phase = now;
+        return s;
+    };
     const LightmapSettings& ls = scene.settings.lightmap;
     const std::string where = scene.path.empty() ? "scene" : scene.path;
     scene.surfaces.clear();
@@ -833,6 +842,7 @@ void make_surfaces_and_atlas(Scene& scene) {
         }
     }
 
+    scene.load_timing.surfaces = lap();
     // Pack every chart with `gutter` free texels on each side, so bilinear lookups near a
     // chart's edge never read a neighbouring chart.
     const int count = int(atlas.charts.size());
@@ -882,6 +892,7 @@ void make_surfaces_and_atlas(Scene& scene) {
         atlas.charts[size_t(c)].y = positions[size_t(c)].y + atlas.gutter;
     }
 
+    scene.load_timing.packing = lap();
     atlas.texel_index.assign(size_t(atlas.width) * size_t(atlas.height), -1);
     for (int oi = 0; oi < int(scene.objects.size()); ++oi)
         atlas.corner_uvs[size_t(oi)].assign(3 * scene.objects[size_t(oi)].mesh.triangles.size(),
@@ -898,6 +909,7 @@ void make_surfaces_and_atlas(Scene& scene) {
         }
         make_chart_texels(mesh, infos[size_t(chart.object)], chart, c, texel_size, atlas);
     }
+    scene.load_timing.texels = lap();
 }
 
 std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record) {

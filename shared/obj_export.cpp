@@ -31,6 +31,17 @@ void export_obj(const Scene& scene, const std::string& obj_path) {
             obj << "# point light '" << l.name << "' position " << triple(l.position)
                 << " intensity " << triple(l.intensity) << " W/sr" << (l.enabled ? "" : " (off)")
                 << "\n";
+        else if (l.type == LightType::sun)
+            obj << "# sun light '" << l.name << "' direction " << triple(l.direction)
+                << " irradiance " << triple(l.irradiance) << (l.enabled ? "" : " (off)") << "\n";
+        else if (l.type == LightType::spot)
+            obj << "# spot light '" << l.name << "' position " << triple(l.position)
+                << " direction " << triple(l.direction) << " cone " << l.cone_inner << " "
+                << l.cone_outer << " intensity " << triple(l.intensity)
+                << (l.enabled ? "" : " (off)") << "\n";
+        else if (l.type == LightType::mesh)
+            obj << "# mesh light '" << l.name << "': the emissive object of that name, radiance "
+                << triple(l.radiance) << (l.enabled ? "" : " (off)") << "\n";
         else
             obj << "# quad light '" << l.name << "' corners " << triple(l.corners[0]) << " | "
                 << triple(l.corners[1]) << " | " << triple(l.corners[2]) << " | "

@@ -25,14 +25,119 @@ float Light::quad_area() const {
     return glm::length(glm::cross(corners[1] - corners[0], corners[3] - corners[0]));
 }
 
+float Light::area() const {
+    if (type == LightType::quad) return quad_area();
+    if (type == LightType::mesh) return mesh_area;
+    return 0.0f;
+}
+
 glm::vec3 Light::center() const {
-    if (type == LightType::point) return position;
+    if (type != LightType::quad) return position;
     return 0.25f * (corners[0] + corners[1] + corners[2] + corners[3]);
 }
 
+float Light::cos_outer() const { return std::cos(glm::radians(cone_outer)); }
+float Light::cos_inner() const { return std::cos(glm::radians(std::min(cone_inner, cone_outer))); }
+
+float Light::spot_factor(float cos_theta) const {
+    if (type != LightType::spot) return 1.0f;
+    const float co = cos_outer(), ci = cos_inner();
+    if (cos_theta >= ci) return 1.0f;
+    if (!(ci > co)) return 0.0f;
+    return std::clamp((cos_theta - co) / (ci - co), 0.0f, 1.0f);
+}
+
 glm::vec3 Light::power() const {
-    if (type == LightType::point) return 4.0f * std::numbers::pi_v<float> * intensity;
-    return std::numbers::pi_v<float> * quad_area() * radiance;  // Lambertian emitter: Φ = π L A
+    constexpr float kPi = std::numbers::pi_v<float>;
+    switch (type) {
+        case LightType::point:
+            return 4.0f * kPi * intensity;
+        case LightType::spot: {
+            // ∫ f dω = 2π [(1 − cos_i) + (cos_i − cos_o)/2] for f linear in cosθ between the cones.
+            const float co = cos_outer(), ci = cos_inner();
+            return 2.0f * kPi * ((1.0f - ci) + 0.5f * (ci - co)) * intensity;
+        }
+        case LightType::sun:
+            return kPi * sun_radius * sun_radius * irradiance;  // E through the disc
+        default:
+            return kPi * area() * radiance;  // Lambertian emitter: Φ = π L A
+    }
+}
+
+void update_sun_discs(Scene& scene) {
+    const Bounds b = scene.world_bounds();
+    for (Light& l : scene.lights)
+        if (l.type == LightType::sun) {
+            l.sun_center = b.empty() ? glm::vec3(0.0f) : b.center();
+            l.sun_radius = b.empty() ? 1.0f : 0.505f * glm::length(b.extent());
+            l.position = l.sun_center - 2.0f * l.sun_radius * l.direction;  // for display only
+        }
+}
+
+LightPoint sample_area_light(const Scene& scene, const Light& light, float u, float v) {
+    if (light.type == LightType::quad) {
+        const glm::vec3 e1 = light.corners[1] - light.corners[0];
+        const glm::vec3 e3 = light.corners[3] - light.corners[0];
+        return {light.corners[0] + u * e1 + v * e3, light.quad_normal()};
+    }
+    const Object& o = scene.objects[size_t(light.object)];
+    const std::vector<float>& cdf = light.triangle_cdf;
+    const size_t t = size_t(std::min<ptrdiff_t>(
+        std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin(), ptrdiff_t(cdf.size()) - 1));
+    const float lo = t == 0 ? 0.0f : cdf[t - 1];
+    const float w = cdf[t] > lo ? std::clamp((u - lo) / (cdf[t] - lo), 0.0f, 1.0f) : 0.5f;
+    // Uniform in the triangle: p = (1-√w) a + √w (1-v) b + √w v c.
+    const glm::uvec3 tri = o.mesh.triangles[t];
+    const float r = std::sqrt(w);
+    const glm::vec3 p = (1.0f - r) * o.mesh.positions[tri.x] +
+                        r * (1.0f - v) * o.mesh.positions[tri.y] + r * v * o.mesh.positions[tri.z];
+    return {o.transform.apply_point(p), o.transform.apply_vector(triangle_normal(o.mesh, int(t)))};
+}
+
+void update_mesh_light_positions(Scene& scene, int object) {
+    for (Light& l : scene.lights)
+        if (l.type == LightType::mesh && l.object == object) {
+            const Object& o = scene.objects[size_t(object)];
+            l.position = o.transform.apply_point(mesh_bounds(o.mesh).center());
+        }
+}
+
+void add_mesh_lights(Scene& scene) {
+    for (int i = 0; i < int(scene.objects.size()); ++i) {
+        const Object& o = scene.objects[size_t(i)];
+        const Material& m = o.material;
+        if (!m.emits_light || !(std::max({m.emission.x, m.emission.y, m.emission.z}) > 0.0f))
+            continue;
+        if (scene.find_light(o.name) >= 0)
+            throw_input_error(scene.path, "/objects",
+                              "object \"" + o.name +
+                                  "\" emits light and becomes a mesh light of its name; expected "
+                                  "no light named \"" +
+                                  o.name + "\" in /lights");
+        Light l;
+        l.name = o.name;
+        l.type = LightType::mesh;
+        l.object = i;
+        l.radiance = m.emission;
+        double total = 0.0;
+        l.triangle_cdf.resize(o.mesh.triangles.size());
+        for (size_t t = 0; t < o.mesh.triangles.size(); ++t) {
+            total += double(triangle_area(o.mesh, int(t)));
+            l.triangle_cdf[t] = float(total);
+        }
+        for (float& c : l.triangle_cdf) c = float(double(c) / total);
+        l.triangle_cdf.back() = 1.0f;
+        l.mesh_area = float(total);
+        scene.lights.push_back(std::move(l));
+        update_mesh_light_positions(scene, i);
+    }
+}
+
+std::vector<int> object_lights(const Scene& scene) {
+    std::vector<int> out(scene.objects.size(), -1);
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        if (scene.lights[l].type == LightType::mesh) out[size_t(scene.lights[l].object)] = int(l);
+    return out;
 }
 
 int Scene::find_object(const std::string& object_name) const {
@@ -72,7 +177,7 @@ int quad_light_grid(const Settings& settings) {
 int light_sample_count(const Scene& scene) {
     const int grid = quad_light_grid(scene.settings);
     int count = 0;
-    for (const Light& l : scene.lights) count += l.type == LightType::point ? 1 : grid * grid;
+    for (const Light& l : scene.lights) count += l.is_area() ? grid * grid : 1;
     return count;
 }
 
@@ -80,12 +185,12 @@ void check_light_samples(const Scene& scene) {
     const int count = light_sample_count(scene);
     if (count <= kMaxLightSamples) return;
     int quads = 0;
-    for (const Light& l : scene.lights) quads += l.type == LightType::quad ? 1 : 0;
+    for (const Light& l : scene.lights) quads += l.is_area() ? 1 : 0;
     const int grid = quad_light_grid(scene.settings);
     throw_input_error(
         scene.path, "/lights",
         std::to_string(scene.lights.size() - size_t(quads)) + " point lights and " +
-            std::to_string(quads) + " quad lights of " + std::to_string(grid) + "×" +
+            std::to_string(quads) + " quad or mesh lights of " + std::to_string(grid) + "×" +
             std::to_string(grid) + " samples (settings/direct/area_light_samples = " +
             std::to_string(scene.settings.direct.area_light_samples) + ") make " +
             std::to_string(count) + " light samples; expected at most " +

@@ -33,6 +33,9 @@ struct Material {
     glm::vec3 albedo{0.75f};
     float ior = 1.5f;
     glm::vec3 emission{0.0f};
+    // Emission makes the object a mesh light (Scene::lights gets one for it on load) rather than
+    // only a visible lamp; scene files say "light": false for a lamp lit by a separate light.
+    bool emits_light = true;
 };
 
 // Rigid transform: world = rotation * object + translation. Scale is baked into the mesh at load.
@@ -54,12 +57,17 @@ struct Object {
     std::string source;  // mesh file or built-in shape name, for info/export
 };
 
-enum class LightType { point, quad };
-inline constexpr std::array kLightTypeNames = {"point", "quad"};
+enum class LightType { point, quad, mesh, sun, spot };
+inline constexpr std::array kLightTypeNames = {"point", "quad", "mesh", "sun", "spot"};
 
 // Point light: position and intensity I (W/sr, RGB). Quad area light: a parallelogram
 // corners[0..3] (corners[2] = corners[1] + corners[3] - corners[0]) emitting radiance L from the
-// side its normal (edge01 × edge03) faces.
+// side its normal (edge01 × edge03) faces. Mesh light: the front faces of an emissive object
+// (made by add_mesh_lights, never written in a scene file's "lights"), radiance L = the
+// material's emission, moving with its object. Sun: parallel light travelling along `direction`
+// with irradiance E (W/unit²) on a surface facing it; its photons leave a disc covering the scene
+// (sun_center, sun_radius). Spot: a point light of intensity I on its axis `direction`, full
+// inside cone_inner and falling linearly in cosθ to zero at cone_outer (half-angles, degrees).
 struct Light {
     std::string name;
     LightType type = LightType::point;
@@ -68,14 +76,46 @@ struct Light {
     std::array<glm::vec3, 4> corners{};
     glm::vec3 radiance{0.0f};
     bool enabled = true;
+    // Mesh light: the object, its area and the cumulative area fraction of its triangles (rigid
+    // transforms keep both); `position` follows the object's world bounds centre.
+    int object = -1;
+    float mesh_area = 0.0f;
+    std::vector<float> triangle_cdf;
+    glm::vec3 direction{0.0f, -1.0f, 0.0f};        // sun, spot: unit direction light travels
+    glm::vec3 irradiance{0.0f};                    // sun
+    float cone_inner = 30.0f, cone_outer = 45.0f;  // spot, degrees
+    glm::vec3 sun_center{0.0f};                    // sun: the disc photons leave (update_sun)
+    float sun_radius = 0.0f;
 
     glm::vec3 quad_normal() const;  // unit normal of a quad light
     float quad_area() const;
-    glm::vec3 center() const;  // position, or the quad's centre
-    glm::vec3 power() const;   // emitted flux Φ (W): 4πI for a point, πLA for a quad
-    // The value a user sets: intensity I (W/sr) for a point light, radiance L for a quad.
-    const glm::vec3& value() const { return type == LightType::point ? intensity : radiance; }
-    glm::vec3& value() { return type == LightType::point ? intensity : radiance; }
+    bool is_area() const { return type == LightType::quad || type == LightType::mesh; }
+    float area() const;        // emitting area of a quad or mesh light
+    glm::vec3 center() const;  // position (mesh: its object's centre), or the quad's centre
+    glm::vec3 power() const;   // emitted flux Φ (W): 4πI for a point, πLA for a quad or mesh
+    // Spot falloff at cosθ from the axis: 1 inside the inner cone, linear in cosθ to 0 at the
+    // outer one; 1 for every other light.
+    float spot_factor(float cos_theta) const;
+    float cos_inner() const;
+    float cos_outer() const;
+    // The value a user sets: intensity I (W/sr) for a point or spot light, irradiance E for a
+    // sun, radiance L for an area light.
+    const glm::vec3& value() const {
+        return type == LightType::point || type == LightType::spot ? intensity
+               : type == LightType::sun                            ? irradiance
+                                                                   : radiance;
+    }
+    glm::vec3& value() {
+        return type == LightType::point || type == LightType::spot ? intensity
+               : type == LightType::sun                            ? irradiance
+                                                                   : radiance;
+    }
+};
+
+// A point on an area light, uniform in area, with the light's front normal there (world space).
+struct LightPoint {
+    glm::vec3 position{0.0f};
+    glm::vec3 normal{0.0f};
 };
 
 struct Camera {
@@ -116,6 +156,14 @@ struct SceneChange {
     int index = -1;  // object or light index; -1 for the camera
 };
 
+// Where load_scene spent its time, in seconds (afterglow info --timing).
+struct LoadTiming {
+    double files = 0.0;     // JSON, mesh and model files, shapes, lights
+    double surfaces = 0.0;  // crease-angle surfaces and charts, per object
+    double packing = 0.0;   // the atlas: charts shelf-packed
+    double texels = 0.0;    // texel records
+};
+
 struct Scene {
     std::string name;
     std::string path;  // the scene file, for messages and relative paths
@@ -130,6 +178,7 @@ struct Scene {
     std::vector<Surface> surfaces;
     std::vector<std::vector<int>> triangle_surface;  // [object][triangle] -> surface id
     LightmapAtlas atlas;
+    LoadTiming load_timing;
 
     // Versioning: every edit bumps `version` and the touched item's counter and appends a change.
     uint64_t version = 0;
@@ -150,8 +199,21 @@ struct Scene {
 // Side n of the n×n grid of point lights that stands in for a quad light on the GPU
 // (n² ≈ settings.direct.area_light_samples).
 int quad_light_grid(const Settings& settings);
+// (u, v) ∈ [0,1)² → a point uniform in area on a quad or mesh light. For a mesh, u picks a
+// triangle by area and is reused (rescaled) inside it, so stratified (u, v) stay stratified.
+LightPoint sample_area_light(const Scene& scene, const Light& light, float u, float v);
+// Makes a mesh light for every object whose material emits and `emits_light`, named after the
+// object (an InputError naming scene.path if a light of that name exists), and updates their
+// positions; call after objects change place (scene_edit does).
+void add_mesh_lights(Scene& scene);
+void update_mesh_light_positions(Scene& scene, int object);
+// Sizes every sun's photon disc to the scene's world bounds now (with a 1% margin); call after
+// loading. Objects that later move outside these bounds get no sun photons there.
+void update_sun_discs(Scene& scene);
+// Per object, the index of the mesh light it is, or -1.
+std::vector<int> object_lights(const Scene& scene);
 // Point-light samples the GPU frame needs for every light of the scene, enabled or not (an edit
-// may turn any of them on): 1 per point light, n² per quad light.
+// may turn any of them on): 1 per point, spot or sun light, n² per quad or mesh light.
 int light_sample_count(const Scene& scene);
 // Throws InputError, naming scene.path, where light_sample_count exceeds kMaxLightSamples: the
 // GPU frame holds no more, and dropping lights silently would change the image.

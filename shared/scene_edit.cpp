@@ -154,6 +154,11 @@ void set_object_transform(Scene& scene, int object, const Transform& transform) 
                           "object '" + o.name + "': " + problem);
     o.transform = placed;
     record(scene, ChangeKind::object_transform, object);
+    // A mesh light moves with its object: its photons leave from the new place.
+    update_mesh_light_positions(scene, object);
+    for (size_t l = 0; l < scene.lights.size(); ++l)
+        if (scene.lights[l].type == LightType::mesh && scene.lights[l].object == object)
+            record(scene, ChangeKind::light_position, int(l));
 }
 
 void translate_object(Scene& scene, int object, const glm::vec3& offset) {
@@ -189,8 +194,15 @@ void set_light_position(Scene& scene, int light, const glm::vec3& position) {
     check_light(scene, light, "set_light_position");
     check_finite(scene, position, "set_light_position");
     Light& l = scene.lights[size_t(light)];
+    if (l.type == LightType::mesh)
+        throw_input_error(
+            scene.path, "set_light_position",
+            "light '" + l.name + "' is a mesh light; expected an edit of its object's transform");
+    if (l.type == LightType::sun)
+        throw_input_error(scene.path, "set_light_position",
+                          "light '" + l.name + "' is a sun; it has a direction, not a position");
     Light moved = l;
-    if (l.type == LightType::point) {
+    if (l.type == LightType::point || l.type == LightType::spot) {
         moved.position = position;
         if (std::string problem = position_problem(position); !problem.empty())
             throw_input_error(scene.path, "set_light_position", problem);
@@ -215,6 +227,8 @@ void set_light_color(Scene& scene, int light, const glm::vec3& value) {
         throw_input_error(scene.path, "set_light_color", problem);
     Light& l = scene.lights[size_t(light)];
     l.value() = value;
+    // A mesh light's radiance is its object's emission: both are seen and lit by the same value.
+    if (l.type == LightType::mesh) scene.objects[size_t(l.object)].material.emission = value;
     record(scene, ChangeKind::light_power, light);
 }
 

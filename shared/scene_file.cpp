@@ -2,6 +2,9 @@
 // value with its JSON path, build objects, lights and camera, then derive surfaces and the atlas.
 #include "shared/scene_file.h"
 
+#include <algorithm>
+#include <cctype>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -14,6 +17,7 @@
 #include "shared/input_error.h"
 #include "shared/json_read.h"
 #include "shared/mesh_io.h"
+#include "shared/model_io.h"
 #include "shared/scene_edit.h"
 #include "shared/settings_json.h"
 #include "shared/shapes.h"
@@ -119,6 +123,7 @@ public:
     SceneParser(const std::string& path) : in_(path), base_(fs::path(path).parent_path()) {}
 
     Scene parse(const Json& root) {
+        const auto start = std::chrono::steady_clock::now();
         in_.object(root, "");
         in_.check_keys(
             root, "",
@@ -130,16 +135,33 @@ public:
             scene_.length_unit = in_.string(*v, "/units");
         if (const Json* v = JsonInput::find(root, "settings"))
             read_settings(*v, scene_.settings, in_.file(), "/settings");
-        read_camera(in_.require(root, "", "camera", "a camera {eye, target, ...}"));
         read_materials(in_.require(root, "", "materials", "an object of named materials"));
         read_lights(in_.require(root, "", "lights", "an array of lights (may be empty)"));
+        read_objects(in_.require(root, "", "objects", "an array of objects"));
+        // Without "camera" the first camera of a glTF object is used.
+        if (JsonInput::find(root, "camera") || model_cameras_.empty()) {
+            read_camera(in_.require(root, "", "camera", "a camera {eye, target, ...}"));
+        } else {
+            const ModelCamera& c = model_cameras_.front();
+            scene_.camera.eye = c.eye;
+            scene_.camera.target = c.target;
+            scene_.camera.up = c.up;
+            scene_.camera.fov_y = std::clamp(c.fov_y, float(kMinFovY), float(kMaxFovY));
+            std::string key;
+            if (const std::string problem = camera_problem(scene_.camera, key); !problem.empty())
+                in_.fail("/objects", "the glTF camera \"" + c.name + "\": " + problem);
+        }
+        add_mesh_lights(scene_);
+        update_sun_discs(scene_);
         check_light_samples(scene_);
         check_photon_budget(scene_);
-        read_objects(in_.require(root, "", "objects", "an array of objects"));
         if (const Json* v = JsonInput::find(root, "script"))
             scene_.script = existing_file(*v, "/script", "Lua script");
         init_versions(scene_);
+        const double files =
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         make_surfaces_and_atlas(scene_);
+        scene_.load_timing.files = files;
         return std::move(scene_);
     }
 
@@ -186,7 +208,7 @@ private:
             const std::string mpath = JsonInput::child(path, item.key());
             const Json& m = in_.object(item.value(), mpath);
             if (item.key().empty()) in_.fail(mpath, "expected a non-empty material name");
-            in_.check_keys(m, mpath, {"type", "albedo", "ior", "emission"});
+            in_.check_keys(m, mpath, {"type", "albedo", "ior", "emission", "light"});
             Material mat;
             mat.name = item.key();
             if (const Json* v = JsonInput::find(m, "type"))
@@ -204,6 +226,8 @@ private:
             }
             if (const Json* v = JsonInput::find(m, "emission"))
                 mat.emission = in_.color(*v, mpath + "/emission", 0, kMaxLightValue);
+            if (const Json* v = JsonInput::find(m, "light"))
+                mat.emits_light = in_.boolean(*v, mpath + "/light");
             materials_[mat.name] = mat;
         }
     }
@@ -215,10 +239,22 @@ private:
             const std::string lpath = JsonInput::child(path, i);
             const Json& l = in_.object(json[i], lpath);
             Light light;
-            light.type = LightType(in_.choice(in_.require(l, lpath, "type", "point or quad"),
-                                              lpath + "/type", kLightTypeNames));
+            light.type =
+                LightType(in_.choice(in_.require(l, lpath, "type", "point, quad, sun or spot"),
+                                     lpath + "/type", kLightTypeNames));
+            if (light.type == LightType::mesh)
+                in_.fail(
+                    lpath + "/type",
+                    "expected point, quad, sun or spot, got \"mesh\" (mesh lights are the objects "
+                    "whose material has an emission)");
             if (light.type == LightType::point)
                 in_.check_keys(l, lpath, {"name", "type", "position", "intensity", "enabled"});
+            else if (light.type == LightType::sun)
+                in_.check_keys(l, lpath, {"name", "type", "direction", "irradiance", "enabled"});
+            else if (light.type == LightType::spot)
+                in_.check_keys(l, lpath,
+                               {"name", "type", "position", "direction", "intensity", "cone_outer",
+                                "cone_inner", "enabled"});
             else
                 in_.check_keys(l, lpath, {"name", "type", "corners", "radiance", "enabled"});
             light.name =
@@ -228,7 +264,30 @@ private:
                          "expected a unique light name, got \"" + light.name + "\" a second time");
             if (const Json* v = JsonInput::find(l, "enabled"))
                 light.enabled = in_.boolean(*v, lpath + "/enabled");
-            if (light.type == LightType::point) {
+            if (light.type == LightType::sun || light.type == LightType::spot) {
+                const std::string dpath = lpath + "/direction";
+                const glm::vec3 d =
+                    in_.vec3(in_.require(l, lpath, "direction", "[x, y, z] light travels"), dpath);
+                if (!safe_normalize(d, light.direction))
+                    in_.fail(dpath, "expected a non-zero direction, got " + format_vec(d));
+            }
+            if (light.type == LightType::sun) {
+                light.irradiance =
+                    in_.color(in_.require(l, lpath, "irradiance", "[r, g, b] in W/unit²"),
+                              lpath + "/irradiance", 0, kMaxLightValue);
+            } else if (light.type == LightType::spot) {
+                light.position = in_.vec3(in_.require(l, lpath, "position", "[x, y, z]"),
+                                          lpath + "/position", kMaxCoordinate);
+                light.intensity = in_.color(in_.require(l, lpath, "intensity", "[r, g, b] in W/sr"),
+                                            lpath + "/intensity", 0, kMaxLightValue);
+                light.cone_outer =
+                    float(in_.number(in_.require(l, lpath, "cone_outer", "a half-angle in (0, 90]"),
+                                     lpath + "/cone_outer", 0, 90, true));
+                light.cone_inner = light.cone_outer;
+                if (const Json* v = JsonInput::find(l, "cone_inner"))
+                    light.cone_inner =
+                        float(in_.number(*v, lpath + "/cone_inner", 0, light.cone_outer));
+            } else if (light.type == LightType::point) {
                 light.position = in_.vec3(in_.require(l, lpath, "position", "[x, y, z]"),
                                           lpath + "/position", kMaxCoordinate);
                 light.intensity = in_.color(in_.require(l, lpath, "intensity", "[r, g, b] in W/sr"),
@@ -271,38 +330,145 @@ private:
         for (size_t i = 0; i < json.size(); ++i) {
             const std::string opath = JsonInput::child(path, i);
             const Json& o = in_.object(json[i], opath);
-            in_.check_keys(
-                o, opath,
-                {"name", "material", "dynamic", "mesh", "scale", "shape", "offset", "transform"});
+            in_.check_keys(o, opath,
+                           {"name", "material", "materials", "dynamic", "mesh", "scale", "shape",
+                            "offset", "transform"});
             Object object;
             object.name =
                 in_.string(in_.require(o, opath, "name", "a unique object name"), opath + "/name");
             if (scene_.find_object(object.name) >= 0)
                 in_.fail(opath + "/name", "expected a unique object name, got \"" + object.name +
                                               "\" a second time");
-            const std::string material = in_.string(
-                in_.require(o, opath, "material", "the name of a material"), opath + "/material");
-            const auto it = materials_.find(material);
-            if (it == materials_.end()) {
-                std::string list;
-                for (const auto& [name, unused] : materials_)
-                    list += (list.empty() ? "" : ", ") + name;
-                in_.fail(opath + "/material", "unknown material \"" + material +
-                                                  "\"; expected one of " +
-                                                  (list.empty() ? "(none defined)" : list));
-            }
-            object.material = it->second;
             if (const Json* v = JsonInput::find(o, "dynamic"))
                 object.dynamic = in_.boolean(*v, opath + "/dynamic");
-            read_geometry(o, opath, object);
-            if (const Json* v = JsonInput::find(o, "transform")) {
-                object.transform = read_transform(*v, opath + "/transform");
-                if (const std::string problem = placement_problem(object.mesh, object.transform);
+            Transform transform;
+            if (const Json* v = JsonInput::find(o, "transform"))
+                transform = read_transform(*v, opath + "/transform");
+
+            // An OBJ without "material" brings its own: one object per file material.
+            const Json* mesh = JsonInput::find(o, "mesh");
+            const Json* material = JsonInput::find(o, "material");
+            std::vector<Object> parts;
+            if (mesh && !material && JsonInput::find(o, "shape") == nullptr) {
+                parts = read_model(o, opath, object, transform);
+            } else {
+                if (JsonInput::find(o, "materials"))
+                    in_.fail(opath + "/materials",
+                             "material overrides apply to OBJ meshes read with their own "
+                             "materials; expected no \"materials\" next to \"material\" or "
+                             "\"shape\"");
+                object.material = find_material(
+                    in_.string(in_.require(o, opath, "material", "the name of a material"),
+                               opath + "/material"),
+                    opath + "/material");
+                read_geometry(o, opath, object);
+                parts.push_back(std::move(object));
+            }
+            for (Object& part : parts) {
+                part.transform = transform;
+                if (const std::string problem = placement_problem(part.mesh, part.transform);
                     !problem.empty())
                     in_.fail(opath + "/transform", problem);
+                if (scene_.find_object(part.name) >= 0)
+                    in_.fail(opath + "/name", "expected a unique object name, got \"" + part.name +
+                                                  "\" a second time");
+                scene_.objects.push_back(std::move(part));
             }
-            scene_.objects.push_back(std::move(object));
         }
+    }
+
+    const Material& find_material(const std::string& material, const std::string& path) {
+        const auto it = materials_.find(material);
+        if (it == materials_.end()) {
+            std::string list;
+            for (const auto& [name, unused] : materials_) list += (list.empty() ? "" : ", ") + name;
+            in_.fail(path, "unknown material \"" + material + "\"; expected one of " +
+                               (list.empty() ? "(none defined)" : list));
+        }
+        return it->second;
+    }
+
+    // An OBJ with its MTL materials: one object per material ("NAME/MATERIAL" when there are
+    // several), each material mapped from the file unless "materials" names a scene material for
+    // it. Other formats carry no materials, so they need "material".
+    std::vector<Object> read_model(const Json& o, const std::string& opath, const Object& base,
+                                   const Transform& transform) {
+        const Json& mesh = *JsonInput::find(o, "mesh");
+        const std::string file = existing_file(mesh, opath + "/mesh", "mesh");
+        std::string ext = fs::path(file).extension().string();
+        for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));
+        if (ext != ".obj" && ext != ".gltf" && ext != ".glb")  // only these bring materials
+            in_.require(o, opath, "material", "the name of a material");
+        Model model;
+        try {
+            model = load_model(file);
+        } catch (const InputError& e) {
+            in_.fail(opath + "/mesh", std::string("expected a usable mesh; ") + e.what());
+        }
+        std::map<std::string, std::string> overrides;
+        if (const Json* v = JsonInput::find(o, "materials")) {
+            const std::string mpath = opath + "/materials";
+            in_.object(*v, mpath);
+            for (const auto& item : v->items()) {
+                const std::string ipath = JsonInput::child(mpath, item.key());
+                const bool known =
+                    std::any_of(model.parts.begin(), model.parts.end(),
+                                [&](const ModelPart& p) { return p.material.name == item.key(); });
+                if (!known) {
+                    std::string list;
+                    std::set<std::string> listed;
+                    for (const ModelPart& p : model.parts)
+                        if (listed.insert(p.material.name).second)
+                            list += (list.empty() ? "" : ", ") + p.material.name;
+                    in_.fail(ipath, "unknown material \"" + item.key() + "\" in " + file +
+                                        "; expected one of " + list);
+                }
+                const std::string name = in_.string(item.value(), ipath);
+                find_material(name, ipath);
+                overrides[item.key()] = name;
+            }
+        }
+        std::vector<Object> parts;
+        for (ModelPart& part : model.parts) {
+            Object object = base;
+            object.name = model.parts.size() == 1 ? base.name : base.name + "/" + part.name;
+            const auto it = overrides.find(part.material.name);
+            object.material = it != overrides.end() ? materials_[it->second] : part.material;
+            object.mesh = std::move(part.mesh);
+            object.source = mesh.get<std::string>();
+            finish_mesh(o, opath, object);
+            parts.push_back(std::move(object));
+        }
+        // The file's lights and cameras are placed as its meshes: scale, offset, transform.
+        glm::vec3 scale(1.0f), offset(0.0f);
+        if (const Json* v = JsonInput::find(o, "scale"))
+            scale = v->is_number() ? glm::vec3(float(v->get<double>())) : in_.vec3(*v, opath);
+        if (const Json* v = JsonInput::find(o, "offset")) offset = in_.vec3(*v, opath + "/offset");
+        const auto place = [&](const glm::vec3& p) {
+            return transform.apply_point(scale * p + offset);
+        };
+        const auto turn = [&](const glm::vec3& d) {
+            glm::vec3 unit(0.0f, -1.0f, 0.0f);
+            safe_normalize(transform.apply_vector(d / scale), unit);
+            return unit;
+        };
+        for (Light l : model.lights) {
+            l.name = base.name + "/" + l.name;
+            l.position = place(l.position);
+            l.direction = turn(l.direction);
+            if (scene_.find_light(l.name) >= 0)
+                in_.fail(opath + "/name", "expected light names of " + file +
+                                              " unique in the scene, got \"" + l.name +
+                                              "\" a second time");
+            scene_.lights.push_back(l);
+        }
+        for (ModelCamera c : model.cameras) {
+            c.eye = place(c.eye);
+            c.target = place(c.target);
+            c.up = turn(c.up);
+            model_cameras_.push_back(c);
+        }
+        return parts;
     }
 
     void read_geometry(const Json& o, const std::string& opath, Object& object) {
@@ -319,6 +485,21 @@ private:
                 in_.fail(opath + "/mesh", std::string("expected a usable mesh; ") + e.what());
             }
             object.source = mesh->get<std::string>();
+            finish_mesh(o, opath, object);
+            return;
+        }
+        if (JsonInput::find(o, "scale"))
+            in_.fail(opath + "/scale",
+                     "scale applies to meshes only; expected the size in "
+                     "the shape itself");
+        object.mesh = read_shape(*shape, opath + "/shape");
+        object.source = (*shape)["type"].get<std::string>();
+        apply_offset(o, opath, object);
+    }
+
+    // Scale (meshes only) and offset, then the world-size check of every vertex.
+    void finish_mesh(const Json& o, const std::string& opath, Object& object) {
+        {
             if (const Json* v = JsonInput::find(o, "scale")) {
                 const std::string spath = opath + "/scale";
                 const glm::vec3 s =
@@ -337,14 +518,11 @@ private:
                     warn(in_.file() + ": " + spath + ": dropped " + std::to_string(dropped) +
                          " triangles made degenerate by the scale");
             }
-        } else {
-            if (JsonInput::find(o, "scale"))
-                in_.fail(opath + "/scale",
-                         "scale applies to meshes only; expected the size in "
-                         "the shape itself");
-            object.mesh = read_shape(*shape, opath + "/shape");
-            object.source = (*shape)["type"].get<std::string>();
         }
+        apply_offset(o, opath, object);
+    }
+
+    void apply_offset(const Json& o, const std::string& opath, Object& object) {
         if (const Json* v = JsonInput::find(o, "offset")) {
             const glm::vec3 offset = in_.vec3(*v, opath + "/offset", kMaxCoordinate);
             for (glm::vec3& p : object.mesh.positions) p += offset;
@@ -487,6 +665,7 @@ private:
     fs::path base_;
     Scene scene_;
     std::map<std::string, Material> materials_;
+    std::vector<ModelCamera> model_cameras_;  // cameras of glTF files, placed
 };
 
 }  // namespace

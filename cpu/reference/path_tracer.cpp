@@ -22,7 +22,8 @@ PathTracer::PathTracer(const Scene& scene, const RayTracer& rays, const Referenc
       rays_(rays),
       max_depth_(std::max(1, settings.max_depth)),
       seed_(settings.seed),
-      halton_(kPixelDims + kVertexDims * kQmcVertices, hash_u32(settings.seed) | 1u) {}
+      halton_(kPixelDims + kVertexDims * kQmcVertices, hash_u32(settings.seed) | 1u),
+      object_lights_(object_lights(scene)) {}
 
 ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
     const Camera& camera = scene_.camera;
@@ -58,7 +59,17 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
                                : depth == 0   ? FrameTerm::direct
                                               : FrameTerm::indirect;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
-        if (front) out[here] += throughput * m.emission;
+        if (front && object_lights_[size_t(hit.object)] >= 0 && depth > 0) {
+            // A mesh light after a diffuse vertex was counted by next-event estimation there;
+            // after a specular one it completes a path NEE cannot sample (as quad lights above).
+            if (after_specular)
+                out[diffuse_seen ? (specular_pixel    ? FrameTerm::specular
+                                    : diffuse_after_x ? FrameTerm::indirect
+                                                      : FrameTerm::caustics)
+                                 : here] += throughput * m.emission;
+        } else if (front) {
+            out[here] += throughput * m.emission;
+        }
 
         if (m.type == MaterialType::diffuse) {
             // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the

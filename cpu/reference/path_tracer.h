@@ -2,6 +2,8 @@
 // unbiased answer for everything except caustics of point lights, which it cannot sample.
 #pragma once
 
+#include <vector>
+
 #include "cpu/reference/reference.h"
 
 namespace ag::cpu {
@@ -19,6 +21,7 @@ private:
     int max_depth_;
     uint32_t seed_;
     Halton halton_;
+    std::vector<int> object_lights_;  // per object: its mesh light, or -1
 };
 
 }  // namespace ag::cpu

@@ -50,7 +50,8 @@ PhotonMapper::PhotonMapper(const Scene& scene, const RayTracer& rays,
       camera_halton_(kCameraDims, hash_u32(settings.seed) | 1u),
       gather_halton_(2, hash_u32(settings.seed + 0x9e3779b9u) | 1u),
       photon_halton_(kCausticEmitDims + 3 * kQmcBounces,
-                     hash_u32(settings.seed + 0x3c6ef372u) | 1u) {
+                     hash_u32(settings.seed + 0x3c6ef372u) | 1u),
+      object_lights_(object_lights(scene)) {
     const float r =
         settings.caustic_radius > 0.0f ? settings.caustic_radius : 0.01f * scene_diagonal(scene);
     caustic_r2_ = r * r;
@@ -166,16 +167,9 @@ void PhotonMapper::emit_global(int light, int count, int first, int n,
     const uint64_t key = mix64(uint64_t(settings_.seed) * 0x100000001b3ull + uint64_t(light));
     for (int i = first; i < first + n; ++i) {
         const Sampler s(photon_halton_, key, uint64_t(i));
-        Ray ray;
-        if (l.type == LightType::point) {
-            ray = {l.position, sphere_direction(s.get(0), s.get(1))};
-        } else {
-            const glm::vec3 nl = l.quad_normal();
-            ray.origin = l.corners[0] + s.get(2) * (l.corners[1] - l.corners[0]) +
-                         s.get(3) * (l.corners[3] - l.corners[0]) + rays_.epsilon() * nl;
-            ray.direction = cosine_direction(nl, s.get(0), s.get(1));
-        }
-        trace(ray, power, s, kGlobalEmitDims, false, out);
+        const EmissionRay e =
+            emission_ray(scene_, l, {s.get(0), s.get(1)}, {s.get(2), s.get(3)}, rays_.epsilon());
+        if (e.weight > 0.0f) trace(e.ray, power * e.weight, s, kGlobalEmitDims, false, out);
     }
 }
 
@@ -190,12 +184,13 @@ void PhotonMapper::emit_caustic(int light, int count, int first, int n,
     std::vector<glm::vec3> axis(specular_bounds_.size());
     std::vector<float> cos_max(specular_bounds_.size()), cumulative(specular_bounds_.size());
     for (int i = first; i < first + n; ++i) {
+        if (l.type == LightType::sun) break;  // no caustic photons from a sun (cones need a point)
         const Sampler s(photon_halton_, key, uint64_t(i));
         glm::vec3 origin = l.position, nl(0.0f);
-        if (l.type == LightType::quad) {
-            nl = l.quad_normal();
-            origin = l.corners[0] + s.get(3) * (l.corners[1] - l.corners[0]) +
-                     s.get(4) * (l.corners[3] - l.corners[0]) + rays_.epsilon() * nl;
+        if (l.is_area()) {
+            const LightPoint at = sample_area_light(scene_, l, s.get(3), s.get(4));
+            nl = at.normal;
+            origin = at.position + rays_.epsilon() * nl;
         }
         float total = 0.0f;
         for (size_t k = 0; k < specular_bounds_.size(); ++k) {
@@ -215,13 +210,14 @@ void PhotonMapper::emit_caustic(int light, int count, int first, int n,
             containing += glm::dot(dir, axis[k]) >= cos_max[k] ? 1 : 0;
         const float inv_pdf = total / float(std::max(containing, 1));
         glm::vec3 power;
-        if (l.type == LightType::point) {
-            power = l.intensity * inv_pdf / float(count);
+        if (l.type == LightType::point || l.type == LightType::spot) {
+            power =
+                l.intensity * l.spot_factor(glm::dot(dir, l.direction)) * inv_pdf / float(count);
         } else {
             // dΦ = L cos θ dω dA; the point is uniform on the quad (pdf 1/A).
             const float cos_l = glm::dot(dir, nl);
             if (!(cos_l > 0.0f)) continue;
-            power = l.radiance * cos_l * l.quad_area() * inv_pdf / float(count);
+            power = l.radiance * cos_l * l.area() * inv_pdf / float(count);
         }
         trace({origin, dir}, power, s, kCausticEmitDims, true, out);
     }
@@ -283,7 +279,9 @@ glm::vec3 PhotonMapper::gather_ray(Ray ray, uint64_t key) const {
         if (!hit.hit) break;
         const Material& m = scene_.objects[size_t(hit.object)].material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
-        if (front) radiance += m.emission;
+        // A mesh light seen from x is direct light (next-event estimation), or after a specular
+        // bounce a caustic (the caustic map): only a lamp that lights nothing shows here.
+        if (front && object_lights_[size_t(hit.object)] < 0) radiance += m.emission;
         if (m.type == MaterialType::diffuse) {
             if (front)
                 radiance += m.albedo / std::numbers::pi_v<float> *

@@ -80,6 +80,7 @@ private:
     float caustic_r2_;
     Halton camera_halton_, gather_halton_, photon_halton_;
     std::vector<Sphere> specular_bounds_;  // world bounding spheres of mirrors and glass
+    std::vector<int> object_lights_;       // per object: its mesh light, or -1
     PhotonMap global_, caustic_;
     IrradianceCache cache_;
 };

@@ -27,29 +27,38 @@ glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm
     for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& light = scene.lights[l];
         if (!light.enabled) continue;
-        if (light.type == LightType::point) {
+        if (light.type == LightType::sun) {  // E cos, unless something lies sunwards
+            const float cos_x = -glm::dot(n, light.direction);
+            if (!(cos_x > 0.0f)) continue;
+            if (rays.occluded({origin, -light.direction, 0.0f, 1e30f})) continue;
+            e += light.irradiance * cos_x;
+            continue;
+        }
+        if (light.type == LightType::point || light.type == LightType::spot) {
             const glm::vec3 to = light.position - origin;
             const float d2 = glm::dot(to, to), d = std::sqrt(d2);
             const float cos_x = glm::dot(n, to) / d;
             if (!(cos_x > 0.0f)) continue;
+            const float falloff = light.spot_factor(-glm::dot(to, light.direction) / d);
+            if (!(falloff > 0.0f)) continue;
             if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
-            e += light.intensity * cos_x / d2;
+            e += light.intensity * (falloff * cos_x / d2);
             continue;
         }
-        // Quad light: E = L ∫ cos_x cos_l / d² dA, estimated by a rotated rank-1 lattice (its
-        // own rotation per light so that two quads do not share shadow-ray patterns).
-        const glm::vec3 e1 = light.corners[1] - light.corners[0];
-        const glm::vec3 e3 = light.corners[3] - light.corners[0];
-        const glm::vec3 nl = light.quad_normal();
-        const float area = light.quad_area();
+        // Quad or mesh light: E = L ∫ cos_x cos_l / d² dA, estimated by a rotated rank-1
+        // lattice (its own rotation per light so that two lights do not share shadow-ray
+        // patterns); a mesh light's lattice is spread over its triangles by area.
+        const float area = light.area();
         const float r1 = u1 + hashed_uniform(l, 1), r2 = u2 + hashed_uniform(l, 2);
         glm::vec3 sum(0.0f);
         for (int j = 0; j < quad_samples; ++j) {
             const float a = std::fmod((float(j) + 0.5f) / float(quad_samples) + r1, 1.0f);
             const float b = std::fmod(float(j) * 0.6180339887f + r2, 1.0f);
-            const glm::vec3 to = light.corners[0] + a * e1 + b * e3 - origin;
+            const LightPoint at = sample_area_light(scene, light, a, b);
+            const glm::vec3 to = at.position - origin;
             const float d2 = glm::dot(to, to), d = std::sqrt(d2);
-            const float cos_x = glm::dot(n, to) / d, cos_l = -glm::dot(nl, to) / d;
+            if (!(d2 > 0.0f)) continue;
+            const float cos_x = glm::dot(n, to) / d, cos_l = -glm::dot(at.normal, to) / d;
             if (!(cos_x > 0.0f) || !(cos_l > 0.0f)) continue;
             if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
             sum += glm::vec3(cos_x * cos_l / d2);

@@ -14,3 +14,12 @@ add_test(NAME convergence.cornell_cube_jump_settle
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(convergence.cornell_cube_jump_settle PROPERTIES LABELS convergence
                      SKIP_RETURN_CODE 77 TIMEOUT 300)
+
+# Issue #14: McGuire's Cornell box with its own emissive light, progressive against pt
+# (relMSE <= 0.02); skipped without ../shared/external-scenes.
+add_test(NAME convergence.cornell_mcguire_pt
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/mcguire_test.sh $<TARGET_FILE:afterglow>
+                 ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.cornell_mcguire_pt PROPERTIES LABELS convergence
+                     SKIP_RETURN_CODE 77 TIMEOUT 300)

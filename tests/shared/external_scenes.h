@@ -41,13 +41,19 @@ inline std::vector<std::string> missing_external_meshes(const std::filesystem::p
 }
 
 // The scene with every external mesh replaced by a unit box (same name, material, dynamic flag,
-// offset and transform; the mesh's scale dropped). Everything else is read as load_scene reads it.
+// offset and transform; the mesh's scale dropped; a grey "stand_in" material where the mesh
+// brought its own). Everything else is read as load_scene reads it.
 inline Scene load_scene_with_stand_ins(const std::filesystem::path& scene_file) {
     nlohmann::json j = read_scene_json(scene_file);
     for (nlohmann::json& o : j.at("objects")) {
         if (!o.contains("mesh") || !is_external_mesh(o["mesh"].get<std::string>())) continue;
         o.erase("mesh");
         o.erase("scale");
+        o.erase("materials");
+        if (!o.contains("material")) {  // a mesh bringing its own materials
+            j["materials"]["stand_in"] = {{"albedo", 0.5}};
+            o["material"] = "stand_in";
+        }
         o["shape"] = {{"type", "box"}, {"size", {1, 1, 1}}};
     }
     return parse_scene(j.dump(), scene_file.string());

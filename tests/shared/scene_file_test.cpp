@@ -401,8 +401,30 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
          "expected a unique object name, got \"floor\" a second time"},
         {"duplicate_light", [](Json& j) { j["lights"][1]["name"] = "lamp"; }, "/lights/1/name",
          "expected a unique light name"},
-        {"light_type", [](Json& j) { j["lights"][0]["type"] = "spot"; }, "/lights/0/type",
-         "expected one of point, quad, got \"spot\""},
+        {"light_type", [](Json& j) { j["lights"][0]["type"] = "torch"; }, "/lights/0/type",
+         "expected one of point, quad, mesh, sun, spot, got \"torch\""},
+        {"light_type_mesh", [](Json& j) { j["lights"][0]["type"] = "mesh"; }, "/lights/0/type",
+         "mesh lights are the objects whose material has an emission"},
+        {"spot_without_cone",
+         [](Json& j) {
+             j["lights"][0]["type"] = "spot";
+             j["lights"][0]["direction"] = {0, -1, 0};
+         },
+         "/lights/0", "missing key \"cone_outer\""},
+        {"spot_inner_wider",
+         [](Json& j) {
+             j["lights"][0]["type"] = "spot";
+             j["lights"][0]["direction"] = {0, -1, 0};
+             j["lights"][0]["cone_outer"] = 20;
+             j["lights"][0]["cone_inner"] = 30;
+         },
+         "/lights/0/cone_inner", "expected a number in [0, 20]"},
+        {"sun_zero_direction",
+         [](Json& j) {
+             j["lights"][0] = {
+                 {"name", "sun"}, {"type", "sun"}, {"direction", {0, 0, 0}}, {"irradiance", 1}};
+         },
+         "/lights/0/direction", "expected a non-zero direction"},
         {"light_key_of_other_type", [](Json& j) { j["lights"][0]["radiance"] = 1; },
          "/lights/0/radiance", "unknown key; expected one of name, type, position, intensity"},
         {"negative_intensity",

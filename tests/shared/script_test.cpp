@@ -70,6 +70,7 @@ fs::path scene_for(const fs::path& script_path) {
     } scenes[] = {{"cornell_", "cornell.json"},
                   {"two_rooms_", "two_rooms.json"},
                   {"conference_", "conference.json"},
+                  {"sponza_", "sponza.json"},
                   {"bumpy_133k_", "bumpy_133k_box.json"}};
     for (const auto& s : scenes)
         if (name.rfind(s.prefix, 0) == 0) return kScenes / s.scene;

@@ -44,7 +44,8 @@ uint64_t state_hash(const Scene& scene, const cpu::ReferenceSettings& rs) {
     }
     for (const Light& l : scene.lights) {
         add(l.type), add(l.position), add(l.intensity), add(l.corners), add(l.radiance),
-            add(l.enabled);
+            add(l.enabled), add(l.direction), add(l.irradiance), add(l.cone_inner),
+            add(l.cone_outer), add(l.object);
     }
     add(scene.camera.eye), add(scene.camera.target), add(scene.camera.up), add(scene.camera.fov_y);
     add(scene.camera.width), add(scene.camera.height);

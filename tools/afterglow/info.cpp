@@ -17,6 +17,7 @@ const Command kInfoCommand{
     {
         flag("objects", "also list every object"),
         flag("settings", "also print the effective settings as JSON"),
+        flag("timing", "also print where loading spent its time (files, surfaces, atlas)"),
         settings_option(),
     },
     1,
@@ -34,6 +35,7 @@ std::string fmt_vec(const glm::vec3& v) {
 }  // namespace
 
 int run_info(const Args& args) {
+    char buf_timing[256];
     Scene scene = load_scene(args.positionals()[0]);
     args.apply_settings(scene);
     int dynamic = 0;
@@ -57,6 +59,17 @@ int run_info(const Args& args) {
         if (l.type == LightType::point)
             out << "point at " << fmt_vec(l.position) << ", intensity " << fmt_vec(l.intensity)
                 << " W/sr";
+        else if (l.type == LightType::sun)
+            out << "sun along " << fmt_vec(l.direction) << ", irradiance " << fmt_vec(l.irradiance)
+                << ", photon disc radius " << l.sun_radius;
+        else if (l.type == LightType::spot)
+            out << "spot at " << fmt_vec(l.position) << " along " << fmt_vec(l.direction)
+                << ", cone " << l.cone_inner << "-" << l.cone_outer << " deg, intensity "
+                << fmt_vec(l.intensity) << " W/sr";
+        else if (l.type == LightType::mesh)
+            out << "mesh (object " << scene.objects[size_t(l.object)].name << ", "
+                << l.triangle_cdf.size() << " triangles) centred at " << fmt_vec(l.center())
+                << ", area " << l.area() << ", radiance " << fmt_vec(l.radiance);
         else
             out << "quad centred at " << fmt_vec(l.center()) << ", area " << l.quad_area()
                 << ", radiance " << fmt_vec(l.radiance);
@@ -83,6 +96,15 @@ int run_info(const Args& args) {
                 << kMaterialTypeNames[size_t(o.material.type)] << " '" << o.material.name << "'"
                 << (o.dynamic ? ", dynamic" : "") << ", from " << o.source << "\n";
         }
+    }
+    if (args.has("timing")) {
+        const LoadTiming& t = scene.load_timing;
+        std::snprintf(buf_timing, sizeof buf_timing,
+                      "load       %.3f s: files (JSON, meshes, models) %.3f s, surfaces and "
+                      "charts %.3f s, atlas packing %.3f s, texel records %.3f s\n",
+                      t.files + t.surfaces + t.packing + t.texels, t.files, t.surfaces, t.packing,
+                      t.texels);
+        out << buf_timing;
     }
     if (args.has("settings")) out << settings_to_json(scene.settings) << "\n";
     return 0;

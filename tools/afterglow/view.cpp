@@ -155,7 +155,10 @@ void restore(Scene& scene, const EditableState& s) {
     for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& now = scene.lights[l];
         const Light& then = s.lights[l];
-        if (now.center() != then.center()) set_light_position(scene, int(l), then.center());
+        // A mesh light moves with its object (restored above); a sun has no position.
+        if (now.center() != then.center() && now.type != LightType::mesh &&
+            now.type != LightType::sun)
+            set_light_position(scene, int(l), then.center());
         if (now.value() != then.value()) set_light_color(scene, int(l), then.value());
         if (now.enabled != then.enabled) set_light_enabled(scene, int(l), then.enabled);
     }

@@ -167,7 +167,10 @@ void lights_section(const Scene& scene, ViewRequests& requests) {
         if (ImGui::Checkbox(l.name.c_str(), &on))
             requests.lights.push_back({int(i), std::nullopt, on});
         ImGui::SameLine();
-        ImGui::TextColored(kDimColour, l.type == LightType::point ? "I (W/sr)" : "L");
+        ImGui::TextColored(kDimColour, l.type == LightType::point || l.type == LightType::spot
+                                           ? "I (W/sr)"
+                                       : l.type == LightType::sun ? "E"
+                                                                  : "L");
         glm::vec3 value = l.value();
         if (edit_light_value("value", value))
             requests.lights.push_back({int(i), value, std::nullopt});

@@ -1,0 +1,330 @@
+// glTF 2.0 models (shared/gltf_io.h): files the tests write themselves cover the node hierarchy,
+// each material mapping, KHR_lights_punctual, cameras, .glb, every warning and the errors; the
+// Khronos box from ../shared/external-scenes loads through its scene file.
+#include "shared/gltf_io.h"
+
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+
+#include "shared/input_error.h"
+#include "shared/scene_file.h"
+#include "tests/shared/external_scenes.h"
+#include "tests/shared/temp_dir.h"
+
+namespace ag {
+namespace {
+
+using Json = nlohmann::json;
+using test::TempDirTest;
+
+std::string base64(const std::vector<unsigned char>& data) {
+    static const char* k = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (size_t i = 0; i < data.size(); i += 3) {
+        uint32_t v = uint32_t(data[i]) << 16;
+        if (i + 1 < data.size()) v |= uint32_t(data[i + 1]) << 8;
+        if (i + 2 < data.size()) v |= data[i + 2];
+        out += k[(v >> 18) & 63];
+        out += k[(v >> 12) & 63];
+        out += i + 1 < data.size() ? k[(v >> 6) & 63] : '=';
+        out += i + 2 < data.size() ? k[v & 63] : '=';
+    }
+    return out;
+}
+
+// One unit quad in the XZ plane facing +y (4 positions, 6 uint16 indices) as buffer 0 with
+// accessors 0 (POSITION) and 1 (indices); `extra` adds to the document.
+struct GltfDoc {
+    Json j;
+    std::vector<unsigned char> bin;
+
+    GltfDoc() {
+        const float p[12] = {-0.5f, 0, -0.5f, -0.5f, 0, 0.5f, 0.5f, 0, 0.5f, 0.5f, 0, -0.5f};
+        const uint16_t idx[6] = {0, 1, 2, 0, 2, 3};
+        bin.resize(sizeof p + sizeof idx);
+        std::memcpy(bin.data(), p, sizeof p);
+        std::memcpy(bin.data() + sizeof p, idx, sizeof idx);
+        j = {{"asset", {{"version", "2.0"}}},
+             {"bufferViews",
+              {{{"buffer", 0}, {"byteOffset", 0}, {"byteLength", sizeof p}},
+               {{"buffer", 0}, {"byteOffset", sizeof p}, {"byteLength", sizeof idx}}}},
+             {"accessors",
+              {{{"bufferView", 0},
+                {"componentType", 5126},
+                {"count", 4},
+                {"type", "VEC3"},
+                {"min", {-0.5, 0, -0.5}},
+                {"max", {0.5, 0, 0.5}}},
+               {{"bufferView", 1}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}}}},
+             {"meshes", Json::array()},
+             {"materials", Json::array()},
+             {"nodes", Json::array()},
+             {"scenes", {{{"nodes", Json::array()}}}},
+             {"scene", 0}};
+    }
+    // A mesh of the quad with material `material` (-1: none); returns its index.
+    int mesh(int material) {
+        Json prim = {{"attributes", {{"POSITION", 0}}}, {"indices", 1}};
+        if (material >= 0) prim["material"] = material;
+        j["meshes"].push_back({{"primitives", {prim}}});
+        return int(j["meshes"].size()) - 1;
+    }
+    int material(const Json& m) {
+        j["materials"].push_back(m);
+        return int(j["materials"].size()) - 1;
+    }
+    int node(const Json& n, bool root = true) {
+        j["nodes"].push_back(n);
+        const int i = int(j["nodes"].size()) - 1;
+        if (root) j["scenes"][0]["nodes"].push_back(i);
+        return i;
+    }
+    std::string gltf() const {
+        Json out = j;
+        out["buffers"] = {{{"byteLength", bin.size()},
+                           {"uri", "data:application/octet-stream;base64," + base64(bin)}}};
+        return out.dump(1);
+    }
+    std::string glb() const {
+        Json out = j;
+        out["buffers"] = {{{"byteLength", bin.size()}}};
+        std::string json = out.dump();
+        while (json.size() % 4) json += ' ';
+        std::vector<unsigned char> b = bin;
+        while (b.size() % 4) b.push_back(0);
+        std::string s;
+        auto u32 = [&](uint32_t v) { s.append(reinterpret_cast<const char*>(&v), 4); };
+        u32(0x46546C67);
+        u32(2);
+        u32(uint32_t(12 + 8 + json.size() + 8 + b.size()));
+        u32(uint32_t(json.size()));
+        u32(0x4E4F534A);
+        s += json;
+        u32(uint32_t(b.size()));
+        u32(0x004E4942);
+        s.append(reinterpret_cast<const char*>(b.data()), b.size());
+        return s;
+    }
+};
+
+class GltfTest : public TempDirTest {
+protected:
+    Model load(const GltfDoc& doc, std::string* warnings = nullptr, bool binary = false) {
+        const std::string file = binary ? write("m.glb", doc.glb()) : write("m.gltf", doc.gltf());
+        ::testing::internal::CaptureStderr();
+        Model m;
+        try {
+            m = load_gltf(file);
+        } catch (...) {
+            const std::string err = ::testing::internal::GetCapturedStderr();
+            if (warnings) *warnings = err;
+            throw;
+        }
+        const std::string err = ::testing::internal::GetCapturedStderr();
+        if (warnings) *warnings = err;
+        return m;
+    }
+};
+
+TEST_F(GltfTest, NodeHierarchyIsFlattenedIntoWorldPositions) {
+    GltfDoc doc;
+    const int mesh = doc.mesh(-1);
+    const int child =
+        doc.node({{"mesh", mesh}, {"translation", {0, 1, 0}}, {"scale", {2, 2, 2}}}, false);
+    // Parent: 90° about +z (quaternion x y z w), then moved by +10 x.
+    const float s = std::sqrt(0.5f);
+    doc.node({{"name", "parent"},
+              {"children", {child}},
+              {"translation", {10, 0, 0}},
+              {"rotation", {0, 0, s, s}}});
+    const Model m = load(doc);
+    ASSERT_EQ(m.parts.size(), 1u);
+    const Bounds b = mesh_bounds(m.parts[0].mesh);
+    // Child: quad scaled 2 at y = 1 → x ∈ [-1, 1], y = 1; rotated about z by 90° → x = -1,
+    // y ∈ [-1, 1]; moved → x = 9.
+    EXPECT_NEAR(b.min.x, 9.0f, 1e-5f);
+    EXPECT_NEAR(b.max.x, 9.0f, 1e-5f);
+    EXPECT_NEAR(b.min.y, -1.0f, 1e-5f);
+    EXPECT_NEAR(b.max.z, 1.0f, 1e-5f);
+    EXPECT_EQ(m.parts[0].material.name, "default");
+    // The quad faced +y; the rotation turns that to -x.
+    EXPECT_NEAR(triangle_normal(m.parts[0].mesh, 0).x, -1.0f, 1e-5f);
+}
+
+TEST_F(GltfTest, MirroringNodeKeepsFrontFacesOutward) {
+    GltfDoc doc;
+    doc.node({{"mesh", doc.mesh(-1)}, {"scale", {1, -1, 1}}});
+    const Model m = load(doc);
+    EXPECT_NEAR(triangle_normal(m.parts[0].mesh, 0).y, -1.0f, 1e-5f);
+}
+
+TEST_F(GltfTest, MaterialsMapToDiffuseEmissiveGlassAndMirror) {
+    GltfDoc doc;
+    const int red =
+        doc.material({{"name", "red"},
+                      {"pbrMetallicRoughness",
+                       {{"baseColorFactor", {0.8, 0.1, 0.1, 1}}, {"metallicFactor", 0}}}});
+    const int lamp = doc.material(
+        {{"name", "lamp"},
+         {"emissiveFactor", {1, 0.5, 0.25}},
+         {"extensions", {{"KHR_materials_emissive_strength", {{"emissiveStrength", 8}}}}}});
+    const int glass = doc.material({{"name", "glass"},
+                                    {"extensions",
+                                     {{"KHR_materials_transmission", {{"transmissionFactor", 1}}},
+                                      {"KHR_materials_ior", {{"ior", 1.33}}}}}});
+    const int chrome = doc.material(
+        {{"name", "chrome"},
+         {"pbrMetallicRoughness", {{"metallicFactor", 1}, {"roughnessFactor", 0.05}}}});
+    for (int mat : {red, lamp, glass, chrome})
+        doc.node({{"name", "n" + std::to_string(mat)}, {"mesh", doc.mesh(mat)}});
+    const Model m = load(doc);
+    ASSERT_EQ(m.parts.size(), 4u);
+    EXPECT_EQ(m.parts[0].material.type, MaterialType::diffuse);
+    EXPECT_NEAR(m.parts[0].material.albedo.x, 0.8f, 1e-6f);
+    EXPECT_EQ(m.parts[1].material.emission, glm::vec3(8, 4, 2));
+    EXPECT_EQ(m.parts[2].material.type, MaterialType::glass);
+    EXPECT_NEAR(m.parts[2].material.ior, 1.33f, 1e-6f);
+    EXPECT_EQ(m.parts[3].material.type, MaterialType::mirror);
+    EXPECT_EQ(m.parts[3].name, "n3");
+}
+
+TEST_F(GltfTest, PunctualLightsAndCamerasAreReadInWorldSpace) {
+    GltfDoc doc;
+    doc.node({{"mesh", doc.mesh(-1)}});
+    doc.j["extensionsUsed"] = {"KHR_lights_punctual"};
+    doc.j["extensions"] = {
+        {"KHR_lights_punctual",
+         {{"lights",
+           {{{"name", "bulb"}, {"type", "point"}, {"color", {1, 0.5, 0.5}}, {"intensity", 4}},
+            {{"name", "torch"},
+             {"type", "spot"},
+             {"intensity", 10},
+             {"spot", {{"innerConeAngle", 0.2}, {"outerConeAngle", 0.5}}}},
+            {{"name", "sun"}, {"type", "directional"}, {"intensity", 3}}}}}}};
+    const float s = std::sqrt(0.5f);  // -90° about x: -z (the light's axis) turns to -y
+    doc.node(
+        {{"translation", {0, 2, 0}}, {"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    doc.node({{"translation", {1, 3, 0}},
+              {"rotation", {-s, 0, 0, s}},
+              {"extensions", {{"KHR_lights_punctual", {{"light", 1}}}}}});
+    doc.node(
+        {{"rotation", {-s, 0, 0, s}}, {"extensions", {{"KHR_lights_punctual", {{"light", 2}}}}}});
+    doc.j["cameras"] = {{{"type", "perspective"},
+                         {"name", "view"},
+                         {"perspective", {{"yfov", 0.7}, {"znear", 0.1}}}}};
+    doc.node({{"camera", 0}, {"translation", {0, 1, 5}}});
+    const Model m = load(doc);
+    ASSERT_EQ(m.lights.size(), 3u);
+    EXPECT_EQ(m.lights[0].type, LightType::point);
+    EXPECT_EQ(m.lights[0].intensity, glm::vec3(4, 2, 2));
+    EXPECT_NEAR(m.lights[0].position.y, 2.0f, 1e-6f);
+    EXPECT_EQ(m.lights[1].type, LightType::spot);
+    EXPECT_NEAR(m.lights[1].direction.y, -1.0f, 1e-5f);
+    EXPECT_NEAR(m.lights[1].cone_outer, glm::degrees(0.5f), 1e-3f);
+    EXPECT_NEAR(m.lights[1].cone_inner, glm::degrees(0.2f), 1e-3f);
+    EXPECT_EQ(m.lights[2].type, LightType::sun);
+    EXPECT_EQ(m.lights[2].irradiance, glm::vec3(3));
+    EXPECT_NEAR(m.lights[2].direction.y, -1.0f, 1e-5f);
+    ASSERT_EQ(m.cameras.size(), 1u);
+    EXPECT_NEAR(m.cameras[0].eye.z, 5.0f, 1e-6f);
+    EXPECT_NEAR(m.cameras[0].target.z, 4.0f, 1e-6f);
+    EXPECT_NEAR(m.cameras[0].fov_y, glm::degrees(0.7f), 1e-3f);
+
+    // In a scene: lights named OBJECT/LIGHT, placed by the object's transform; the glTF camera
+    // stands in for a missing "camera".
+    write("m.gltf", doc.gltf());
+    const Scene scene = parse_scene(R"({"materials": {}, "lights": [],
+        "objects": [{"name": "room", "mesh": "m.gltf", "transform": {"translate": [0, 10, 0]}}]})",
+                                    path("s.json"));
+    ASSERT_EQ(scene.lights.size(), 3u);
+    EXPECT_EQ(scene.lights[0].name, "room/bulb");
+    EXPECT_NEAR(scene.lights[0].position.y, 12.0f, 1e-5f);
+    EXPECT_NEAR(scene.camera.eye.y, 11.0f, 1e-5f);
+    EXPECT_NEAR(scene.camera.fov_y, glm::degrees(0.7f), 1e-3f);
+}
+
+TEST_F(GltfTest, BinaryGlbLoadsLikeGltf) {
+    GltfDoc doc;
+    doc.node({{"mesh", doc.mesh(doc.material({{"pbrMetallicRoughness",
+                                               {{"baseColorFactor", {0.2, 0.4, 0.6, 1}}}}}))}});
+    const Model m = load(doc, nullptr, true);
+    ASSERT_EQ(m.parts.size(), 1u);
+    EXPECT_EQ(m.parts[0].mesh.triangles.size(), 2u);
+    EXPECT_NEAR(m.parts[0].material.albedo.z, 0.6f, 1e-6f);
+}
+
+TEST_F(GltfTest, EachUnsupportedFeatureIsNamedInAWarning) {
+    GltfDoc doc;
+    const int mat = doc.material({{"pbrMetallicRoughness", {{"baseColorTexture", {{"index", 0}}}}},
+                                  {"normalTexture", {{"index", 0}}},
+                                  {"alphaMode", "BLEND"}});
+    doc.j["textures"] = {{{"source", 0}}};
+    doc.j["images"] = {{{"uri", "missing.png"}}};
+    const int mesh = doc.mesh(mat);
+    doc.j["meshes"][size_t(mesh)]["primitives"][0]["attributes"]["NORMAL"] = 0;
+    doc.j["meshes"][size_t(mesh)]["primitives"].push_back(
+        {{"attributes", {{"POSITION", 0}}}, {"mode", 1}});  // lines
+    doc.node({{"mesh", mesh}});
+    doc.j["extensionsUsed"] = {"EXT_fancy"};
+    doc.j["cameras"] = {
+        {{"type", "orthographic"},
+         {"orthographic", {{"xmag", 1}, {"ymag", 1}, {"znear", 0.1}, {"zfar", 9}}}}};
+    doc.node({{"camera", 0}});
+    doc.j["animations"] = Json::array({{{"channels", Json::array()}, {"samplers", Json::array()}}});
+    std::string warnings;
+    const Model m = load(doc, &warnings);
+    EXPECT_EQ(m.parts.size(), 1u);
+    for (const char* what :
+         {"baseColorTexture", "normalTexture", "alphaMode BLEND", "NORMAL attribute",
+          "point and line primitives", "extension EXT_fancy", "orthographic cameras", "animations"})
+        EXPECT_NE(warnings.find(what), std::string::npos) << what << " in:\n" << warnings;
+    EXPECT_NE(warnings.find("m.gltf"), std::string::npos);
+}
+
+TEST_F(GltfTest, BadInputIsAnErrorNamingTheFile) {
+    {
+        GltfDoc doc;
+        const int mesh = doc.mesh(-1);
+        doc.j["meshes"][size_t(mesh)]["primitives"][0]["indices"] = 7;
+        doc.node({{"mesh", mesh}});
+        try {
+            load(doc);
+            FAIL() << "expected an InputError";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("m.gltf"), std::string::npos) << e.what();
+        }
+    }
+    {
+        GltfDoc doc;  // an index past the positions
+        doc.bin[12 * 4 + 2] = 9;
+        doc.node({{"mesh", doc.mesh(-1)}});
+        EXPECT_THROW(load(doc), InputError);
+    }
+    EXPECT_THROW(load_gltf(write("bad.gltf", "{ not json")), InputError);
+    EXPECT_THROW(load_gltf(path("absent.gltf")), InputError);
+    GltfDoc empty;
+    EXPECT_THROW(load(empty), InputError);  // no meshes
+}
+
+TEST(ExternalScenes, KhronosBoxLoadsThroughItsScene) {
+    const std::filesystem::path file =
+        std::filesystem::path(AG_SOURCE_DIR) / "scenes" / "box_gltf.json";
+    if (!test::missing_external_meshes(file).empty())
+        GTEST_SKIP() << "../shared/external-scenes is absent: " << file << " needs it";
+    const Scene scene = load_scene(file.string());
+    size_t triangles = 0;
+    for (const Object& o : scene.objects)
+        if (o.source.find("Box.gltf") != std::string::npos) {
+            triangles += o.mesh.triangles.size();
+            EXPECT_NEAR(o.material.albedo.x, 0.8f, 1e-6f);
+            EXPECT_EQ(o.material.albedo.y, 0.0f);
+        }
+    EXPECT_EQ(triangles, 12u);
+}
+
+}  // namespace
+}  // namespace ag
