@@ -509,12 +509,28 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
     render(IndirectTerm{iim, IndirectSpace::lightmap}, caustics);
 }
 
+bool FrameRenderer::cube_maps_stale(const IndirectTerm& indirect,
+                                    const std::vector<LightSample>& lights) {
+    auto same = [](const LightSample& a, const LightSample& b) {
+        return a.position == b.position && a.intensity == b.intensity && a.normal == b.normal &&
+               a.one_sided == b.one_sided && a.directional == b.directional && a.cone == b.cone;
+    };
+    const CubeMapKey& k = cube_key_;
+    bool stale = !k.valid || indirect.revision == 0 || k.revision != indirect.revision ||
+                 k.scene_version != scene_.version || k.texture != indirect.texture ||
+                 k.space != indirect.space || k.lights.size() != lights.size();
+    for (size_t i = 0; !stale && i < lights.size(); ++i) stale = !same(k.lights[i], lights[i]);
+    cube_key_ = {scene_.version, indirect.revision, indirect.texture, indirect.space, lights, true};
+    return stale;
+}
+
 void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     const std::vector<LightSample> lights = light_samples(scene_);
-    // Cube maps see the scene by its lightmaps; a screen-space term has none to give them.
+    // Cube maps see the scene by its lightmaps; a screen-space term has none to give them. They
+    // are kept while the scene, the term and the light samples stay as they were.
     const GLuint iim = indirect.texture;
     const bool in_screen = indirect.space == IndirectSpace::screen;
-    render_cube_maps(in_screen ? 0 : iim, lights);
+    if (cube_maps_stale(indirect, lights)) render_cube_maps(in_screen ? 0 : iim, lights);
 
     Camera camera = scene_.camera;
     camera.width = width_;

@@ -43,6 +43,9 @@ enum class IndirectSpace { lightmap, screen };
 struct IndirectTerm {
     GLuint texture = 0;
     IndirectSpace space = IndirectSpace::lightmap;
+    // Changes whenever the texture's contents do; 0 = not tracked (then the renderer treats the
+    // term as changed every frame). Lets the cube maps be kept while nothing they see changes.
+    uint64_t revision = 0;
 };
 
 struct FrameImages {
@@ -69,6 +72,8 @@ public:
 
 private:
     void render_cube_maps(GLuint iim, const std::vector<LightSample>& lights);
+    // Whether the cube maps must be rendered again for this scene version, term and lights.
+    bool cube_maps_stale(const IndirectTerm& indirect, const std::vector<LightSample>& lights);
     glm::vec3 cube_centre(size_t object) const;  // where its cube maps are rendered from (world)
     // Adds each light's direct light on the diffuse objects into `draw_buffer` of the bound
     // framebuffer, outside its shadow volumes (the depth buffer must hold the scene).
@@ -99,6 +104,13 @@ private:
     std::vector<Texture> inner_maps_;
     std::vector<float> cube_radii_;  // bounding radius around the centre
     Renderbuffer cube_depth_;
+    struct CubeMapKey {
+        uint64_t scene_version = 0, revision = 0;
+        GLuint texture = 0;
+        IndirectSpace space = IndirectSpace::lightmap;
+        std::vector<LightSample> lights;
+        bool valid = false;
+    } cube_key_;
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
 };

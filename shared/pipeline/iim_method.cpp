@@ -101,7 +101,9 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     // values show at once, as brute force shows them: the light follows the edit without lag.
     const bool blend = in.mode == PipelineMode::selective && !timed;
     const int blend_frames = blend ? scene_.settings.gather.blend_frames : 1;
-    texture_.update(iim_.shown(), iim_.blend(in.frame, blend_frames));
+    const std::vector<int>& changed = iim_.blend(in.frame, blend_frames);
+    if (!changed.empty()) ++revision_;
+    texture_.update(iim_.shown(), changed);
 }
 
 void IimMethod::hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) {
@@ -117,10 +119,11 @@ void IimMethod::prime(cpu::PhotonSimulation& photons, uint64_t frame) {
     moved_regions();  // consumes the scene changes
     iim_.gather(gatherer(backend_), int(scene_.atlas.texels.size()), frame);
     texture_.update(iim_.shown(), iim_.blend(frame, 1));
+    ++revision_;
 }
 
 gpu::IndirectTerm IimMethod::term() const {
-    return gpu::IndirectTerm{texture_.id(), gpu::IndirectSpace::lightmap};
+    return gpu::IndirectTerm{texture_.id(), gpu::IndirectSpace::lightmap, revision_};
 }
 
 }  // namespace ag

@@ -51,6 +51,7 @@ private:
     const Scene& scene_;
     cpu::Iim iim_;
     gpu::LightmapTexture texture_;
+    uint64_t revision_ = 1;  // IndirectTerm::revision: bumped whenever texture_ changes
     gpu::HemiPlaneGather gl_gather_;
     ThreadPool cpu_pool_{1};  // the CPU gather runs beside the photon work, on its own worker
     cpu::CpuGather cpu_gather_;

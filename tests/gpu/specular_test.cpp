@@ -202,4 +202,39 @@ TEST_F(SpecularTest, MirrorBallShowsItsOwnContactShadow) {
     EXPECT_NEAR(whole_f / whole_p, 1.0, 0.05);
 }
 
+// The cube maps are kept while nothing they see changes, and rendered again when the scene (here
+// the floor's albedo, seen in the mirror) or the indirect term's revision changes: the kept maps
+// give exactly what a fresh renderer gives.
+TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
+    Scene scene = mirror_scene(32);
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, 32, 32);
+    auto specular = [&](FrameRenderer& r, uint64_t revision) {
+        r.render(IndirectTerm{iim.id(), IndirectSpace::lightmap, revision});
+        return r.read_back().aov[size_t(FrameTerm::specular)];
+    };
+    auto mean = [](const Image& img) {
+        double sum = 0.0;
+        for (int y = 0; y < img.height; ++y)
+            for (int x = 0; x < img.width; ++x) sum += double(img.rgb(x, y).g);
+        return sum;
+    };
+    const double before = mean(specular(renderer, 1));
+    EXPECT_DOUBLE_EQ(mean(specular(renderer, 1)), before);  // kept
+    set_albedo(scene, scene.find_object("floor"), glm::vec3(0.2f));
+    const double darker = mean(specular(renderer, 1));
+    EXPECT_LT(darker, 0.6 * before) << "the mirror must show the darker floor";
+    FrameRenderer fresh(scene, meshes, 32, 32);
+    EXPECT_DOUBLE_EQ(mean(specular(fresh, 1)), darker);
+    // A new indirect term (non-zero now) reaches the mirror only through a new revision.
+    std::vector<glm::vec3> lit(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                               glm::vec3(5.0f));
+    std::vector<int> all(lit.size());
+    for (size_t a = 0; a < all.size(); ++a) all[a] = int(a);
+    iim.update(lit, all);
+    EXPECT_DOUBLE_EQ(mean(specular(renderer, 1)), darker);  // same revision: kept on purpose
+    EXPECT_GT(mean(specular(renderer, 2)), darker);
+}
+
 }  // namespace ag::gpu
