@@ -30,6 +30,7 @@ public:
     void invalidate_all() override { iim_.invalidate_all(); }
     gpu::IndirectTerm term() const override;
     bool settled() const override { return iim_.settled(); }
+    uint64_t changes_seen() const override { return seen_sequence_; }
 
     const cpu::Iim& iim() const { return iim_; }
     GLuint texture() const { return texture_.id(); }

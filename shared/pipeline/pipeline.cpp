@@ -1,6 +1,9 @@
 #include "shared/pipeline/pipeline.h"
 
+#include <algorithm>
+
 #include "gpu/gl.h"
+#include "shared/scene_edit.h"
 
 namespace ag {
 
@@ -163,6 +166,9 @@ void Pipeline::hand_over(PipelineStats& stats) {
     aim_dirty_ = aim_->take_dirty_texels();
     for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     indirect_->hand_over(*photons_, stats);
+    // Both readers of the change log have seen this frame's edits: without trimming, the log
+    // grows by every edit for as long as the program runs.
+    trim_changes(scene_, std::min(photons_->changes_seen(), indirect_->changes_seen()));
 }
 
 GLuint Pipeline::iim_texture() const {
