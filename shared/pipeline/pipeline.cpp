@@ -61,7 +61,7 @@ void Pipeline::sync() {
 void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
     // Photons, AIMs and caustic photons for this frame's scene, on the workers: invalid photon
     // groups first, AIM texels with what the frame has left.
-    cpu_work_ = std::async(std::launch::async, [this, budgets] {
+    cpu_work_ = cpu_thread_.submit([this, budgets] {
         CpuWork w;
         if (on_cpu_work_start_) on_cpu_work_start_();
         const Clock::time_point t0 = Clock::now();
