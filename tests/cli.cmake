@@ -136,3 +136,9 @@ add_test(NAME cli.bench_soak_change_log
                  --set photons.retrace_budget=400 --set caustics.photons=1000
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.bench_soak_change_log PROPERTIES LABELS gl)
+# bench's own --size N|WxH is read digit by digit too: 4294967360 = 2^32 + 64 used to wrap to 64.
+foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
+  ag_cli_test(bench_soak_bad_size_${size} 2
+              "--size: expects N or WxH with positive integers up to 16384, got '${size}'"
+              bench soak --size ${size})
+endforeach()

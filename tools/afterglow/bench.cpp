@@ -90,15 +90,28 @@ void bench_size(const Args& args, int fallback_w, int fallback_h, int& width, in
     width = fallback_w, height = fallback_h;
     if (!args.has("size")) return;
     const std::string v = args.get("size");
-    int w = 0, h = 0;
-    char extra = 0;
-    const int n = std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &extra);
-    if (n == 1 && v.find('x') == std::string::npos) h = w;
-    const bool digits = !v.empty() && v.find_first_not_of("0123456789x") == std::string::npos;
-    if (!digits || (n != 1 && n != 2) || (n == 1 && v.find('x') != std::string::npos) || w < 1 ||
-        h < 1 || w > kMaxImageSize || h > kMaxImageSize)
+    // Digits checked against the limit while reading: sscanf("%d") wraps on overflow
+    // (4294967360 was read as 64).
+    long long dims[2] = {0, 0};
+    int n = 0;
+    bool ok = !v.empty(), in_number = false;
+    for (const char c : v) {
+        if (c >= '0' && c <= '9') {
+            if (!in_number) ++n, in_number = true;
+            dims[n - 1] = dims[n - 1] * 10 + (c - '0');
+            if (dims[n - 1] > kMaxImageSize) ok = false;
+        } else if (c == 'x' && n == 1 && in_number) {
+            in_number = false;
+        } else {
+            ok = false;
+        }
+        if (!ok) break;
+    }
+    if (n == 1 && v.find('x') == std::string::npos) dims[1] = dims[0];
+    if (!ok || !in_number || dims[0] < 1 || dims[1] < 1)
         throw CliError("afterglow bench: --size: expects N or WxH with positive integers up to " +
                        std::to_string(kMaxImageSize) + ", got '" + v + "'");
+    const int w = int(dims[0]), h = int(dims[1]);
     width = w, height = h;
 }
 
