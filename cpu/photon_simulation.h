@@ -77,6 +77,8 @@ public:
     const RayTracer& rays() const { return *rays_; }
     LightGroupState light_state(int light) const;
     uint64_t frame_index() const { return frame_; }
+    // The last entry of scene.changes applied (its sequence): older ones may be trimmed.
+    uint64_t changes_seen() const { return seen_sequence_; }
     // Groups of `light` invalidated since construction (verification, edits), for diagnostics.
     uint64_t invalidations(int light) const { return invalidations_[size_t(light)]; }
 

@@ -16,13 +16,6 @@ std::string GlContext::version() const {
     return s ? reinterpret_cast<const char*>(s) : "unknown";
 }
 
-GlBackend parse_gl_backend(const std::string& name) {
-    for (size_t i = 0; i < kGlBackendNames.size(); ++i)
-        if (name == kGlBackendNames[i]) return GlBackend(i);
-    throw std::invalid_argument("unknown GL backend '" + name +
-                                "' (expected auto, osmesa, egl or window)");
-}
-
 std::unique_ptr<GlContext> make_gl_context(GlBackend backend, int width, int height,
                                            const std::string& title) {
     switch (backend) {

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
 namespace ag::gpu {
@@ -34,8 +35,14 @@ protected:
 std::unique_ptr<GlContext> make_gl_context(GlBackend backend, int width = 64, int height = 64,
                                            const std::string& title = "afterglow");
 
-// Parses "auto|osmesa|egl|window"; throws std::invalid_argument listing the choices.
-GlBackend parse_gl_backend(const std::string& name);
+// Parses "auto|osmesa|egl|window"; throws std::invalid_argument listing the choices. Inline, so
+// the command-line parser (and its fuzz target) needs no GL library.
+inline GlBackend parse_gl_backend(const std::string& name) {
+    for (size_t i = 0; i < kGlBackendNames.size(); ++i)
+        if (name == kGlBackendNames[i]) return GlBackend(i);
+    throw std::invalid_argument("unknown GL backend '" + name +
+                                "' (expected auto, osmesa, egl or window)");
+}
 
 namespace detail {
 std::unique_ptr<GlContext> make_osmesa_context();

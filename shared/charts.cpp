@@ -8,6 +8,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <limits>
 #include <numbers>
 #include <numeric>
@@ -33,8 +34,6 @@ constexpr double kMinCoverage = 1e-9;
 // Snapped texel centres move this fraction of the way to the triangle's centroid, so they sit
 // strictly inside a chart triangle rather than on an edge shared with a crease (ch. 8, 11).
 constexpr double kSnapNudge = 1e-3;
-// An atlas larger than this (texels) is a texel size far too small for the scene.
-constexpr double kMaxAtlasTexels = double(1 << 28);
 
 // Equal positions get one id, so meshes that repeat corners per face (boxes exported with
 // per-face normals) are still connected across their edges.
@@ -856,11 +855,14 @@ void make_surfaces_and_atlas(Scene& scene) {
         total += double(sizes[size_t(c)].x) * double(sizes[size_t(c)].y);
         widest = std::max(widest, sizes[size_t(c)].x);
     }
-    if (total > kMaxAtlasTexels)
+    char texel_size_text[32];
+    std::snprintf(texel_size_text, sizeof texel_size_text, "%g", double(texel_size_f));
+    if (total > double(kMaxAtlasTexels))
         throw_input_error(where, "settings.lightmap.texel_size",
-                          "the lightmap atlas would need " + std::to_string(int64_t(total)) +
-                              " texels; expected a larger texel size than " +
-                              std::to_string(texel_size_f));
+                          "a texel size of " + std::string(texel_size_text) +
+                              " makes a lightmap atlas of " + std::to_string(int64_t(total)) +
+                              " texels; expected at most " + std::to_string(kMaxAtlasTexels) +
+                              " (a larger texel size)");
     std::vector<int> order(static_cast<size_t>(count));
     std::iota(order.begin(), order.end(), 0);
     std::sort(order.begin(), order.end(), [&](int a, int b) {
@@ -892,6 +894,12 @@ void make_surfaces_and_atlas(Scene& scene) {
         atlas.charts[size_t(c)].y = positions[size_t(c)].y + atlas.gutter;
     }
 
+    if (atlas.width > kMaxAtlasSide || atlas.height > kMaxAtlasSide)
+        throw_input_error(where, "settings.lightmap.texel_size",
+                          "a texel size of " + std::string(texel_size_text) +
+                              " makes a lightmap atlas of " + std::to_string(atlas.width) + "×" +
+                              std::to_string(atlas.height) + " texels; expected at most " +
+                              std::to_string(kMaxAtlasSide) + " on a side (a larger texel size)");
     scene.load_timing.packing = lap();
     atlas.texel_index.assign(size_t(atlas.width) * size_t(atlas.height), -1);
     for (int oi = 0; oi < int(scene.objects.size()); ++oi)

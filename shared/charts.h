@@ -16,7 +16,8 @@ std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int*
 // Fills scene.surfaces, scene.triangle_surface and scene.atlas from the objects' meshes and
 // scene.settings.lightmap (crease angle, chart cone, texel size, gutter). Every object gets
 // surfaces; only diffuse objects get charts and texels (specular ones have no lightmap).
-// Deterministic.
+// Deterministic. A texel size too small for the scene is an InputError naming
+// settings.lightmap.texel_size and the limit, raised before the atlas is allocated.
 void make_surfaces_and_atlas(Scene& scene);
 
 // A point of a texel's footprint, in its object's space.
@@ -30,5 +31,10 @@ struct FootprintPoint {
 // chart's triangles. Where a gather from the centre starts inside geometry (the floor under a
 // box), one of these usually does not, and gathers the light right beside the contact.
 std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record);
+// Atlas bounds. Texels (gutters included): each one costs a texel record, AIM and IIM values and
+// GL texels, about 100 bytes in all, so 2^24 is some 1.6 GiB. Side: the GL_MAX_TEXTURE_SIZE every
+// OpenGL 4.5 implementation must reach, for the AIM and IIM textures.
+inline constexpr int64_t kMaxAtlasTexels = int64_t(1) << 24;
+inline constexpr int kMaxAtlasSide = 16384;
 
 }  // namespace ag

@@ -146,25 +146,41 @@ struct PlyElement {
 void validate_ply(const std::string& path, const std::string& data) {
     if (data.compare(0, 3, "ply") != 0 || data.size() < 4 || !std::isspace((unsigned char)data[3]))
         throw_input_error(path, "line 1", "not a valid ply file: expected 'ply' as the first line");
-    const size_t header_end = data.find("end_header");
-    if (header_end == std::string::npos || header_end > kMaxHeaderBytes)
-        throw_input_error(path, "",
-                          "PLY header has no 'end_header' within its first " +
-                              std::to_string(kMaxHeaderBytes) + " bytes");
-    size_t body = data.find('\n', header_end);
-    body = body == std::string::npos ? data.size() : body + 1;
+    // The header line by line, each line exactly as OpenMesh reads it word by word: a line it
+    // would read differently (a keyword it does not know, a format version that is no number, a
+    // word too many or too few) once sent its reader round the same keyword forever.
     const int64_t size = int64_t(data.size());
     std::vector<PlyElement> elements;
     std::string format;
     int line_no = 0;
-    std::istringstream header(data.substr(0, header_end));
-    std::string line;
-    while (std::getline(header, line)) {
-        ++line_no;
+    size_t body = std::string::npos;
+    Tokens lines(data, 0, 0);
+    std::string_view line;
+    while (body == std::string::npos) {
+        if (lines.pos() > kMaxHeaderBytes || !lines.line(line))
+            throw_input_error(path, "",
+                              "PLY header has no 'end_header' within its first " +
+                                  std::to_string(kMaxHeaderBytes) + " bytes");
+        line_no = lines.line_number();
         const auto words = split(line);
-        if (words.empty()) continue;
         const auto place = at_line(line_no);
-        if (words[0] == "format" && words.size() >= 2) {
+        if (line_no == 1) {
+            if (words.size() != 1)
+                throw_input_error(path, place, "not a valid ply file: expected 'ply' alone");
+            continue;
+        }
+        if (words.empty() || words[0] == "comment" || words[0] == "obj_info") continue;
+        if (words[0] == "end_header") {
+            if (words.size() != 1) throw_input_error(path, place, "expected 'end_header' alone");
+            body = std::min(lines.pos(), data.size());
+        } else if (words[0] == "format") {
+            const bool known =
+                words.size() == 3 && (words[1] == "ascii" || words[1] == "binary_little_endian" ||
+                                      words[1] == "binary_big_endian");
+            if (!known || words[2] != "1.0")
+                throw_input_error(path, place,
+                                  "expected 'format ascii|binary_little_endian|binary_big_endian "
+                                  "1.0'");
             format = std::string(words[1]);
         } else if (words[0] == "element") {
             if (words.size() != 3) throw_input_error(path, place, "expected 'element NAME COUNT'");
@@ -180,26 +196,34 @@ void validate_ply(const std::string& path, const std::string& data) {
             if (elements.empty())
                 throw_input_error(path, place, "property before any 'element' line");
             PlyProperty p;
-            if (words.size() >= 5 && words[1] == "list") {
+            if (words.size() == 5 && words[1] == "list") {
                 p.count_size = ply_type_size(words[2]);
                 p.size = ply_type_size(words[3]);
                 if (p.count_size == 0 || p.size == 0)
                     throw_input_error(path, place, "unknown PLY list type");
-            } else if (words.size() >= 3) {
+            } else if (words.size() == 3) {
                 p.size = ply_type_size(words[1]);
                 if (p.size == 0)
                     throw_input_error(path, place,
                                       "unknown PLY type \"" + std::string(words[1]) + "\"");
             } else {
-                throw_input_error(path, place, "expected 'property TYPE NAME'");
+                throw_input_error(path, place,
+                                  "expected 'property TYPE NAME' or 'property list COUNT_TYPE "
+                                  "TYPE NAME'");
             }
             elements.back().properties.push_back(p);
+        } else {
+            throw_input_error(path, place,
+                              "unknown PLY header keyword \"" +
+                                  std::string(words[0]).substr(0, 40) +
+                                  "\"; expected format, element, property, comment, obj_info or "
+                                  "end_header");
         }
     }
     const int64_t rest = size - int64_t(body);
     if (format == "ascii") {
         // Each value takes at least two bytes (a digit and a separator).
-        Tokens tokens(data, body, line_no + 2);  // the line after end_header
+        Tokens tokens(data, body, line_no + 1);  // the line after end_header
         std::string_view token;
         for (const PlyElement& e : elements) {
             const int64_t values = int64_t(e.properties.size());

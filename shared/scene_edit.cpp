@@ -249,6 +249,10 @@ void set_camera(Scene& scene, const Camera& camera) {
     record(scene, ChangeKind::camera, -1);
 }
 
+void trim_changes(Scene& scene, uint64_t seen) {
+    std::erase_if(scene.changes, [seen](const SceneChange& c) { return c.sequence <= seen; });
+}
+
 std::vector<SceneChange> changes_since(const Scene& scene, uint64_t since) {
     std::vector<SceneChange> out;
     // The log is ordered by sequence; find the first newer one from the back.

@@ -60,6 +60,11 @@ void set_camera(Scene& scene, const Camera& camera);
 // Changes with sequence > since, oldest first.
 std::vector<SceneChange> changes_since(const Scene& scene, uint64_t since);
 
+// Drops the changes with sequence <= seen: whoever owns every consumer of the log (the pipeline)
+// calls it with the oldest sequence any of them has yet to see, so the log stays as short as the
+// edits no consumer has read, however long the program runs.
+void trim_changes(Scene& scene, uint64_t seen);
+
 // Called once after loading: sizes the version arrays.
 void init_versions(Scene& scene);
 

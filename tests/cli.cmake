@@ -121,3 +121,30 @@ ag_cli_test(render_script_directory 1 "scenes: a script must be a regular file" 
 ag_cli_test(render_script_dev_zero 1 "/dev/zero: a script must be a regular file" render
             scenes/cornell.json --script /dev/zero -o ${CMAKE_CURRENT_BINARY_DIR}/never_written.exr)
 set_tests_properties(cli.render_script_dev_zero PROPERTIES TIMEOUT 20)
+# --set is checked against the scene as loading checks it: the photon budget, the light samples
+# and the lightmap atlas (before anything is allocated), exit 2 naming --set, the setting and the
+# limit.
+ag_cli_test(info_set_photon_budget 2
+            "--set: .*groups \\(100000\\) × photons_per_group \\(100000\\) × lights \\(1\\) = 10000000000 photons; expected at most 100000000"
+            info scenes/cornell.json --set photons.groups=100000 --set photons.photons_per_group=100000)
+ag_cli_test(info_set_caustic_budget 2 "--set: .*caustics/photons.*expected at most 100000000"
+            info scenes/two_rooms.json --set caustics.photons=100000000)
+ag_cli_test(info_set_atlas 2
+            "--set: .*settings.lightmap.texel_size: a texel size of 0.01 makes a lightmap atlas of [0-9]+ texels; expected at most 16777216"
+            info scenes/cornell.json --set lightmap.texel_size=0.01)
+# bench soak: the scene's change log holds at most one frame's edits however long the run (two
+# objects moved and a light recoloured per frame: 3), where it used to grow by 3 a frame (600
+# entries by the end of this run).
+add_test(NAME cli.bench_soak_change_log
+         COMMAND ${AG_EXPECT} 0 "change log: 0 entries after the last frame, at most 3 before a frame"
+                 ${AG_BIN} bench soak scenes/cornell.json --frames 200 --size 64
+                 --csv ${CMAKE_CURRENT_BINARY_DIR}/bench-soak-test.csv --set threads=1
+                 --set photons.retrace_budget=400 --set caustics.photons=1000
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.bench_soak_change_log PROPERTIES LABELS gl)
+# bench's own --size N|WxH is read digit by digit too: 4294967360 = 2^32 + 64 used to wrap to 64.
+foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
+  ag_cli_test(bench_soak_bad_size_${size} 2
+              "--size: expects N or WxH with positive integers up to 16384, got '${size}'"
+              bench soak --size ${size})
+endforeach()

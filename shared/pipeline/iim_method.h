@@ -31,6 +31,7 @@ public:
     void prime(cpu::PhotonSimulation& photons, uint64_t frame) override;
     gpu::IndirectTerm term() const override;
     bool settled() const override { return iim_.settled(); }
+    uint64_t changes_seen() const override { return seen_sequence_; }
 
     const cpu::Iim& iim() const { return iim_; }
     GLuint texture() const { return texture_.id(); }

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <memory>
 
 #include "cpu/photon_simulation.h"
@@ -50,6 +51,9 @@ public:
     virtual gpu::IndirectTerm term() const = 0;
     // Nothing left to repair or refine.
     virtual bool settled() const = 0;
+    // The last entry of scene.changes this method has read (its sequence), so the pipeline can
+    // trim the log; a method that never reads the log has nothing to wait for.
+    virtual uint64_t changes_seen() const { return std::numeric_limits<uint64_t>::max(); }
 };
 
 }  // namespace ag

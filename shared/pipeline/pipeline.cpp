@@ -1,6 +1,9 @@
 #include "shared/pipeline/pipeline.h"
 
+#include <algorithm>
+
 #include "gpu/gl.h"
+#include "shared/scene_edit.h"
 
 namespace ag {
 
@@ -58,7 +61,7 @@ void Pipeline::sync() {
 void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
     // Photons, AIMs and caustic photons for this frame's scene, on the workers: invalid photon
     // groups first, AIM texels with what the frame has left.
-    cpu_work_ = std::async(std::launch::async, [this, budgets] {
+    cpu_work_ = cpu_thread_.submit([this, budgets] {
         CpuWork w;
         if (on_cpu_work_start_) on_cpu_work_start_();
         const Clock::time_point t0 = Clock::now();
@@ -163,6 +166,9 @@ void Pipeline::hand_over(PipelineStats& stats) {
     aim_dirty_ = aim_->take_dirty_texels();
     for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     indirect_->hand_over(*photons_, stats);
+    // Both readers of the change log have seen this frame's edits: without trimming, the log
+    // grows by every edit for as long as the program runs.
+    trim_changes(scene_, std::min(photons_->changes_seen(), indirect_->changes_seen()));
 }
 
 int Pipeline::prime(int max_frames) {

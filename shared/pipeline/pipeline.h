@@ -26,6 +26,7 @@
 #include "shared/pipeline/pipeline_stats.h"
 #include "shared/pipeline/scheduler.h"
 #include "shared/scene.h"
+#include "shared/worker_thread.h"
 
 namespace ag {
 
@@ -115,6 +116,8 @@ private:
         double photon_ms = 0, aim_ms = 0, caustic_ms = 0;
     };
     std::future<CpuWork> cpu_work_;
+    // Runs each frame's CPU side; declared after everything its tasks use, so it is joined first.
+    WorkerThread cpu_thread_;
     // Staged at the hand-over for the next frame's GL work (no data race with the workers).
     std::vector<int> aim_dirty_;         // AIM texels changed by the last photon frame
     std::vector<glm::vec3> staged_aim_;  // atlas-sized AIM radiance as the GL side sees it

@@ -7,6 +7,8 @@
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
+#include <set>
+#include <thread>
 
 #include "../gpu/gl_fixture.h"
 #include "gpu/gl.h"
@@ -57,6 +59,29 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     for (size_t a = 0; a < after.aov.size(); ++a)
         EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << kFrameTermNames[a];
     EXPECT_EQ(before.frame.pixels, after.frame.pixels);
+}
+
+// A long run must not grow: every frame's CPU side runs on the same thread (a thread per frame
+// left an Embree allocator behind each time), and the change log keeps only unread edits.
+TEST_F(PipelineTest, EditsEveryFrameUseOneCpuThreadAndKeepTheChangeLogShort) {
+    Scene scene = cornell();
+    std::set<std::thread::id> cpu_threads;
+    PipelineOptions options{32, 32};
+    options.on_cpu_work_start = [&] { cpu_threads.insert(std::this_thread::get_id()); };
+    Pipeline pipeline(scene, options);
+    FrameLoop loop(pipeline);
+    const int cube = scene.find_object("cube");
+    size_t longest = 0;
+    for (int f = 0; f < 40; ++f) {
+        loop.begin_edits();
+        translate_object(scene, cube, {f % 2 ? 5.0f : -5.0f, 0.0f, 0.0f});
+        set_light_color(scene, 0, scene.lights[0].value() * (f % 2 ? 2.0f : 0.5f));
+        longest = std::max(longest, scene.changes.size());
+        loop.step();
+    }
+    EXPECT_EQ(cpu_threads.size(), 1u);
+    EXPECT_EQ(longest, 2u) << "one frame's edits";
+    EXPECT_TRUE(scene.changes.empty());
 }
 
 TEST_F(PipelineTest, AnEditReachesTheIimAndSettlesLikeAFreshPipeline) {

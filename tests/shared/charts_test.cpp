@@ -14,6 +14,7 @@
 #include <numbers>
 #include <set>
 
+#include "shared/input_error.h"
 #include "shared/shapes.h"
 
 namespace ag {
@@ -473,6 +474,31 @@ TEST(Atlas, BumpyFloors13kAnd133k) {
         for (const TexelRecord& r : scene.atlas.texels) area += r.area;
         EXPECT_NEAR(area, mesh_area(floor), 1e-3 * mesh_area(floor));
     }
+}
+
+// A texel size far too small for the scene is refused before the atlas is allocated, naming the
+// setting and the limit: by texel count, and by side (a long thin chart packs into a wide atlas).
+TEST(Atlas, TooManyTexelsAreRefusedNamingTheSettingAndTheLimit) {
+    auto error = [](const Mesh& mesh, float texel_size) {
+        try {
+            make_scene({mesh}, texel_size);
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string();
+    };
+    std::string err = error(make_quad(10.0f, 10.0f), 0.001f);  // 10^8 texels
+    EXPECT_NE(err.find("settings.lightmap.texel_size"), std::string::npos) << err;
+    EXPECT_NE(err.find("expected at most " + std::to_string(kMaxAtlasTexels)), std::string::npos)
+        << err;
+    // 30,000 × 1 texels: few texels, but 32768 wide.
+    err = error(make_quad(30000.0f, 1.0f), 1.0f);
+    EXPECT_NE(err.find("settings.lightmap.texel_size"), std::string::npos) << err;
+    EXPECT_NE(err.find("expected at most " + std::to_string(kMaxAtlasSide) + " on a side"),
+              std::string::npos)
+        << err;
+    // Just inside both bounds: accepted.
+    EXPECT_EQ(error(make_quad(10000.0f, 1.0f), 1.0f), "");
 }
 
 }  // namespace

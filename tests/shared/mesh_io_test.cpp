@@ -149,6 +149,39 @@ TEST_F(MeshIo, PlyWithoutEndHeaderIsRejected) {
     EXPECT_NE(err.find("end_header"), std::string::npos) << err;
 }
 
+// Found by the mesh_io fuzz target (tests/fuzz): a format line whose version is no number sent
+// OpenMesh's header reader round the same keyword forever. Header lines must read the same word
+// by word as line by line, and "end_header" counts only as a line of its own.
+TEST_F(MeshIo, PlyHeaderLinesAreCheckedAsOpenMeshReadsThem) {
+    const std::string tail =
+        "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+        "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const std::string body = "0 0 0\n2 0 0\n0 2 0\n3 0 1 2\n";
+    std::string err;
+    test::within_deadline(std::chrono::seconds(20), [&] {
+        err = load_error(write("version.ply", "ply\nformat binary_little_endian 0.e\n" + tail));
+    });
+    EXPECT_NE(err.find("version.ply: line 2: expected 'format ascii"), std::string::npos) << err;
+    err =
+        load_error(write("keyword.ply", "ply\nformat ascii 1.0\nlement vertex 3\n" + tail + body));
+    EXPECT_NE(err.find("keyword.ply: line 3: unknown PLY header keyword \"lement\""),
+              std::string::npos)
+        << err;
+    err = load_error(write("comment.ply",
+                           "ply\nformat ascii 1.0\ncomment end_header\n"
+                           "format ascii 0.e\n" +
+                               tail + body));
+    EXPECT_NE(err.find("comment.ply: line 4"), std::string::npos) << err;
+    err = load_error(write("words.ply",
+                           "ply\nformat ascii 1.0\nelement vertex 3\n"
+                           "property float x y\n"));
+    EXPECT_NE(err.find("words.ply: line 4: expected 'property TYPE NAME'"), std::string::npos)
+        << err;
+    EXPECT_EQ(
+        load_error(write("good.ply", "ply\r\nformat ascii 1.0\r\ncomment ok\r\n" + tail + body)),
+        "");
+}
+
 TEST_F(MeshIo, PlyCountsAreCheckedAgainstTheFile) {
     const std::string head = "ply\nformat ascii 1.0\nelement vertex ";
     const std::string tail =

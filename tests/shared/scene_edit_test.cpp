@@ -62,6 +62,23 @@ TEST(SceneEdit, EveryEditBumpsVersionsAndIsRecorded) {
     EXPECT_TRUE(changes_since(s, 5).empty());
 }
 
+// The log keeps only what some consumer has not seen; versions and later reads are unaffected.
+TEST(SceneEdit, TrimmingDropsOnlyChangesEveryConsumerHasSeen) {
+    Scene s = two_objects_two_lights();
+    for (int i = 0; i < 4; ++i) translate_object(s, 0, {1, 0, 0});
+    trim_changes(s, 2);
+    ASSERT_EQ(s.changes.size(), 2u);
+    EXPECT_EQ(s.changes[0].sequence, 3u);
+    EXPECT_EQ(changes_since(s, 2).size(), 2u);
+    EXPECT_EQ(changes_since(s, 3).size(), 1u);
+    trim_changes(s, s.version);
+    EXPECT_TRUE(s.changes.empty());
+    set_light_enabled(s, 1, false);
+    ASSERT_EQ(changes_since(s, 4).size(), 1u);
+    EXPECT_EQ(changes_since(s, 4)[0].sequence, 5u);
+    EXPECT_EQ(s.object_versions[0], 4u);
+}
+
 TEST(SceneEdit, UntouchedItemsKeepTheirVersion) {
     Scene s = two_objects_two_lights();
     translate_object(s, 0, {0, 1, 0});

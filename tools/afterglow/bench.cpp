@@ -19,6 +19,7 @@
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
+#include "tools/afterglow/bench_soak.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/convergence.h"
 
@@ -26,7 +27,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle [SCENE...|SCENE:SCRIPT...] [options]",
+    "photons|knn|gather|frame|caustics|settle|soak [SCENE...|SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -42,7 +43,11 @@ const Command kBenchCommand{
     "--frame-ms (default 33): frames and seconds from the edit until the indirect error is back "
     "within 10% of its settled value, frame times, work done, the area under the error curve and "
     "selective's speed-up over full-budget; a table, a CSV and a log-log plot of settle time "
-    "against triangles (docs/convergence.md).",
+    "against triangles (docs/convergence.md). 'soak [SCENE]': --frames frames (default 100000) "
+    "of random edits (every dynamic object moved near its start and the first light's colour "
+    "toggled, every frame) at --size N (default 64); RSS, frame time and the scene's change log "
+    "sampled into --csv (default out/bench-soak.csv), growth from frame min(10000, N/10) to the "
+    "end reported (docs/robustness.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -50,17 +55,19 @@ const Command kBenchCommand{
                   gpu::GlBackend::osmesa),
         integer("frames", "N",
                 "frames per measurement for 'frame' (default 100), frames per run for 'settle' "
-                "(default 90)",
+                "(default 90) and 'soak' (default 100000)",
                 1, 100000),
         text("size", "N|WxH",
-             "frame size: square N for 'frame' and 'caustics' (at least 64 there; default 512), "
-             "WxH for 'settle' (default 64x64)"),
+             "frame size: square N for 'frame' and 'caustics' (at least 64 there; default 512) "
+             "and 'soak' (default 64), WxH for 'settle' (default 64x64)"),
         gather_option(),
         indirect_option(),
         frame_ms_option(),
         settings_option(),
         integer("threads", "N", "worker threads for 'settle' (default: settings.threads)", 0, 1024),
-        text("csv", "FILE.csv", "'settle': the table as CSV", "out/bench-settle.csv"),
+        text("csv", "FILE.csv",
+             "'settle': the table as CSV (default out/bench-settle.csv); 'soak': the samples "
+             "(default out/bench-soak.csv)"),
         text("plot", "FILE.png", "'settle': settle time against triangles, log-log; '' for none",
              "out/bench-settle.png"),
         text("cache", "DIR", "'settle': reference cache", "out/reference-cache"),
@@ -89,15 +96,28 @@ void bench_size(const Args& args, int fallback_w, int fallback_h, int& width, in
     width = fallback_w, height = fallback_h;
     if (!args.has("size")) return;
     const std::string v = args.get("size");
-    int w = 0, h = 0;
-    char extra = 0;
-    const int n = std::sscanf(v.c_str(), "%dx%d%c", &w, &h, &extra);
-    if (n == 1 && v.find('x') == std::string::npos) h = w;
-    const bool digits = !v.empty() && v.find_first_not_of("0123456789x") == std::string::npos;
-    if (!digits || (n != 1 && n != 2) || (n == 1 && v.find('x') != std::string::npos) || w < 1 ||
-        h < 1 || w > kMaxImageSize || h > kMaxImageSize)
+    // Digits checked against the limit while reading: sscanf("%d") wraps on overflow
+    // (4294967360 was read as 64).
+    long long dims[2] = {0, 0};
+    int n = 0;
+    bool ok = !v.empty(), in_number = false;
+    for (const char c : v) {
+        if (c >= '0' && c <= '9') {
+            if (!in_number) ++n, in_number = true;
+            dims[n - 1] = dims[n - 1] * 10 + (c - '0');
+            if (dims[n - 1] > kMaxImageSize) ok = false;
+        } else if (c == 'x' && n == 1 && in_number) {
+            in_number = false;
+        } else {
+            ok = false;
+        }
+        if (!ok) break;
+    }
+    if (n == 1 && v.find('x') == std::string::npos) dims[1] = dims[0];
+    if (!ok || !in_number || dims[0] < 1 || dims[1] < 1)
         throw CliError("afterglow bench: --size: expects N or WxH with positive integers up to " +
                        std::to_string(kMaxImageSize) + ", got '" + v + "'");
+    const int w = int(dims[0]), h = int(dims[1]);
     width = w, height = h;
 }
 
@@ -443,8 +463,16 @@ int run_bench(const Args& args) {
         bench_size(args, 64, 64, width, height);
         return bench_settle(args, width, height);
     }
+    if (what == "soak") {
+        int size = 0, height = 0;
+        bench_size(args, 64, 64, size, height);
+        if (height != size) throw CliError("afterglow bench soak: --size expects a square N");
+        return bench_soak(
+            args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
+            size);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics or settle)");
+                   "' (expected photons, knn, gather, frame, caustics, settle or soak)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

@@ -369,10 +369,19 @@ void Args::apply_settings(Scene& scene) const {
         scene.settings.indirect.method = IndirectMethodKind(get_choice("indirect"));
     const LightmapSettings before = scene.settings.lightmap;
     for (const std::string& s : settings_) apply_setting(s, scene.settings);  // checked on parse
-    const LightmapSettings& after = scene.settings.lightmap;
-    if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
-        after.chart_cone != before.chart_cone || after.gutter != before.gutter)
-        make_surfaces_and_atlas(scene);
+    if (settings_.empty()) return;
+    // Each value was checked alone while parsing; what depends on the scene (its lights, its
+    // size) is checked again, as loading checked it, before anything is allocated.
+    try {
+        check_light_samples(scene);
+        check_photon_budget(scene);
+        const LightmapSettings& after = scene.settings.lightmap;
+        if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
+            after.chart_cone != before.chart_cone || after.gutter != before.gutter)
+            make_surfaces_and_atlas(scene);
+    } catch (const InputError& e) {
+        throw CliError("afterglow " + command_.name + ": --set: " + e.what());
+    }
 }
 
 std::string help_text(const Command& command) {

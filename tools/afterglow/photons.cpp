@@ -13,6 +13,7 @@
 #include "cpu/photon_simulation.h"
 #include "shared/image.h"
 #include "shared/input_error.h"
+#include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/script.h"
 #include "tools/afterglow/commands.h"
@@ -68,6 +69,7 @@ int run_photons(const Args& args) {
             warn(*script->last_error() + " (edit skipped)");
         const auto t0 = std::chrono::steady_clock::now();
         cpu::PhotonFrameStats st = sim.frame();
+        trim_changes(scene, sim.changes_seen());  // the simulation is the log's only reader here
         const auto t1 = std::chrono::steady_clock::now();
         st.aim_texels_rebuilt = aim.update(sim.maps(), &st.aim_surfaces_rebuilt);
         const auto t2 = std::chrono::steady_clock::now();
