@@ -135,6 +135,15 @@ Adjacency triangle_adjacency(const Mesh& mesh) {
     for (const glm::vec3& p : welded_positions) om.add_vertex(OmMesh::Point(p.x, p.y, p.z));
     std::vector<int> face_triangle;
     face_triangle.reserve(size_t(n));
+    // A face OpenMesh cannot link (a non-manifold patch) is handled below as a fallback triangle;
+    // its notes on the error stream, one a face, would only bury the real messages.
+    struct QuietOpenMesh {
+        bool was = omerr().is_enabled();
+        QuietOpenMesh() { omerr().disable(); }
+        ~QuietOpenMesh() {
+            if (was) omerr().enable();
+        }
+    } quiet;
     for (int t = 0; t < n; ++t) {
         if (fallback[size_t(t)]) continue;
         const auto& c = corners[size_t(t)];

@@ -49,6 +49,55 @@ public:
     using ImporterT::add_face;
 };
 
+// OpenMesh reports on its error stream (omerr, std::cerr by default), and notes every face at a
+// non-manifold vertex ("complex vertex") before its importer re-adds it with vertices of its own:
+// thousands of lines for the conference room. While a file is read the stream is collected
+// instead; a failure quotes it in the error, a success sums the notes up in one warning.
+class CollectedReaderMessages {
+public:
+    CollectedReaderMessages() {
+        was_on_cerr_ = omerr().disconnect(std::cerr);
+        omerr().connect(text_);
+    }
+    ~CollectedReaderMessages() {
+        omerr().flush();
+        omerr().disconnect(text_);
+        if (was_on_cerr_) omerr().connect(std::cerr);
+    }
+    CollectedReaderMessages(const CollectedReaderMessages&) = delete;
+    CollectedReaderMessages& operator=(const CollectedReaderMessages&) = delete;
+    std::string text() {
+        omerr().flush();
+        return text_.str();
+    }
+    // The collected lines without the non-manifold notes, at most `limit` characters.
+    std::string errors(size_t limit = 400) {
+        std::istringstream in(text());
+        std::string out;
+        for (std::string line; std::getline(in, line);) {
+            if (line.find("complex vertex") != std::string::npos ||
+                line.find("patch re-linking failed") != std::string::npos)
+                continue;
+            if (!out.empty()) out += "; ";
+            out += line;
+        }
+        if (out.size() > limit) out = out.substr(0, limit) + "…";
+        return out;
+    }
+    int non_manifold_notes() {
+        const std::string t = text();
+        int n = 0;
+        for (size_t at = t.find("complex vertex"); at != std::string::npos;
+             at = t.find("complex vertex", at + 1))
+            ++n;
+        return n;
+    }
+
+private:
+    std::ostringstream text_;
+    bool was_on_cerr_ = false;
+};
+
 // ---- pre-validation ----------------------------------------------------------------------------
 // OpenMesh trusts header counts (it reserves them and loops until they are read), so a bad count
 // hangs or allocates gigabytes before any message. Every count is walked here first, bounded by
@@ -486,13 +535,18 @@ Mesh load_mesh(const std::string& path) {
 
     PolyMesh poly;
     CountingImporter importer(poly);
+    int non_manifold = 0;
     try {
         validate(path, ext);
         OpenMesh::IO::Options options;
-        if (!OpenMesh::IO::IOManager().read(path, importer, options))
+        CollectedReaderMessages messages;
+        if (!OpenMesh::IO::IOManager().read(path, importer, options)) {
+            const std::string said = messages.errors();
             throw_input_error(path, "",
-                              "cannot read mesh file: not a valid " + ext.substr(1) +
-                                  " file (see the mesh reader's message above)");
+                              "cannot read mesh file: not a valid " + ext.substr(1) + " file" +
+                                  (said.empty() ? "" : " (the mesh reader says: " + said + ")"));
+        }
+        non_manifold = messages.non_manifold_notes();
     } catch (const std::bad_alloc&) {
         throw_input_error(path, "", "out of memory reading the mesh (a count in it is too large?)");
     } catch (const std::length_error&) {
@@ -524,6 +578,9 @@ Mesh load_mesh(const std::string& path) {
     if (dropped > 0)
         warn(path + ": dropped " + std::to_string(dropped) + " of " + std::to_string(total) +
              " faces as degenerate (zero area or repeated vertices)");
+    if (non_manifold > 0)
+        warn(path + ": " + std::to_string(non_manifold) +
+             " faces meet others at a non-manifold vertex; they keep vertices of their own");
     return mesh;
 }
 

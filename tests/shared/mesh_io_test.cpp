@@ -106,6 +106,27 @@ TEST_F(MeshIo, DropsDegenerateTrianglesWithAWarningNamingTheFile) {
     EXPECT_NE(obj_err.find("sliver.obj: dropped 1 of 2 faces"), std::string::npos) << obj_err;
 }
 
+// A face at a vertex whose fan is already closed cannot join OpenMesh's halfedge structure; its
+// importer re-adds it with vertices of its own after noting it on its error stream, a line per
+// face. The notes become one warning with the count; no face is lost.
+TEST_F(MeshIo, NonManifoldVerticesAreOneWarningNotALinePerFace) {
+    // A four-sided pyramid without its base closes the fan around the apex (vertex 1); two more
+    // triangles at the apex are non-manifold there.
+    const std::string file = write("spiky.off",
+                                   "OFF\n9 6 0\n0 1 0\n-1 0 -1\n1 0 -1\n1 0 1\n-1 0 1\n"
+                                   "3 2 0\n3 3 0\n-3 2 0\n-3 3 0\n"
+                                   "3 1 2 0\n3 2 3 0\n3 3 4 0\n3 4 1 0\n"
+                                   "3 0 5 6\n3 0 8 7\n");
+    ::testing::internal::CaptureStderr();
+    const Mesh mesh = load_mesh(file);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_EQ(mesh.triangles.size(), 6u);
+    EXPECT_NE(err.find("spiky.off: 2 faces meet others at a non-manifold vertex"),
+              std::string::npos)
+        << err;
+    EXPECT_EQ(err.find("complex vertex"), std::string::npos) << err;
+}
+
 TEST_F(MeshIo, RejectsEmptyAndFullyDegenerateMeshes) {
     std::string err = load_error(write("empty.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n"));
     EXPECT_NE(err.find("empty.obj"), std::string::npos) << err;
