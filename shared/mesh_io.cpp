@@ -51,24 +51,29 @@ public:
 
 // OpenMesh reports on its error stream (omerr, std::cerr by default), and notes every face at a
 // non-manifold vertex ("complex vertex") before its importer re-adds it with vertices of its own:
-// thousands of lines for the conference room. While a file is read the stream is collected
-// instead; a failure quotes it in the error, a success sums the notes up in one warning.
+// thousands of lines for the conference room. The stream is routed once, for good, into a
+// collector (OpenMesh leaks a little on every connect/disconnect, so it is not done per read);
+// a failed read quotes what it collected in the error, a successful one sums the notes up in one
+// warning.
 class CollectedReaderMessages {
 public:
     CollectedReaderMessages() {
-        was_on_cerr_ = omerr().disconnect(std::cerr);
-        omerr().connect(text_);
-    }
-    ~CollectedReaderMessages() {
+        static std::ostringstream* const collector = [] {
+            static std::ostringstream stream;
+            omerr().disconnect(std::cerr);
+            omerr().connect(stream);
+            return &stream;
+        }();
+        text_ = collector;
         omerr().flush();
-        omerr().disconnect(text_);
-        if (was_on_cerr_) omerr().connect(std::cerr);
+        text_->str("");
+        text_->clear();
     }
     CollectedReaderMessages(const CollectedReaderMessages&) = delete;
     CollectedReaderMessages& operator=(const CollectedReaderMessages&) = delete;
     std::string text() {
         omerr().flush();
-        return text_.str();
+        return text_->str();
     }
     // The collected lines without the non-manifold notes, at most `limit` characters.
     std::string errors(size_t limit = 400) {
@@ -94,8 +99,7 @@ public:
     }
 
 private:
-    std::ostringstream text_;
-    bool was_on_cerr_ = false;
+    std::ostringstream* text_ = nullptr;
 };
 
 // ---- pre-validation ----------------------------------------------------------------------------
