@@ -49,57 +49,22 @@ public:
     using ImporterT::add_face;
 };
 
-// OpenMesh reports on its error stream (omerr, std::cerr by default), and notes every face at a
-// non-manifold vertex ("complex vertex") before its importer re-adds it with vertices of its own:
-// thousands of lines for the conference room. The stream is routed once, for good, into a
-// collector (OpenMesh leaks a little on every connect/disconnect, so it is not done per read);
-// a failed read quotes what it collected in the error, a successful one sums the notes up in one
-// warning.
-class CollectedReaderMessages {
+// OpenMesh reports on its error stream (omerr) and notes every face at a non-manifold vertex
+// ("complex vertex") before its importer re-adds it with vertices of its own: thousands of lines
+// for the conference room, burying everything else. The stream is off while a file is read (no
+// reconnecting: OpenMesh leaks its stream targets on disconnect); a file it cannot read gets the
+// error below, and the pre-validation above it names the line or byte of most defects.
+class QuietOpenMeshReader {
 public:
-    CollectedReaderMessages() {
-        static std::ostringstream* const collector = [] {
-            static std::ostringstream stream;
-            omerr().disconnect(std::cerr);
-            omerr().connect(stream);
-            return &stream;
-        }();
-        text_ = collector;
-        omerr().flush();
-        text_->str("");
-        text_->clear();
+    QuietOpenMeshReader() : was_enabled_(omerr().is_enabled()) { omerr().disable(); }
+    ~QuietOpenMeshReader() {
+        if (was_enabled_) omerr().enable();
     }
-    CollectedReaderMessages(const CollectedReaderMessages&) = delete;
-    CollectedReaderMessages& operator=(const CollectedReaderMessages&) = delete;
-    std::string text() {
-        omerr().flush();
-        return text_->str();
-    }
-    // The collected lines without the non-manifold notes, at most `limit` characters.
-    std::string errors(size_t limit = 400) {
-        std::istringstream in(text());
-        std::string out;
-        for (std::string line; std::getline(in, line);) {
-            if (line.find("complex vertex") != std::string::npos ||
-                line.find("patch re-linking failed") != std::string::npos)
-                continue;
-            if (!out.empty()) out += "; ";
-            out += line;
-        }
-        if (out.size() > limit) out = out.substr(0, limit) + "…";
-        return out;
-    }
-    int non_manifold_notes() {
-        const std::string t = text();
-        int n = 0;
-        for (size_t at = t.find("complex vertex"); at != std::string::npos;
-             at = t.find("complex vertex", at + 1))
-            ++n;
-        return n;
-    }
+    QuietOpenMeshReader(const QuietOpenMeshReader&) = delete;
+    QuietOpenMeshReader& operator=(const QuietOpenMeshReader&) = delete;
 
 private:
-    std::ostringstream* text_ = nullptr;
+    bool was_enabled_;
 };
 
 // ---- pre-validation ----------------------------------------------------------------------------
@@ -539,18 +504,13 @@ Mesh load_mesh(const std::string& path) {
 
     PolyMesh poly;
     CountingImporter importer(poly);
-    int non_manifold = 0;
     try {
         validate(path, ext);
         OpenMesh::IO::Options options;
-        CollectedReaderMessages messages;
-        if (!OpenMesh::IO::IOManager().read(path, importer, options)) {
-            const std::string said = messages.errors();
+        QuietOpenMeshReader quiet;
+        if (!OpenMesh::IO::IOManager().read(path, importer, options))
             throw_input_error(path, "",
-                              "cannot read mesh file: not a valid " + ext.substr(1) + " file" +
-                                  (said.empty() ? "" : " (the mesh reader says: " + said + ")"));
-        }
-        non_manifold = messages.non_manifold_notes();
+                              "cannot read mesh file: not a valid " + ext.substr(1) + " file");
     } catch (const std::bad_alloc&) {
         throw_input_error(path, "", "out of memory reading the mesh (a count in it is too large?)");
     } catch (const std::length_error&) {
@@ -582,9 +542,6 @@ Mesh load_mesh(const std::string& path) {
     if (dropped > 0)
         warn(path + ": dropped " + std::to_string(dropped) + " of " + std::to_string(total) +
              " faces as degenerate (zero area or repeated vertices)");
-    if (non_manifold > 0)
-        warn(path + ": " + std::to_string(non_manifold) +
-             " faces meet others at a non-manifold vertex; they keep vertices of their own");
     return mesh;
 }
 

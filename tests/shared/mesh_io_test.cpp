@@ -108,8 +108,8 @@ TEST_F(MeshIo, DropsDegenerateTrianglesWithAWarningNamingTheFile) {
 
 // A face at a vertex whose fan is already closed cannot join OpenMesh's halfedge structure; its
 // importer re-adds it with vertices of its own after noting it on its error stream, a line per
-// face. The notes become one warning with the count; no face is lost.
-TEST_F(MeshIo, NonManifoldVerticesAreOneWarningNotALinePerFace) {
+// face (thousands for the conference room). The notes are kept off stderr; no face is lost.
+TEST_F(MeshIo, NonManifoldVerticesKeepTheirFacesQuietly) {
     // A four-sided pyramid without its base closes the fan around the apex (vertex 1); two more
     // triangles at the apex are non-manifold there.
     const std::string file = write("spiky.off",
@@ -121,9 +121,6 @@ TEST_F(MeshIo, NonManifoldVerticesAreOneWarningNotALinePerFace) {
     const Mesh mesh = load_mesh(file);
     const std::string err = ::testing::internal::GetCapturedStderr();
     EXPECT_EQ(mesh.triangles.size(), 6u);
-    EXPECT_NE(err.find("spiky.off: 2 faces meet others at a non-manifold vertex"),
-              std::string::npos)
-        << err;
     EXPECT_EQ(err.find("complex vertex"), std::string::npos) << err;
 }
 
