@@ -160,7 +160,10 @@ int bench_settle(const Args& args, int width, int height) {
         const size_t colon = p.find(':');
         if (colon == std::string::npos || colon == 0 || colon + 1 == p.size())
             throw CliError("afterglow bench settle: expected SCENE:SCRIPT, got '" + p + "'");
-        ladder.push_back({p.substr(0, colon), p.substr(colon + 1)});
+        LadderEntry e{p.substr(0, colon), p.substr(colon + 1)};
+        for (const LadderEntry& known : kLadder)  // a ladder entry named again keeps its length
+            if (known.scene == e.scene && known.script == e.script) e.frames = known.frames;
+        ladder.push_back(e);
     }
     if (ladder.empty())
         for (const LadderEntry& e : kLadder)
