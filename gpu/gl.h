@@ -100,7 +100,42 @@
     X(PFNGLDELETEQUERIESPROC, DeleteQueries)                     \
     X(PFNGLBEGINQUERYPROC, BeginQuery)                           \
     X(PFNGLENDQUERYPROC, EndQuery)                               \
-    X(PFNGLGETQUERYOBJECTUIVPROC, GetQueryObjectuiv)
+    X(PFNGLGETQUERYOBJECTUIVPROC, GetQueryObjectuiv)             \
+    X(PFNGLGETQUERYOBJECTUI64VPROC, GetQueryObjectui64v)         \
+    X(PFNGLQUERYCOUNTERPROC, QueryCounter)                       \
+    X(PFNGLDISPATCHCOMPUTEPROC, DispatchCompute)                 \
+    X(PFNGLDISPATCHCOMPUTEINDIRECTPROC, DispatchComputeIndirect) \
+    X(PFNGLMEMORYBARRIERPROC, MemoryBarrier)                     \
+    X(PFNGLBINDBUFFERBASEPROC, BindBufferBase)                   \
+    X(PFNGLBINDBUFFERRANGEPROC, BindBufferRange)                 \
+    X(PFNGLGETBUFFERSUBDATAPROC, GetBufferSubData)               \
+    X(PFNGLCOPYBUFFERSUBDATAPROC, CopyBufferSubData)             \
+    X(PFNGLCLEARBUFFERDATAPROC, ClearBufferData)                 \
+    X(PFNGLCLEARBUFFERSUBDATAPROC, ClearBufferSubData)           \
+    X(PFNGLMAPBUFFERRANGEPROC, MapBufferRange)                   \
+    X(PFNGLUNMAPBUFFERPROC, UnmapBuffer)                         \
+    X(PFNGLBINDIMAGETEXTUREPROC, BindImageTexture)               \
+    X(PFNGLTEXIMAGE3DPROC, TexImage3D)                           \
+    X(PFNGLTEXSUBIMAGE3DPROC, TexSubImage3D)                     \
+    X(PFNGLTEXSTORAGE2DPROC, TexStorage2D)                       \
+    X(PFNGLCLEARTEXIMAGEPROC, ClearTexImage)                     \
+    X(PFNGLTEXPARAMETERFPROC, TexParameterf)                     \
+    X(PFNGLTEXPARAMETERFVPROC, TexParameterfv)                   \
+    X(PFNGLFRAMEBUFFERTEXTUREPROC, FramebufferTexture)           \
+    X(PFNGLDRAWARRAYSINSTANCEDPROC, DrawArraysInstanced)         \
+    X(PFNGLDRAWELEMENTSINSTANCEDPROC, DrawElementsInstanced)     \
+    X(PFNGLVERTEXATTRIBDIVISORPROC, VertexAttribDivisor)         \
+    X(PFNGLVERTEXATTRIBIPOINTERPROC, VertexAttribIPointer)       \
+    X(PFNGLBLENDFUNCSEPARATEPROC, BlendFuncSeparate)             \
+    X(PFNGLBLENDEQUATIONSEPARATEPROC, BlendEquationSeparate)     \
+    X(PFNGLUNIFORM1UIPROC, Uniform1ui)                           \
+    X(PFNGLUNIFORM3IPROC, Uniform3i)                             \
+    X(PFNGLUNIFORM1FVPROC, Uniform1fv)                           \
+    X(PFNGLUNIFORM2FVPROC, Uniform2fv)                           \
+    X(PFNGLUNIFORM4FVPROC, Uniform4fv)                           \
+    X(PFNGLUNIFORMMATRIX3FVPROC, UniformMatrix3fv)               \
+    X(PFNGLGETINTEGERI_VPROC, GetIntegeri_v)                     \
+    X(PFNGLGETPROGRAMRESOURCEINDEXPROC, GetProgramResourceIndex)
 
 namespace ag::gpu::gl {
 
