@@ -192,8 +192,40 @@ void PhotonMapper::emit_caustic(int light, int count, int first, int n,
     std::vector<glm::vec3> axis(specular_bounds_.size());
     std::vector<float> cos_max(specular_bounds_.size()), cumulative(specular_bounds_.size());
     for (int i = first; i < first + n; ++i) {
-        if (l.type == LightType::sun) break;  // no caustic photons from a sun (cones need a point)
         const Sampler s(photon_halton_, key, uint64_t(i));
+        if (l.type == LightType::sun) {
+            // Parallel light: the union of the bounding spheres' discs across the sun's
+            // direction; a point uniform on a disc picked by area, the density divided by the
+            // discs containing it (overlaps count once), started outside the scene.
+            glm::vec3 u, v;
+            orthonormal_basis(l.direction, u, v);
+            float area = 0.0f;
+            for (size_t k = 0; k < specular_bounds_.size(); ++k) {
+                area += std::numbers::pi_v<float> * specular_bounds_[k].radius *
+                        specular_bounds_[k].radius;
+                cumulative[k] = area;
+            }
+            if (!(area > 0.0f)) return;
+            const float pick = s.get(0) * area;
+            size_t chosen = 0;
+            while (chosen + 1 < cumulative.size() && pick >= cumulative[chosen]) ++chosen;
+            const Sphere& b = specular_bounds_[chosen];
+            const float r = b.radius * std::sqrt(s.get(1));
+            const float phi = 2.0f * std::numbers::pi_v<float> * s.get(2);
+            const glm::vec3 p = b.center + r * (std::cos(phi) * u + std::sin(phi) * v);
+            int containing = 0;
+            for (const Sphere& c : specular_bounds_) {
+                const glm::vec3 d = p - c.center;
+                const glm::vec3 across = d - glm::dot(d, l.direction) * l.direction;
+                containing += glm::dot(across, across) <= c.radius * c.radius ? 1 : 0;
+            }
+            const glm::vec3 origin =
+                p - (glm::dot(p - l.sun_center, l.direction) + 1.01f * l.sun_radius) * l.direction;
+            const glm::vec3 power =
+                l.irradiance * area / float(std::max(containing, 1)) / float(count);
+            trace({origin, l.direction}, power, s, kCausticEmitDims, true, out);
+            continue;
+        }
         glm::vec3 origin = l.position, nl(0.0f);
         if (l.is_area()) {
             const LightPoint at = sample_area_light(scene_, l, s.get(3), s.get(4));
