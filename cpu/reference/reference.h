@@ -32,6 +32,11 @@ struct ComponentRadiance {
     glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
 };
 
+// A rectangle of the camera's pixels (a tile of a distributed reference render); width 0 = all.
+struct PixelRegion {
+    int x = 0, y = 0, width = 0, height = 0;
+};
+
 struct ReferenceSettings {
     ReferenceMethod method = ReferenceMethod::path_tracing;
     int spp = 0;              // stop after this many samples per pixel; 0 = no sample limit
@@ -39,6 +44,9 @@ struct ReferenceSettings {
                               // At least one pass always completes; with neither, one pass.
     uint32_t seed = 1;        // scrambles every sequence; same seed, same image
     int max_depth = 256;      // path length cap (Russian roulette ends paths long before)
+    // Only these pixels are rendered and the result is this size; each pixel's samples depend on
+    // its place in the whole image only, so tiles merge into exactly the whole image.
+    PixelRegion region;
 
     // Photon mapping only.
     int photons = 1000000;          // global map: photons emitted from all lights together
@@ -69,7 +77,8 @@ struct ReferenceResult {
     size_t global_photons = 0, caustic_photons = 0;  // stored photons (pm)
 };
 
-// Renders scene.camera at its resolution. Samples are QMC points seeded per pixel and sample
+// Renders scene.camera at its resolution (or settings.region of it; std::invalid_argument if the
+// region is not inside the image). Samples are QMC points seeded per pixel and sample
 // index, so the image does not depend on the thread count; a time limit only decides how many
 // whole passes are kept (an interrupted pass is dropped).
 ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& settings,
