@@ -24,7 +24,7 @@ int main(int argc, char** argv) {
         ag::run_frames(pipeline, nullptr, 3);
         pipeline.sync();
         ag::translate_object(scene, scene.find_object("cube"), {40.0f, 0.0f, 0.0f});
-        const ag::PipelineStats stats = ag::run_frames(pipeline, nullptr, 2);
+        const ag::PipelineStats stats = ag::run_frames(pipeline, nullptr, 1);  // the move is seen
         const ag::Image frame = pipeline.images().frame;
 
         ag::cpu::ReferenceSettings rs;

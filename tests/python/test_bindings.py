@@ -43,7 +43,7 @@ def test_pipeline_images_and_counters(cornell):
     p = afterglow.Pipeline(cornell, size=(40, 30), threads=1)
     counters = p.run(3)
     assert counters["frame"] == p.counters["frame"]
-    assert counters["photons_retraced"] > 0 and counters["frame_ms"] > 0
+    assert counters["photons_verified"] > 0 and counters["frame_ms"] > 0
     images = p.images()
     assert set(images) == {"full", "direct", "indirect", "caustics", "specular"}
     for image in images.values():
@@ -84,11 +84,13 @@ def test_edit_seen_by_pipeline(cornell):
 def test_scene_from_dict_and_settings():
     scene = afterglow.Scene.from_dict({
         "camera": {"eye": [0, 1, 3], "target": [0, 1, 0]},
+        "materials": {"white": {"albedo": [0.7, 0.7, 0.7]}},
         "lights": [{"name": "lamp", "type": "point", "position": [0, 1.8, 0],
                     "intensity": [5, 5, 5]}],
-        "objects": [{"name": "floor", "shape": {"type": "quad", "size": [4, 4]}},
-                    {"name": "box", "dynamic": True, "shape": {"type": "box", "size": [1, 1, 1]},
-                     "position": [0, 0.5, 0]}],
+        "objects": [{"name": "floor", "material": "white",
+                     "shape": {"type": "quad", "size": [4, 4]}},
+                    {"name": "box", "material": "white", "dynamic": True, "shape": {"type": "box", "size": [1, 1, 1]},
+                     "transform": {"translate": [0, 0.5, 0]}}],
     }, path=os.path.join(SOURCE_DIR, "scenes", "from_dict.json"))
     assert scene.objects == ["floor", "box"] and scene.lights == ["lamp"]
     scene.apply_settings({"photons": {"groups": 16}, "seed": 5})
@@ -117,7 +119,8 @@ def test_errors_carry_the_cli_messages(afterglow_bin, tmp_path):
     assert isinstance(e.value, ValueError)
 
     bad = tmp_path / "bad.json"
-    bad.write_text('{"camera": {"eye": [0, 0, 1], "target": [0, 0, 0]}, "objects": [{"shape": '
+    bad.write_text('{"camera": {"eye": [0, 0, 1], "target": [0, 0, 0]}, "materials": {"m": {}}, '
+                   '"lights": [], "objects": [{"name": "q", "material": "m", "shape": '
                    '{"type": "quad", "size": [1, -1]}}]}')
     with pytest.raises(afterglow.InputError) as e:
         afterglow.Scene.load(str(bad))

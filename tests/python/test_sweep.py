@@ -2,6 +2,7 @@
 workers; the tiled references merge into exactly the single-process render; a failing task is
 retried and reported, never dropped."""
 import csv
+import logging
 import os
 
 import numpy as np
@@ -19,7 +20,7 @@ FRAMES = 8
 def client():
     distributed = pytest.importorskip("distributed")
     cluster = distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                                       dashboard_address=None)
+                                       dashboard_address=None, silence_logs=logging.ERROR)
     c = distributed.Client(cluster)
     yield c
     c.close()

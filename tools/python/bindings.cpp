@@ -10,7 +10,6 @@
 
 #include <atomic>
 #include <filesystem>
-#include <map>
 #include <memory>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -407,24 +406,29 @@ py::dict converge(const SceneRef& holder, std::optional<std::string> script, int
                                    reference_image, thread_count, prime, on_frame);
     }
 
-    std::map<std::string, std::vector<double>> columns;
-    for (const cli::FrameRecord& r : run.frames) {
-        columns["frame"].push_back(r.frame);
-        columns["wall_s"].push_back(r.wall_s);
-        columns["frame_ms"].push_back(r.frame_ms);
-        columns["edited"].push_back(r.edited ? 1 : 0);
-        columns["relmse"].push_back(r.relmse);
-        columns["rmse"].push_back(r.rmse);
-        columns["ssim"].push_back(r.ssim);
-        columns["groups_invalidated"].push_back(double(r.groups_invalidated));
-        columns["photons_retraced"].push_back(double(r.photons_retraced));
-        columns["aim_texels"].push_back(double(r.aim_texels));
-        columns["iim_texels"].push_back(r.iim_texels);
-        columns["iim_pending"].push_back(r.iim_pending);
+    // The columns of `afterglow converge`'s CSV, in its order.
+    const std::vector<std::pair<const char*, double (*)(const cli::FrameRecord&)>> columns = {
+        {"frame", [](const cli::FrameRecord& r) { return double(r.frame); }},
+        {"wall_s", [](const cli::FrameRecord& r) { return r.wall_s; }},
+        {"frame_ms", [](const cli::FrameRecord& r) { return r.frame_ms; }},
+        {"edited", [](const cli::FrameRecord& r) { return r.edited ? 1.0 : 0.0; }},
+        {"relmse", [](const cli::FrameRecord& r) { return r.relmse; }},
+        {"rmse", [](const cli::FrameRecord& r) { return r.rmse; }},
+        {"ssim", [](const cli::FrameRecord& r) { return r.ssim; }},
+        {"groups_invalidated",
+         [](const cli::FrameRecord& r) { return double(r.groups_invalidated); }},
+        {"photons_retraced", [](const cli::FrameRecord& r) { return double(r.photons_retraced); }},
+        {"aim_texels", [](const cli::FrameRecord& r) { return double(r.aim_texels); }},
+        {"iim_texels", [](const cli::FrameRecord& r) { return double(r.iim_texels); }},
+        {"iim_pending", [](const cli::FrameRecord& r) { return double(r.iim_pending); }},
+    };
+    py::dict table;  // insertion-ordered
+    for (const auto& [name, get] : columns) {
+        py::array_t<double> values(py::ssize_t(run.frames.size()));
+        double* out = values.mutable_data();
+        for (size_t i = 0; i < run.frames.size(); ++i) out[i] = get(run.frames[i]);
+        table[name] = values;
     }
-    py::dict table;
-    for (const auto& [name, values] : columns)
-        table[py::str(name)] = py::array_t<double>(py::ssize_t(values.size()), values.data());
     const cli::SettleAnalysis& s = run.settle;
     py::dict settle;
     settle["settled"] = s.settled;
@@ -481,6 +485,7 @@ PYBIND11_MODULE(_afterglow, m) {
             input_error(e.what());
         }
     });
+    input_error.attr("__module__") = "afterglow";
     input_error.doc() =
         "Bad user input (scene files, settings, edits, scripts): the message names the file, the "
         "place and what was expected, as the afterglow command prints it.";

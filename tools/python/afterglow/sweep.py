@@ -32,10 +32,12 @@ renders each reference in one task and checks the merge against it (bit-exact).
 import copy
 import csv
 import json
+import logging
 import os
 import subprocess
 import sys
 import time
+import uuid
 
 import numpy as np
 
@@ -89,7 +91,8 @@ def normalise_spec(spec, path="<spec>"):
     for key in spec:
         if key not in known:
             raise SpecError(f"{path}: /{key}: unknown key (expected one of {', '.join(sorted(known))})")
-    out = _deep_merge(DEFAULTS, {k: v for k, v in spec.items() if k != "reference"})
+    out = copy.deepcopy(DEFAULTS)
+    out.update({k: copy.deepcopy(v) for k, v in spec.items() if k != "reference"})
     out["reference"] = _deep_merge(REFERENCE_DEFAULTS, spec.get("reference", {}))
     for key in out["reference"]:
         if key not in REFERENCE_DEFAULTS:
@@ -204,8 +207,9 @@ def run(spec, out_dir, client=None, scheduler=None, workers=2, plots=True):
         if scheduler:
             client = Client(scheduler)
         else:
+            # Failures are reported once, by the sweep, not also by each worker's log.
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
-                                   dashboard_address=None)
+                                   dashboard_address=None, silence_logs=logging.ERROR)
             own.append(cluster)
             client = Client(cluster)
         own.insert(0, client)
@@ -223,24 +227,31 @@ def _run(spec, out_dir, client, as_completed, plots):
     retries = int(spec["retries"])
     size, frames, ref = spec["size"], spec["frames"], spec["reference"]
     tasks = {}  # key -> (kind, description dict)
+    # Dask keys are unique per sweep (a finished key still held by the scheduler would be reused);
+    # the names reported are the keys without that suffix.
+    token = uuid.uuid4().hex[:8]
+
+    def shown(key):
+        return key[:-len(token) - 1]
+
     futures = []
     references = {}
     verify = {}
     for s in spec["scenes"]:
         tile_futures = []
         for region in afterglow.tiles(size[0], size[1], ref["tile"]):
-            key = f"reference-{s['name']}-{region[0]}-{region[1]}"
+            key = f"reference-{s['name']}-{region[0]}-{region[1]}-{token}"
             f = client.submit(reference_tile, s, frames, size, ref, spec["threads"], region,
                               key=key, retries=retries, pure=False)
             tasks[key] = ("reference tile", {"scene": s["name"], "region": region})
             tile_futures.append(f)
-        key = f"merge-{s['name']}"
+        key = f"merge-{s['name']}-{token}"
         references[s["name"]] = client.submit(merge_reference, size, *tile_futures, key=key,
                                               retries=retries, pure=False)
         tasks[key] = ("reference merge", {"scene": s["name"]})
         futures += tile_futures + [references[s["name"]]]
         if ref["verify"]:
-            key = f"reference-{s['name']}-whole"
+            key = f"reference-{s['name']}-whole-{token}"
             verify[s["name"]] = client.submit(reference_tile, s, frames, size, ref,
                                               spec["threads"], (0, 0, size[0], size[1]), key=key,
                                               retries=retries, pure=False)
@@ -253,7 +264,7 @@ def _run(spec, out_dir, client, as_completed, plots):
                 for seed in spec["seeds"]:
                     for baseline in spec["baselines"]:
                         key = (f"converge-{s['name']}-{method}-{settings_name}-seed{seed}-"
-                               f"{baseline}")
+                               f"{baseline}-{token}")
                         f = client.submit(convergence_run, s, method, settings_name, settings,
                                           seed, baseline, spec, references[s["name"]], key=key,
                                           retries=retries, pure=False)
@@ -272,7 +283,7 @@ def _run(spec, out_dir, client, as_completed, plots):
     for f in as_completed(futures):
         done += 1
         kind, what = tasks[f.key]
-        row = {"task": f.key, "kind": kind, **what, "status": f.status, "attempts": "",
+        row = {"task": shown(f.key), "kind": kind, **what, "status": f.status, "attempts": "",
                "error": "", "seconds": ""}
         if f.status == "finished":
             result = f.result()
@@ -283,14 +294,14 @@ def _run(spec, out_dir, client, as_completed, plots):
                 row["settle_frame"] = result["settle"]["within"]
                 row["settle_s"] = result["settle"]["seconds"]
                 row["wall_s"] = result["wall_s"]
-            _log(f"[{done}/{len(futures)}] {f.key}: done"
+            _log(f"[{done}/{len(futures)}] {shown(f.key)}: done"
                  + (f" in {row['seconds']} s" if row["seconds"] else "")
                  + f" ({time.time() - t0:.1f} s into the sweep)")
         else:
             exc = f.exception()
             row["error"] = f"{type(exc).__name__}: {exc}"
             row["attempts"] = retries + 1
-            _log(f"[{done}/{len(futures)}] {f.key}: FAILED after {retries + 1} attempts: "
+            _log(f"[{done}/{len(futures)}] {shown(f.key)}: FAILED after {retries + 1} attempts: "
                  f"{row['error']}")
         summary[f.key] = row
 
@@ -316,6 +327,7 @@ def _run(spec, out_dir, client, as_completed, plots):
     # The table: one row per frame of every finished run.
     columns = None
     rows = []
+    run_csv = {}
     for key, f in runs.items():
         if f.status != "finished":
             continue
@@ -329,14 +341,15 @@ def _run(spec, out_dir, client, as_completed, plots):
             rows.append([what["scene"], what["method"], what["settings"], what["seed"],
                          what["baseline"]] + [_number(table[c][i]) for c in table])
         label = what["method"] + ("/" + what["baseline"] if len(spec["baselines"]) > 1 else "")
-        with open(os.path.join(out_dir, "runs", key[len("converge-"):] + ".csv"), "w") as out:
+        run_csv[key] = os.path.join(out_dir, "runs", shown(key)[len("converge-"):] + ".csv")
+        with open(run_csv[key], "w") as out:
             out.write(result["csv"].replace(result["method"] + ",", label + ",", n))
     if columns:
         _write_table(os.path.join(out_dir, "sweep"), columns, rows)
     summary_rows = list(summary.values())
     _write_summary(os.path.join(out_dir, "summary.csv"), summary_rows)
     if plots:
-        _plots(spec, out_dir, runs, tasks)
+        _plots(spec, out_dir, run_csv, tasks)
     failed = [r for r in summary_rows if r["status"] != "finished"]
     _log(f"sweep: {len(summary_rows) - len(failed)} of {len(summary_rows)} tasks finished in "
          f"{time.time() - t0:.1f} s; " + (f"{len(failed)} FAILED (see summary.csv)" if failed
@@ -363,17 +376,21 @@ def _write_table(stem, columns, rows):
     pyarrow.parquet.write_table(table, stem + ".parquet")
 
 
+SUMMARY_COLUMNS = ["task", "kind", "scene", "method", "settings", "seed", "baseline", "region",
+                   "status", "attempts", "error", "seconds", "wall_s", "settled_relmse",
+                   "settle_frame", "settle_s"]
+
+
 def _write_summary(path, rows):
-    keys = []
-    for r in rows:
-        keys += [k for k in r if k not in keys]
+    keys = SUMMARY_COLUMNS + [k for r in rows for k in r if k not in SUMMARY_COLUMNS]
+    keys = list(dict.fromkeys(keys))
     with open(path, "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=keys)
+        w = csv.DictWriter(f, fieldnames=keys, restval="")
         w.writeheader()
         w.writerows(rows)
 
 
-def _plots(spec, out_dir, runs, tasks):
+def _plots(spec, out_dir, run_csv, tasks):
     """One plot per scene, settings and seed: every method (and baseline) against time."""
     script = _plot_script()
     if script is None:
@@ -382,11 +399,9 @@ def _plots(spec, out_dir, runs, tasks):
         return
     os.makedirs(os.path.join(out_dir, "plots"), exist_ok=True)
     groups = {}
-    for key, f in runs.items():
-        if f.status == "finished":
-            w = tasks[key][1]
-            groups.setdefault((w["scene"], w["settings"], w["seed"]), []).append(
-                os.path.join(out_dir, "runs", key[len("converge-"):] + ".csv"))
+    for key, path in run_csv.items():
+        w = tasks[key][1]
+        groups.setdefault((w["scene"], w["settings"], w["seed"]), []).append(path)
     for (scene, settings, seed), csvs in sorted(groups.items(), key=str):
         png = os.path.join(out_dir, "plots", f"{scene}.{settings}.seed{seed}.png")
         title = f"{scene} ({settings}, seed {seed}): {spec['component']} relMSE against time"
