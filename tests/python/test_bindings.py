@@ -1,6 +1,8 @@
 """The Python bindings (tools/python): arrays, scene edits seen by the pipeline, errors with the
 command line's messages, and the same image as `afterglow render`."""
 import os
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -203,3 +205,35 @@ def test_convergence_study(cornell):
     with pytest.raises(ValueError, match="reference"):
         afterglow.converge(cornell, script="", frames=2, size=(24, 24),
                            reference=reference["indirect"][:10])
+
+
+def test_frames_release_the_gil_and_block_edits(cornell):
+    p = afterglow.Pipeline(cornell, size=(32, 32), threads=1)
+    p.run(1)
+    ticks, refused = [], []
+    running = threading.Event()
+    stop = threading.Event()
+
+    def other_thread():
+        running.wait()
+        while not stop.is_set():
+            ticks.append(time.perf_counter())
+            try:
+                cornell.object("cube").translate((1.0, 0.0, 0.0))
+            except RuntimeError as e:
+                refused.append(str(e))
+            time.sleep(0.001)
+
+    t = threading.Thread(target=other_thread)
+    t.start()
+    running.set()
+    start = time.perf_counter()
+    p.run(12)
+    end = time.perf_counter()
+    stop.set()
+    t.join()
+    # The other thread ran Python while the frames ran (the GIL was released), and its edits
+    # were refused while the pipeline held the scene.
+    during = [x for x in ticks if start < x < end]
+    assert len(during) >= 3, (len(during), end - start)
+    assert refused and "being rendered" in refused[0]
