@@ -46,6 +46,7 @@ def test_sweep_two_scenes_two_settings(client, tmp_path):
     s = spec({"default": {}, "groups32": {"photons": {"groups": 32}}})
     rows = sweep.run(s, str(tmp_path), client=client)
     assert all(r["status"] == "finished" for r in rows), rows
+    assert all(r["attempts"] == 1 for r in rows), rows  # counted on the workers
     kinds = [r["kind"] for r in rows]
     assert kinds.count("converge") == 4 and kinds.count("reference merge") == 2
     assert kinds.count("reference tile") == 2 * 9  # 24x24 in tiles of 10: 3 x 3
@@ -80,7 +81,7 @@ def test_sweep_reports_failed_tasks(client, tmp_path):
     rows = sweep.run(s, str(tmp_path), client=client, plots=False)
     failed = [r for r in rows if r["status"] != "finished"]
     assert len(failed) == 1 and failed[0]["kind"] == "converge"
-    assert failed[0]["attempts"] == 2  # tried, then retried once
+    assert failed[0]["attempts"] == 2  # tried, then retried once (counted on the workers)
     assert "/photons/groups" in failed[0]["error"]
     summary = read_csv(tmp_path / "summary.csv")
     assert [r["status"] for r in summary if r["kind"] == "converge"] == ["error"]

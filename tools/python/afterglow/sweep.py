@@ -180,6 +180,21 @@ def convergence_run(scene_spec, method, settings_name, settings, seed, baseline,
     return result
 
 
+ATTEMPT_EVENTS = "afterglow-sweep-attempt"
+
+
+def _task(fn, *args):
+    """Runs one sweep task, first logging the attempt on the scheduler (the sweep counts a task's
+    attempts from these, retries included)."""
+    try:
+        from distributed import get_worker
+        worker = get_worker()
+    except ValueError:  # not on a Dask worker
+        return fn(*args)
+    worker.log_event(ATTEMPT_EVENTS, worker.get_current_task())
+    return fn(*args)
+
+
 # ---- the sweep ------------------------------------------------------------------------------------
 
 def _plot_script():
@@ -241,18 +256,18 @@ def _run(spec, out_dir, client, as_completed, plots):
         tile_futures = []
         for region in afterglow.tiles(size[0], size[1], ref["tile"]):
             key = f"reference-{s['name']}-{region[0]}-{region[1]}-{token}"
-            f = client.submit(reference_tile, s, frames, size, ref, spec["threads"], region,
+            f = client.submit(_task, reference_tile, s, frames, size, ref, spec["threads"], region,
                               key=key, retries=retries, pure=False)
             tasks[key] = ("reference tile", {"scene": s["name"], "region": region})
             tile_futures.append(f)
         key = f"merge-{s['name']}-{token}"
-        references[s["name"]] = client.submit(merge_reference, size, *tile_futures, key=key,
+        references[s["name"]] = client.submit(_task, merge_reference, size, *tile_futures, key=key,
                                               retries=retries, pure=False)
         tasks[key] = ("reference merge", {"scene": s["name"]})
         futures += tile_futures + [references[s["name"]]]
         if ref["verify"]:
             key = f"reference-{s['name']}-whole-{token}"
-            verify[s["name"]] = client.submit(reference_tile, s, frames, size, ref,
+            verify[s["name"]] = client.submit(_task, reference_tile, s, frames, size, ref,
                                               spec["threads"], (0, 0, size[0], size[1]), key=key,
                                               retries=retries, pure=False)
             tasks[key] = ("reference whole", {"scene": s["name"]})
@@ -265,7 +280,7 @@ def _run(spec, out_dir, client, as_completed, plots):
                     for baseline in spec["baselines"]:
                         key = (f"converge-{s['name']}-{method}-{settings_name}-seed{seed}-"
                                f"{baseline}-{token}")
-                        f = client.submit(convergence_run, s, method, settings_name, settings,
+                        f = client.submit(_task, convergence_run, s, method, settings_name, settings,
                                           seed, baseline, spec, references[s["name"]], key=key,
                                           retries=retries, pure=False)
                         runs[key] = f
@@ -283,7 +298,7 @@ def _run(spec, out_dir, client, as_completed, plots):
     for f in as_completed(futures):
         done += 1
         kind, what = tasks[f.key]
-        row = {"task": shown(f.key), "kind": kind, **what, "status": f.status, "attempts": "",
+        row = {"task": shown(f.key), "kind": kind, **what, "status": f.status, "attempts": 0,
                "error": "", "seconds": ""}
         if f.status == "finished":
             result = f.result()
@@ -300,10 +315,19 @@ def _run(spec, out_dir, client, as_completed, plots):
         else:
             exc = f.exception()
             row["error"] = f"{type(exc).__name__}: {exc}"
-            row["attempts"] = retries + 1
-            _log(f"[{done}/{len(futures)}] {shown(f.key)}: FAILED after {retries + 1} attempts: "
+            _log(f"[{done}/{len(futures)}] {shown(f.key)}: FAILED (retries {retries}): "
                  f"{row['error']}")
         summary[f.key] = row
+
+    # Attempts per task, as the workers logged them (a log event reaches the scheduler before
+    # the task's result does).
+    attempts = {}
+    for _, key in client.get_events(ATTEMPT_EVENTS):
+        attempts[key] = attempts.get(key, 0) + 1
+    for key, row in summary.items():
+        row["attempts"] = attempts.get(key, 0)
+        if row["status"] == "finished" and row["attempts"] > 1:
+            _log(f"sweep: {shown(key)} finished after {row['attempts']} attempts")
 
     # References: exact (.npy) and viewable (.exr, .png); the merge checked against the whole.
     for name, f in references.items():
