@@ -273,6 +273,7 @@ public:
     }
 
     std::string renderer() {
+        const py::gil_scoped_release release;
         const std::lock_guard<std::mutex> lock(mutex_);
         context_->make_current();
         return context_->renderer();
@@ -635,9 +636,9 @@ PYBIND11_MODULE(_afterglow, m) {
             py::arg("text"), py::arg("path") = "scene.json", "Same as from_dict, from JSON text.")
         .def(
             "copy",
-            [](const SceneHolder& h) {
+            [](SceneHolder& h) {
                 auto c = std::make_shared<SceneHolder>();
-                c->scene = h.scene;
+                c->scene = h.for_edit();  // not while a pipeline may trim its change log
                 return c;
             },
             "An independent copy (edits to one do not reach the other).")
