@@ -458,6 +458,11 @@ def main(argv=None):
     if args.workers < 1:
         print("tools/sweep: error: --workers expects a count >= 1", file=sys.stderr)
         return 2
-    rows = run(spec, out, scheduler=args.scheduler, workers=args.workers,
-               plots=not args.no_plots)
+    try:
+        rows = run(spec, out, scheduler=args.scheduler, workers=args.workers,
+                   plots=not args.no_plots)
+    except OSError as e:  # includes the timeout of an unreachable scheduler
+        where = f"the scheduler at {args.scheduler}" if args.scheduler else "the LocalCluster"
+        print(f"tools/sweep: error: cannot reach {where}: {e}", file=sys.stderr)
+        return 1
     return 1 if any(r["status"] != "finished" for r in rows) else 0
