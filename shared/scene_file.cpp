@@ -689,6 +689,28 @@ Scene parse_scene(const std::string& json_text, const std::string& path) {
     return SceneParser(path).parse(parse_json(json_text, path));
 }
 
+void settings_changed(Scene& scene, const LightmapSettings& before) {
+    check_light_samples(scene);
+    check_photon_budget(scene);
+    const LightmapSettings& after = scene.settings.lightmap;
+    if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
+        after.chart_cone != before.chart_cone || after.gutter != before.gutter)
+        make_surfaces_and_atlas(scene);
+}
+
+void apply_settings_json(Scene& scene, const std::string& json_text, const std::string& source) {
+    Settings settings = scene.settings;
+    read_settings(parse_json(json_text, source), settings, source, "");
+    const Settings before = scene.settings;
+    scene.settings = settings;
+    try {
+        settings_changed(scene, before.lightmap);
+    } catch (...) {
+        scene.settings = before;
+        throw;
+    }
+}
+
 Scene load_scene(const std::string& path) {
     std::error_code ec;
     if (!fs::exists(path, ec)) throw_input_error(path, "", "cannot open scene file: no such file");

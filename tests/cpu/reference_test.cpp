@@ -343,6 +343,32 @@ TEST(Reference, ComponentsSumToFullAndResultIgnoresThreadCount) {
     }
 }
 
+// A region holds exactly the pixels it has in the whole image (tiles of a distributed reference
+// merge bit for bit), for both methods; regions outside the image are refused.
+TEST(Reference, RegionsAreExactlyTheirPixelsOfTheWholeImage) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.camera.width = 13;
+    scene.camera.height = 9;
+    for (ReferenceSettings settings : {pt(2), pm(1, 20000, 8)}) {
+        const ReferenceResult whole = render(scene, settings, 2);
+        for (const PixelRegion region : {PixelRegion{0, 0, 5, 4}, PixelRegion{5, 4, 8, 5}}) {
+            settings.region = region;
+            const ReferenceResult part = render(scene, settings, 1);
+            ASSERT_EQ(part.full.width, region.width);
+            ASSERT_EQ(part.full.height, region.height);
+            for (int y = 0; y < region.height; ++y)
+                for (int x = 0; x < region.width; ++x) {
+                    EXPECT_EQ(part.full.rgb(x, y), whole.full.rgb(region.x + x, region.y + y));
+                    for (FrameTerm t : kFrameTerms)
+                        EXPECT_EQ(part.components[size_t(t)].rgb(x, y),
+                                  whole.components[size_t(t)].rgb(region.x + x, region.y + y));
+                }
+        }
+        settings.region = {10, 0, 4, 9};  // one column past the right edge
+        EXPECT_THROW(render(scene, settings, 1), std::invalid_argument);
+    }
+}
+
 TEST(Reference, TimeLimitKeepsWholePasses) {
     Scene scene = load_scene(test::scene_path("cornell.json"));
     scene.camera.width = scene.camera.height = 8;
