@@ -79,6 +79,7 @@ public:
     // A compute program (GLSL 4.50 with the shared constants prepended, like the others).
     static Program compute(const std::string& name, const std::string& source);
     void use() const { gl::UseProgram(id_.get()); }
+    explicit operator bool() const { return bool(id_); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
     void set(const char* u, int v) const { gl::Uniform1i(location(u), v); }
     void set(const char* u, unsigned v) const { gl::Uniform1ui(location(u), v); }
