@@ -1,5 +1,7 @@
 #include "gpu/gl_objects.h"
 
+#include <atomic>
+
 #include "shared/host_device_shared.h"
 
 namespace ag::gpu {
@@ -93,7 +95,14 @@ Buffer make_storage_buffer(size_t bytes, const void* data) {
     return b;
 }
 
+namespace {
+std::atomic<uint64_t> readbacks{0};
+}  // namespace
+
+uint64_t readback_count() { return readbacks.load(); }
+
 std::vector<uint8_t> read_buffer(GLuint buffer, size_t bytes) {
+    ++readbacks;
     std::vector<uint8_t> out(bytes);
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
     if (bytes > 0) gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), out.data());
@@ -155,6 +164,7 @@ void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
 
 std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width,
                              int height) {
+    ++readbacks;
     std::vector<float> out(size_t(width) * size_t(height) * 4);
     gl::BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
     gl::ReadBuffer(attachment);

@@ -102,6 +102,8 @@ private:
 Buffer make_storage_buffer(size_t bytes, const void* data = nullptr);
 // Reads `bytes` from the start of a buffer back (for tests and diagnostics, never per frame).
 std::vector<uint8_t> read_buffer(GLuint buffer, size_t bytes);
+// How many times read_buffer and read_rgba have read GPU data back (tests check a frame adds 0).
+uint64_t readback_count();
 template <class T>
 std::vector<T> read_buffer_as(GLuint buffer, size_t count) {
     const std::vector<uint8_t> bytes = read_buffer(buffer, count * sizeof(T));
