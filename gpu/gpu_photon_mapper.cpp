@@ -442,15 +442,19 @@ void GpuPhotonMapper::reset() {
         materials.emplace_back(o.material.albedo, float(int(o.material.type)));
     if (materials.empty()) materials.emplace_back(0.0f);
     materials_ = make_storage_buffer(materials.size() * sizeof(glm::vec4), materials.data());
+    radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
+    clear_photons();
+}
+
+void GpuPhotonMapper::clear_photons() {
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, counter_.get());
     gl::ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT,
                         nullptr);
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
-    radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
     frames_ = 0;
     paths_total_ = 0;
     ++revision_;
-    check_gl("GpuPhotonMapper::reset");
+    check_gl("GpuPhotonMapper::clear_photons");
 }
 
 bool GpuPhotonMapper::settled() const { return frames_ >= scene_.settings.gpu_pm.frames; }
@@ -535,6 +539,7 @@ void GpuPhotonMapper::bin(const GBuffer::View& view) {
 
 void GpuPhotonMapper::render() {
     const GBuffer::View& view = g_buffer_.last_view();
+    radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
     // Per-render counters (the overflow flag and refined pixels) start at 0; the photon count
     // stays.
     const uint32_t zero[3] = {0, 0, 0};

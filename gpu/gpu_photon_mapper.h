@@ -48,6 +48,9 @@ public:
 
     // Restart: BVH, emitters and materials from the scene as it is now; photons dropped.
     void reset();
+    // Drops the photons but keeps the BVH, emitters and materials (benchmarks: every frame's
+    // photons new, as in the thesis).
+    void clear_photons();
     // Traces this frame's photon paths (settings.gpu_pm.paths) unless `frames` are accumulated.
     void trace();
     // Bins the photons into the G-buffer's tiles and estimates the indirect term.
