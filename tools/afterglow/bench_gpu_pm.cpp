@@ -38,12 +38,12 @@ std::vector<double> parse_list(const std::string& text, const char* what) {
 }  // namespace
 
 int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int height) {
+    const std::vector<double> paths = parse_list(args.get("paths"), "paths");
+    const std::vector<double> radii = parse_list(args.get("radii"), "radii");
     auto context = gpu::make_gl_context(args.gl_backend());
     std::printf("GL: %s (%s)\n", context->renderer().c_str(), context->version().c_str());
     Scene scene = load_scene(scene_path);
     args.apply_settings(scene);
-    const std::vector<double> paths = parse_list(args.get("paths"), "paths");
-    const std::vector<double> radii = parse_list(args.get("radii"), "radii");
     const int frames = args.get_int("frames", 20);
     Image reference;
     const bool has_reference = args.has("reference");
@@ -62,8 +62,8 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
         "%s, %dx%d, %d frames per cell (mean and sigma of the frame time; G-buffer, "
         "photons traced anew, binning, estimate, direct light and compose)\n",
         scene_path.c_str(), width, height, frames);
-    std::printf("%8s %9s %8s %9s %8s %8s %8s %8s %7s\n", "paths", "(stored)", "radius", "mean ms",
-                "sigma", "refined", "MSE", "NRMSE", "MSSIM");
+    std::printf("%8s %9s %8s %9s %8s %9s %8s %8s %8s %7s\n", "paths", "(stored)", "radius",
+                "mean ms", "sigma", "gpu_pm ms", "refined", "MSE", "NRMSE", "MSSIM");
     for (const double n : paths)
         for (const double r : radii) {
             scene.settings.gpu_pm.paths = int(n);
@@ -71,6 +71,7 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
             scene.settings.gpu_pm.radius = float(r);
             gpu::GpuPhotonMapper mapper(scene, g_buffer);
             std::vector<double> ms;
+            double pm_ms = 0.0;  // G-buffer, photons, binning and estimate alone
             for (int f = 0; f < frames + 2; ++f) {
                 gpu::gl::Finish();
                 const auto t = std::chrono::steady_clock::now();
@@ -78,6 +79,11 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
                 mapper.clear_photons();
                 mapper.trace();
                 mapper.render();
+                gpu::gl::Finish();
+                const double pm =
+                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
+                        .count();
+                if (f >= 2) pm_ms += pm / double(frames);
                 renderer.render(gpu::IndirectTerm{mapper.texture(), gpu::IndirectSpace::screen, 0});
                 gpu::gl::Finish();
                 if (f >= 2)
@@ -88,8 +94,8 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
             double mean = 0.0, var = 0.0;
             for (const double v : ms) mean += v / double(ms.size());
             for (const double v : ms) var += (v - mean) * (v - mean) / double(ms.size());
-            std::printf("%8d %9u %8.4g %9.2f %8.2f %8d", int(n), mapper.stored_photons(), r, mean,
-                        std::sqrt(var), mapper.refined_pixels());
+            std::printf("%8d %9u %8.4g %9.2f %8.2f %9.2f %8d", int(n), mapper.stored_photons(), r,
+                        mean, std::sqrt(var), pm_ms, mapper.refined_pixels());
             if (has_reference) {
                 const LdrMetrics m = compare_ldr(renderer.read_back().frame, reference);
                 std::printf(" %8.2f %8.4f %7.4f", m.mse, m.nrmse, m.mssim);
