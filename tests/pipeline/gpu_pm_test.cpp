@@ -112,6 +112,13 @@ TEST_F(GpuPmTest, StoredPowerIsEmittedPowerTimesTheBounce) {
     const glm::dvec3 expected = glm::dvec3(scene.lights[0].power()) * 0.5 *
                                 (double(photons.size()) / double(m.paths_traced()));
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / expected[c], 1.0, 1e-4);
+    // estimator: kwast carries his code's ×100 at emission and 1/π at the bounce (same paths).
+    scene.settings.gpu_pm.estimator = GpuPmEstimator::kwast;
+    gpu::GpuPhotonMapper kwast(scene, g);
+    kwast.trace();
+    glm::dvec3 kwast_sum(0.0);
+    for (const auto& p : kwast.read_photons()) kwast_sum += glm::dvec3(p.power);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(kwast_sum[c] / sum[c], 100.0 / M_PI, 1e-3);
 }
 
 TEST_F(GpuPmTest, TileListsEqualTheBruteForceBinning) {
