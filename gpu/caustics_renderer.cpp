@@ -9,44 +9,6 @@ namespace ag::gpu {
 
 namespace {
 
-const char* kGeometryVertex = R"(
-layout(location = 0) in vec3 position;
-layout(location = 1) in vec3 normal;
-layout(location = 4) in vec2 texcoord;
-uniform mat4 model, view_projection;
-out vec3 v_world;
-out vec3 v_normal;
-out vec2 v_texcoord;
-void main() {
-    vec4 world = model * vec4(position, 1.0);
-    v_world = world.xyz;
-    v_normal = mat3(model) * normal;
-    v_texcoord = texcoord;
-    gl_Position = view_projection * world;
-}
-)";
-
-// Position, albedo and the world area the pixel covers there (eq. 12.2, with the pixel's footprint
-// growing as 1/cos of the angle between the surface normal and the view direction).
-const std::string kGeometryFragment = std::string(kAlbedoGlsl) + R"(
-in vec3 v_world;
-in vec3 v_normal;
-uniform vec3 eye;
-uniform vec3 albedo;
-uniform float pixel_at_unit_distance;  // 2 tan(fov_y / 2) / height
-uniform int diffuse;  // 0: mirror or glass, which receives no caustic (area 0)
-layout(location = 0) out vec4 out_position;
-layout(location = 1) out vec4 out_surface;
-void main() {
-    vec3 to_eye = eye - v_world;
-    float d = length(to_eye);
-    float cos_n = abs(dot(normalize(v_normal), to_eye / d));
-    float side = d * pixel_at_unit_distance;
-    out_position = vec4(v_world, 1.0);
-    out_surface = vec4(surface_albedo(albedo), diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
-}
-)";
-
 // A photon is splatted where it lands if it lies on the surface its pixel shows: not farther from
 // the eye than that surface at the pixel's centre plus the depth one pixel's footprint spans there
 // (side / cos θ = area / side). A depth test against the centre alone loses the photons on the far
@@ -171,45 +133,32 @@ double elapsed_ms(std::chrono::steady_clock::time_point t) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
 }
 
-Framebuffer framebuffer_with(const std::vector<GLuint>& colors, GLuint depth_stencil) {
-    Framebuffer f = make_framebuffer();
-    gl::BindFramebuffer(GL_FRAMEBUFFER, f.get());
-    for (size_t i = 0; i < colors.size(); ++i)
-        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + i), GL_TEXTURE_2D,
-                                 colors[i], 0);
-    if (depth_stencil)
-        gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
-                                    depth_stencil);
-    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-        throw GlError("caustics: framebuffer incomplete");
-    return f;
-}
-
 }  // namespace
 
 CausticsRenderer::CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width,
-                                   int height)
-    : scene_(scene), meshes_(meshes), width_(width), height_(height) {
+                                   int height, GBuffer* shared)
+    : scene_(scene),
+      width_(width),
+      height_(height),
+      own_g_buffer_(shared ? nullptr : std::make_unique<GBuffer>(scene, meshes, width, height)),
+      g_buffer_(shared ? shared : own_g_buffer_.get()) {
+    if (g_buffer_->width() != width || g_buffer_->height() != height)
+        throw GlError("caustics: the shared G-buffer is not " + std::to_string(width) + "x" +
+                      std::to_string(height));
     tile_ = scene.settings.caustics.tile_size;
     tiles_x_ = (width + tile_ - 1) / tile_;
     tiles_y_ = (height + tile_ - 1) / tile_;
-    geometry_ = Program("caustics geometry", kGeometryVertex, kGeometryFragment);
     splat_ = Program("caustics splat", kSplatVertex, kSplatFragment);
     query_ = Program("caustics tile query", kFullScreenTriangleVertex, kQueryFragment);
     filter_ = Program("caustics filter", kFullScreenTriangleVertex, kFilterFragment);
     footprint_ = Program("caustics footprint", kFullScreenTriangleVertex, kFootprintFragment);
-    position_ = make_float_texture(width, height);
-    surface_ = make_float_texture(width, height);
     splat_texture_ = make_float_texture(width, height, true);
     result_ = make_float_texture(width, height);
     footprint_texture_ = make_float_texture(width, height);
-    depth_stencil_ = make_renderbuffer();
-    gl::BindRenderbuffer(GL_RENDERBUFFER, depth_stencil_.get());
-    gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, width, height);
-    geometry_fbo_ = framebuffer_with({position_.get(), surface_.get()}, depth_stencil_.get());
-    splat_fbo_ = framebuffer_with({splat_texture_.get()}, depth_stencil_.get());
-    result_fbo_ = framebuffer_with({result_.get()}, 0);
-    footprint_fbo_ = framebuffer_with({footprint_texture_.get()}, 0);
+    splat_fbo_ =
+        framebuffer_with({splat_texture_.get()}, g_buffer_->depth_stencil(), "caustics splat");
+    result_fbo_ = framebuffer_with({result_.get()}, 0, "caustics result");
+    footprint_fbo_ = framebuffer_with({footprint_texture_.get()}, 0, "caustics footprint");
     photon_vbo_ = make_buffer();
     photon_vao_ = make_vertex_array();
     gl::BindVertexArray(photon_vao_.get());
@@ -233,31 +182,13 @@ CausticsRenderer::~CausticsRenderer() {
 
 void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
                               const std::vector<glm::vec3>& powers, bool cull) {
-    Camera camera = scene_.camera;
-    camera.width = width_;
-    camera.height = height_;
-    const Bounds bounds = scene_.world_bounds();
-    const float diagonal = scene_.diagonal();
-    const float far_plane = glm::length(camera.eye - bounds.center()) + 2.0f * diagonal;
-    const glm::mat4 vp =
-        projection_matrix(camera, 1e-3f * diagonal, far_plane) * view_matrix(camera);
-
-    // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas.
-    begin_scene_pass(geometry_fbo_.get(), 2, width_, height_, glm::vec4(0.0f));
-    geometry_.use();
-    geometry_.set("view_projection", vp);
-    geometry_.set("eye", camera.eye);
-    geometry_.set("pixel_at_unit_distance",
-                  2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
-    for (size_t o = 0; o < scene_.objects.size(); ++o) {
-        const Object& obj = scene_.objects[o];
-        geometry_.set("model", model_matrix(obj));
-        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? base_albedo(obj)
-                                                                           : glm::vec3(0.0f));
-        meshes_.bind_albedo(geometry_, o, kAlbedoUnit);
-        geometry_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
-        meshes_.draw(o);
-    }
+    // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas (the G-buffer).
+    if (own_g_buffer_) own_g_buffer_->render();
+    const GBuffer::View& view = g_buffer_->last_view();
+    const Camera& camera = view.camera;
+    const glm::mat4& vp = view.view_projection;
+    const GLuint position = g_buffer_->texture(GBufferTarget::position);
+    const GLuint surface = g_buffer_->texture(GBufferTarget::surface);
 
     // 2. Photons as points, additive float RGB, each marking the stencil.
     std::vector<float> data;
@@ -286,9 +217,9 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
                    2.0f * std::tan(glm::radians(camera.fov_y) * 0.5f) / float(height_));
         gl::Uniform2i(splat_.location("size"), width_, height_);
         gl::ActiveTexture(GL_TEXTURE0);
-        gl::BindTexture(GL_TEXTURE_2D, position_.get());
+        gl::BindTexture(GL_TEXTURE_2D, position);
         gl::ActiveTexture(GL_TEXTURE1);
-        gl::BindTexture(GL_TEXTURE_2D, surface_.get());
+        gl::BindTexture(GL_TEXTURE_2D, surface);
         gl::BindVertexArray(photon_vao_.get());
         gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
         gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(),
@@ -364,7 +295,7 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, splat_texture_.get());
     gl::ActiveTexture(GL_TEXTURE1);
-    gl::BindTexture(GL_TEXTURE_2D, surface_.get());
+    gl::BindTexture(GL_TEXTURE_2D, surface);
     // 4a. Each photon pixel's half-size and normalisation.
     gl::BindFramebuffer(GL_FRAMEBUFFER, footprint_fbo_.get());
     gl::DrawBuffers(1, &one);
@@ -411,13 +342,9 @@ std::vector<glm::vec3> CausticsRenderer::read_radiance() const {
 }
 
 std::vector<float> CausticsRenderer::read_pixel_area() const {
-    const std::vector<float> rgba =
-        read_rgba(geometry_fbo_.get(), GL_COLOR_ATTACHMENT1, 0, 0, width_, height_);
-    std::vector<float> out(size_t(width_) * size_t(height_));
-    for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x)
-            out[size_t(y) * size_t(width_) + size_t(x)] =
-                rgba[(size_t(height_ - 1 - y) * size_t(width_) + size_t(x)) * 4 + 3];
+    const std::vector<glm::vec4> surface = g_buffer_->read(GBufferTarget::surface);
+    std::vector<float> out(surface.size());
+    for (size_t i = 0; i < surface.size(); ++i) out[i] = surface[i].w;
     return out;
 }
 

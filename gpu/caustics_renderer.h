@@ -6,8 +6,10 @@
 #pragma once
 
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
+#include "gpu/g_buffer.h"
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
 #include "shared/scene.h"
@@ -16,7 +18,10 @@ namespace ag::gpu {
 
 class CausticsRenderer {
 public:
-    CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height);
+    // Draws its own G-buffer each render, or with `shared` (width × height) reads one the caller
+    // has rendered for this frame; the splats then mark that buffer's stencil.
+    CausticsRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height,
+                     GBuffer* shared = nullptr);
     ~CausticsRenderer();
     CausticsRenderer(const CausticsRenderer&) = delete;
     CausticsRenderer& operator=(const CausticsRenderer&) = delete;
@@ -40,12 +45,12 @@ public:
 
 private:
     const Scene& scene_;
-    const SceneMeshes& meshes_;
     int width_, height_, tiles_x_, tiles_y_, tile_;
-    Program geometry_, splat_, query_, footprint_, filter_;
-    Texture position_, surface_, splat_texture_, result_, footprint_texture_;
-    Renderbuffer depth_stencil_;
-    Framebuffer geometry_fbo_, splat_fbo_, result_fbo_, footprint_fbo_;
+    std::unique_ptr<GBuffer> own_g_buffer_;
+    GBuffer* g_buffer_;
+    Program splat_, query_, footprint_, filter_;
+    Texture splat_texture_, result_, footprint_texture_;
+    Framebuffer splat_fbo_, result_fbo_, footprint_fbo_;
     Buffer photon_vbo_;
     VertexArray photon_vao_, empty_vao_;
     std::vector<GLuint> queries_;

@@ -1,5 +1,7 @@
 #include "gpu/gl_objects.h"
 
+#include <atomic>
+
 #include "shared/host_device_shared.h"
 
 namespace ag::gpu {
@@ -47,7 +49,9 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
         gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
         gl::DeleteShader(s);
         throw GlError("shader '" + name +
-                      (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
+                      (type == GL_VERTEX_SHADER    ? "' (vertex)"
+                       : type == GL_COMPUTE_SHADER ? "' (compute)"
+                                                   : "' (fragment)") +
                       " does not compile:\n" + log);
     }
     return s;
@@ -55,14 +59,21 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
 }  // namespace
 
 Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment) {
-    const GLuint vs = compile(name, GL_VERTEX_SHADER, vertex);
-    const GLuint fs = compile(name, GL_FRAGMENT_SHADER, fragment);
+    link(name,
+         {compile(name, GL_VERTEX_SHADER, vertex), compile(name, GL_FRAGMENT_SHADER, fragment)});
+}
+
+Program Program::compute(const std::string& name, const std::string& source) {
+    Program p;
+    p.link(name, {compile(name, GL_COMPUTE_SHADER, source)});
+    return p;
+}
+
+void Program::link(const std::string& name, const std::vector<GLuint>& shaders) {
     id_ = Handle<detail::delete_program>(gl::CreateProgram());
-    gl::AttachShader(id_.get(), vs);
-    gl::AttachShader(id_.get(), fs);
+    for (const GLuint s : shaders) gl::AttachShader(id_.get(), s);
     gl::LinkProgram(id_.get());
-    gl::DeleteShader(vs);
-    gl::DeleteShader(fs);
+    for (const GLuint s : shaders) gl::DeleteShader(s);
     GLint ok = 0;
     gl::GetProgramiv(id_.get(), GL_LINK_STATUS, &ok);
     if (!ok) {
@@ -70,6 +81,43 @@ Program::Program(const std::string& name, const std::string& vertex, const std::
         gl::GetProgramInfoLog(id_.get(), sizeof log, nullptr, log);
         throw GlError("program '" + name + "' does not link:\n" + log);
     }
+}
+
+Buffer make_storage_buffer(size_t bytes, const void* data) {
+    Buffer b = make_buffer();
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, b.get());
+    gl::BufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(bytes), data, GL_DYNAMIC_COPY);
+    if (!data && bytes > 0)
+        gl::ClearBufferData(GL_SHADER_STORAGE_BUFFER, GL_R32UI, GL_RED_INTEGER, GL_UNSIGNED_INT,
+                            nullptr);
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    check_gl("make_storage_buffer");
+    return b;
+}
+
+namespace {
+std::atomic<uint64_t> readbacks{0};
+}  // namespace
+
+uint64_t readback_count() { return readbacks.load(); }
+
+std::vector<uint8_t> read_buffer(GLuint buffer, size_t bytes) {
+    ++readbacks;
+    std::vector<uint8_t> out(bytes);
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, buffer);
+    if (bytes > 0) gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(bytes), out.data());
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, 0);
+    check_gl("read_buffer");
+    return out;
+}
+
+void dispatch_compute(GLuint groups) {
+    if (groups == 0) return;
+    const GLuint x = groups < 65535u ? groups : 65535u;
+    gl::DispatchCompute(x, (groups + x - 1) / x, 1);
+    gl::MemoryBarrier(GL_SHADER_STORAGE_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT |
+                      GL_BUFFER_UPDATE_BARRIER_BIT | GL_TEXTURE_FETCH_BARRIER_BIT |
+                      GL_ATOMIC_COUNTER_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
 }
 
 Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
@@ -116,6 +164,7 @@ void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
 
 std::vector<float> read_rgba(GLuint framebuffer, GLenum attachment, int x, int y, int width,
                              int height) {
+    ++readbacks;
     std::vector<float> out(size_t(width) * size_t(height) * 4);
     gl::BindFramebuffer(GL_READ_FRAMEBUFFER, framebuffer);
     gl::ReadBuffer(attachment);

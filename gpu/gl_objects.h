@@ -1,6 +1,8 @@
 // RAII handles for GL objects and small helpers (programs, float textures, framebuffers).
 #pragma once
 
+#include <cstdint>
+#include <cstring>
 #include <glm/glm.hpp>
 #include <string>
 #include <utility>
@@ -74,9 +76,13 @@ class Program {
 public:
     Program() = default;
     Program(const std::string& name, const std::string& vertex, const std::string& fragment);
+    // A compute program (GLSL 4.50 with the shared constants prepended, like the others).
+    static Program compute(const std::string& name, const std::string& source);
     void use() const { gl::UseProgram(id_.get()); }
+    explicit operator bool() const { return bool(id_); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
     void set(const char* u, int v) const { gl::Uniform1i(location(u), v); }
+    void set(const char* u, unsigned v) const { gl::Uniform1ui(location(u), v); }
     void set(const char* u, float v) const { gl::Uniform1f(location(u), v); }
     void set(const char* u, const glm::vec2& v) const { gl::Uniform2f(location(u), v.x, v.y); }
     void set(const char* u, const glm::vec3& v) const { gl::Uniform3f(location(u), v.x, v.y, v.z); }
@@ -88,8 +94,26 @@ public:
     }
 
 private:
+    void link(const std::string& name, const std::vector<GLuint>& shaders);
     Handle<detail::delete_program> id_;
 };
+
+// A shader storage buffer of `bytes` (contents from `data`, or zero), usage DYNAMIC_COPY.
+Buffer make_storage_buffer(size_t bytes, const void* data = nullptr);
+// Reads `bytes` from the start of a buffer back (for tests and diagnostics, never per frame).
+std::vector<uint8_t> read_buffer(GLuint buffer, size_t bytes);
+// How many times read_buffer and read_rgba have read GPU data back (tests check a frame adds 0).
+uint64_t readback_count();
+template <class T>
+std::vector<T> read_buffer_as(GLuint buffer, size_t count) {
+    const std::vector<uint8_t> bytes = read_buffer(buffer, count * sizeof(T));
+    std::vector<T> out(count);
+    std::memcpy(out.data(), bytes.data(), bytes.size());
+    return out;
+}
+// Dispatches `groups` work groups of the bound compute program, at most 65535 per dimension
+// (the rest spill into y), followed by a storage and image barrier.
+void dispatch_compute(GLuint groups);
 
 // RGBA32F texture of w × h (nearest filtering, clamped); `mip` allocates a full mip chain.
 Texture make_float_texture(int width, int height, bool mip = false, const float* rgba = nullptr);

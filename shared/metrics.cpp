@@ -143,6 +143,64 @@ ImageMetrics compare_images(const Image& test, const Image& reference, const Ima
     return m;
 }
 
+int ldr_byte(float linear, float exposure_ev) {
+    return int(std::lround(srgb_encode(linear * std::exp2(exposure_ev)) * 255.0f));
+}
+
+LdrMetrics compare_ldr(const Image& test, const Image& reference, float exposure_ev) {
+    check_sizes(test, reference, nullptr);
+    const int w = reference.width, h = reference.height;
+    if (w < 2 * kSsimRadius + 1 || h < 2 * kSsimRadius + 1)
+        throw std::invalid_argument("images are " + size_text(reference) +
+                                    "; MSSIM needs at least 11x11");
+    const size_t n = size_t(w) * size_t(h);
+    LdrMetrics m;
+    m.pixels = n;
+    std::vector<double> a(n), b(n), aa(n), bb(n), ab(n);
+    double squared = 0.0;
+    int lo = 255, hi = 0;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::vec3 ta = pixel_rgb(test, x, y), rb = pixel_rgb(reference, x, y);
+            std::array<int, 3> qa{}, qb{};
+            for (int c = 0; c < 3; ++c) {
+                qa[size_t(c)] = ldr_byte(ta[c], exposure_ev);
+                qb[size_t(c)] = ldr_byte(rb[c], exposure_ev);
+                const double d = double(qa[size_t(c)] - qb[size_t(c)]);
+                squared += d * d;
+                lo = std::min(lo, qb[size_t(c)]);
+                hi = std::max(hi, qb[size_t(c)]);
+            }
+            const auto luma = [](const std::array<int, 3>& q) {
+                return std::round(0.2989 * q[0] + 0.5870 * q[1] + 0.1140 * q[2]);
+            };
+            const size_t i = size_t(y) * size_t(w) + size_t(x);
+            a[i] = luma(qa), b[i] = luma(qb);
+            aa[i] = a[i] * a[i], bb[i] = b[i] * b[i], ab[i] = a[i] * b[i];
+        }
+    m.mse = squared / (3.0 * double(n));
+    m.range = hi - lo;
+    m.nrmse = m.range > 0 ? std::sqrt(m.mse) / double(m.range) : 0.0;
+    // Inside the border of kSsimRadius the truncated blur is the full window ('valid' windows).
+    const double c1 = (kSsimK1 * 255.0) * (kSsimK1 * 255.0);
+    const double c2 = (kSsimK2 * 255.0) * (kSsimK2 * 255.0);
+    const std::vector<double> ma = blur(a, w, h), mb = blur(b, w, h);
+    const std::vector<double> maa = blur(aa, w, h), mbb = blur(bb, w, h), mab = blur(ab, w, h);
+    double sum = 0.0;
+    size_t count = 0;
+    for (int y = kSsimRadius; y < h - kSsimRadius; ++y)
+        for (int x = kSsimRadius; x < w - kSsimRadius; ++x) {
+            const size_t i = size_t(y) * size_t(w) + size_t(x);
+            const double va = maa[i] - ma[i] * ma[i], vb = mbb[i] - mb[i] * mb[i];
+            const double cov = mab[i] - ma[i] * mb[i];
+            sum += ((2.0 * ma[i] * mb[i] + c1) * (2.0 * cov + c2)) /
+                   ((ma[i] * ma[i] + mb[i] * mb[i] + c1) * (va + vb + c2));
+            ++count;
+        }
+    m.mssim = sum / double(count);
+    return m;
+}
+
 Image relative_error_heatmap(const Image& test, const Image& reference, const Image* mask,
                              double max_error) {
     check_sizes(test, reference, mask);

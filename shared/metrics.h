@@ -42,6 +42,31 @@ double ssim(const Image& test, const Image& reference, const Image* mask = nullp
 // Per-pixel relative error e = sqrt(mean over channels of (x − y)² / (y² + ε)) mapped through
 // a colour ramp (black, purple, orange, pale yellow) from 0 to `max_error`; excluded pixels are
 // grey. Linear RGB, ready for write_image as PNG at exposure 0. Same exceptions as above.
+// The thesis metrics of Jimenez Kwast (2016, §4.1) on 8-bit images: both images are taken to
+// what a PNG of them holds (linear × 2^exposure_ev, clamped, sRGB-encoded, rounded to 0..255).
+//  - mse: Eq. 4.1 per R, G, B channel, averaged over the three, in 8-bit units² (his Table 6.1
+//    ranges 139.55..902.23);
+//  - nrmse: √mse / (I_max − I_min), the reference's 8-bit range over all channels. His printed
+//    Eq. 4.2 divides the MSE itself by the range, but every table row satisfies √MSE/NRMSE ≈ 206
+//    (902.23 / 0.1458, 167.09 / 0.0627, 3589.49 / 0.2908), so the RMSE is what he divided;
+//  - mssim: Wang et al. (2004) as in their reference code: 8-bit luma Y = round(0.2989 R + 0.5870 G
+//    + 0.1140 B) (the usual rgb2gray), 11×11 Gaussian window σ = 1.5, K1 = 0.01, K2 = 0.03,
+//    L = 255, mean over the windows that lie wholly inside the image, no downsampling.
+// He states neither the window nor the colour handling; these are Wang's defaults.
+struct LdrMetrics {
+    double mse = 0.0;
+    double nrmse = 0.0;  // 0 when the reference is flat
+    double mssim = 1.0;
+    int range = 0;  // I_max − I_min of the reference, 8-bit
+    size_t pixels = 0;
+};
+
+// Throws std::invalid_argument on a size mismatch or an image smaller than 11×11.
+LdrMetrics compare_ldr(const Image& test, const Image& reference, float exposure_ev = 0.0f);
+
+// The 8-bit value a PNG written at `exposure_ev` holds for a linear channel value.
+int ldr_byte(float linear, float exposure_ev = 0.0f);
+
 Image relative_error_heatmap(const Image& test, const Image& reference, const Image* mask,
                              double max_error);
 

@@ -15,9 +15,21 @@ inline constexpr std::array kGatherBackendNames = {"auto", "gl", "cpu"};
 // How the hemi-plane gather accounts for the part of the hemisphere the plane misses
 // (Larsen ch. 11: renormalise; Gautron 2006 Table 4.1: stretch the border pixels).
 // Where the indirect term comes from (DESIGN.md "Indirect methods on one scene graph"): each is an
-// ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11).
-enum class IndirectMethodKind { iim };
-inline constexpr std::array kIndirectMethodNames = {"iim"};
+// ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11);
+// `gpu_pm`: photons traced on the GPU, binned into screen tiles, cone-filtered (Jimenez Kwast
+// 2016).
+enum class IndirectMethodKind { iim, gpu_pm };
+inline constexpr std::array kIndirectMethodNames = {"iim", "gpu_pm"};
+
+// GPU photon mapping's radiance estimate: `standard`, eq. 5.6 (E = Σ Φ w / ((1 − 2/3k) π r²));
+// `kwast`, with the thesis code's extra factors (×100 photon power, 1/π at the bounce, N·L at the
+// estimate), for comparing with his numbers only.
+enum class GpuPmEstimator { standard, kwast };
+inline constexpr std::array kGpuPmEstimatorNames = {"standard", "kwast"};
+// Tile binning: `scatter`, each photon writes itself into the tiles its disc covers; `brute`, the
+// thesis's every-photon-against-every-tile test (§5.3.3.1), kept for comparison.
+enum class GpuPmBinning { scatter, brute };
+inline constexpr std::array kGpuPmBinningNames = {"scatter", "brute"};
 
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
@@ -78,6 +90,20 @@ struct IndirectSettings {
     IndirectMethodKind method = IndirectMethodKind::iim;
 };
 
+// GPU photon mapping (Jimenez Kwast 2016): photon paths per frame, accumulated while nothing
+// changes; the influence radius as a fraction of the scene's diagonal (his r is in scene units).
+struct GpuPmSettings {
+    int paths = 1000;           // photon paths per frame (thesis baseline: 1000)
+    int frames = 64;            // frames accumulated while the scene is static, then settled
+    float radius = 0.05f;       // photon influence radius / scene diagonal
+    int bounces = 1;            // indirect bounces stored (thesis: 1)
+    int low_res = 2;            // low-resolution pass: 1/low_res per axis; 1 = full resolution only
+    float edge_normal = 0.99f;  // refine where normals differ more (dot below this)
+    float edge_distance = 0.1f;  // ... or the low-res sample lies off the plane by this × radius
+    GpuPmEstimator estimator = GpuPmEstimator::standard;
+    GpuPmBinning binning = GpuPmBinning::scatter;
+};
+
 struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
@@ -103,6 +129,7 @@ struct Settings {
     AimSettings aim;
     GatherSettings gather;
     IndirectSettings indirect;
+    GpuPmSettings gpu_pm;
     ScheduleSettings schedule;
     CausticSettings caustics;
     DirectSettings direct;
@@ -191,6 +218,26 @@ void visit_settings(Settings& s, Visitor& v) {
     v.section("indirect", "the indirect term: which method supplies it");
     v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{
         "method", s.indirect.method, kIndirectMethodNames, "indirect method"});
+    v.end_section();
+    v.section("gpu_pm", "GPU photon mapping, Jimenez Kwast 2016 (--indirect gpu_pm)");
+    v.field(Field<int>{"paths", s.gpu_pm.paths, 1, 1e7, "photon paths per frame"});
+    v.field(Field<int>{"frames", s.gpu_pm.frames, 1, 1e6,
+                       "frames of photons accumulated while the scene is static"});
+    v.field(Field<float>{"radius", s.gpu_pm.radius, 1e-5, 10,
+                         "photon influence radius as a fraction of the scene diagonal"});
+    v.field(Field<int>{"bounces", s.gpu_pm.bounces, 1, 16, "indirect bounces stored"});
+    v.field(Field<int>{"low_res", s.gpu_pm.low_res, 1, 8,
+                       "low-resolution estimate at 1/low_res per axis; 1 = full resolution"});
+    v.field(Field<float>{"edge_normal", s.gpu_pm.edge_normal, -1, 1,
+                         "refine at full resolution where normals' dot is below this"});
+    v.field(Field<float>{"edge_distance", s.gpu_pm.edge_distance, 0, 100,
+                         "refine where a low-res sample lies off the plane by this x radius"});
+    v.field(EnumField<GpuPmEstimator, kGpuPmEstimatorNames.size()>{
+        "estimator", s.gpu_pm.estimator, kGpuPmEstimatorNames,
+        "standard (eq. 5.6) or kwast (his code's extra factors)"});
+    v.field(EnumField<GpuPmBinning, kGpuPmBinningNames.size()>{
+        "binning", s.gpu_pm.binning, kGpuPmBinningNames,
+        "scatter (photon writes its tiles) or brute (every photon against every tile)"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});

@@ -148,3 +148,12 @@ foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
               "--size: expects N or WxH with positive integers up to 16384, got '${size}'"
               bench soak --size ${size})
 endforeach()
+# compare --ldr: the 8-bit metrics of Jimenez Kwast (2016); an image against itself is perfect.
+ag_cli_test(compare_ldr_identical 0 "mssim   1.0000" compare --ldr docs/images/sponza.png
+            docs/images/sponza.png)
+ag_cli_test(compare_ldr_json 0 "\"mse\":0.0" compare --ldr --json docs/images/sponza.png
+            docs/images/sponza.png)
+# bench gpu_pm: its lists are checked before a GL context is made.
+ag_cli_test(bench_gpu_pm_bad_paths 2 "--paths: expects positive numbers separated by commas"
+            bench gpu_pm --paths 1,x)
+ag_cli_test(bench_gpu_pm_bad_radii 2 "--radii: expects positive numbers" bench gpu_pm --radii 0)

@@ -54,6 +54,9 @@ public:
     // The last entry of scene.changes this method has read (its sequence), so the pipeline can
     // trim the log; a method that never reads the log has nothing to wait for.
     virtual uint64_t changes_seen() const { return std::numeric_limits<uint64_t>::max(); }
+    // Whether the method reads the CPU photon maps and AIMs; if not, the pipeline traces no
+    // diffuse photons and builds no AIMs (caustic photons are traced either way).
+    virtual bool uses_photon_maps() const { return true; }
 };
 
 }  // namespace ag

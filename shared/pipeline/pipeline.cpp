@@ -20,10 +20,13 @@ const std::vector<int> kNoneGathered;
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
-                                                     const std::vector<glm::vec3>& aim_values) {
+                                                     const std::vector<glm::vec3>& aim_values,
+                                                     int width, int height) {
     switch (scene.settings.indirect.method) {
         case IndirectMethodKind::iim:
             return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
+        case IndirectMethodKind::gpu_pm:
+            return std::make_unique<GpuPmMethod>(scene, meshes, width, height);
     }
     return nullptr;
 }
@@ -44,7 +47,8 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);
     caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
     staged_aim_.assign(size_t(scene_.atlas.width) * size_t(scene_.atlas.height), glm::vec3(0.0f));
-    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_);
+    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_, width, height);
+    uses_photon_maps_ = indirect_->uses_photon_maps();
     if (mode_ == PipelineMode::full_budget) {
         // The baseline knows nothing of what changed: no verification, no moved-object query.
         photons_->set_verification(false);
@@ -66,36 +70,36 @@ void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
         if (on_cpu_work_start_) on_cpu_work_start_();
         const Clock::time_point t0 = Clock::now();
         cpu::PhotonMaps& maps = photons_->maps();
-        switch (mode_) {
-            case PipelineMode::full:
-                w.photons = photons_->frame(1 << 30);
-                break;
-            case PipelineMode::full_budget:
-                // Round robin through every group, trusting nothing: a new cycle when one ends.
-                if (photons_->queued_photons() == 0) photons_->invalidate_all();
-                w.photons = photons_->frame(budgets.retrace_photons);
-                break;
-            case PipelineMode::selective:
-                w.photons = photons_->frame(budgets.retrace_photons);
-                break;
-        }
+        if (uses_photon_maps_) switch (mode_) {
+                case PipelineMode::full:
+                    w.photons = photons_->frame(1 << 30);
+                    break;
+                case PipelineMode::full_budget:
+                    // Round robin through every group, trusting nothing: a new cycle when one ends.
+                    if (photons_->queued_photons() == 0) photons_->invalidate_all();
+                    w.photons = photons_->frame(budgets.retrace_photons);
+                    break;
+                case PipelineMode::selective:
+                    w.photons = photons_->frame(budgets.retrace_photons);
+                    break;
+            }
         const Clock::time_point t1 = Clock::now();
         const int aim_texels = scheduler_.aim_texels_left(scene_.settings, ms_between(t0, t1));
         cpu::PhotonFrameStats& p = w.photons;
-        switch (mode_) {
-            case PipelineMode::full:
-                p.aim_texels_rebuilt = aim_->rebuild_all(maps);
-                p.aim_surfaces_rebuilt = int(maps.surface_count());
-                break;
-            case PipelineMode::full_budget:
-                p.aim_texels_rebuilt =
-                    aim_->rebuild_round_robin(maps, aim_texels, &p.aim_surfaces_rebuilt);
-                break;
-            case PipelineMode::selective:
-                p.aim_texels_rebuilt =
-                    aim_->update(maps, budgets.aim_surfaces, aim_texels, &p.aim_surfaces_rebuilt);
-                break;
-        }
+        if (uses_photon_maps_) switch (mode_) {
+                case PipelineMode::full:
+                    p.aim_texels_rebuilt = aim_->rebuild_all(maps);
+                    p.aim_surfaces_rebuilt = int(maps.surface_count());
+                    break;
+                case PipelineMode::full_budget:
+                    p.aim_texels_rebuilt =
+                        aim_->rebuild_round_robin(maps, aim_texels, &p.aim_surfaces_rebuilt);
+                    break;
+                case PipelineMode::selective:
+                    p.aim_texels_rebuilt = aim_->update(maps, budgets.aim_surfaces, aim_texels,
+                                                        &p.aim_surfaces_rebuilt);
+                    break;
+            }
         const Clock::time_point t2 = Clock::now();
         w.caustics = caustic_tracer_->frame();
         w.photon_ms = ms_between(t0, t1);
@@ -115,7 +119,7 @@ PipelineStats Pipeline::frame() {
     ++caustic_frames_since_edit_;
     int invalidated = 0;
     if (mode_ == PipelineMode::full) {
-        invalidated = photons_->invalidate_all();
+        if (uses_photon_maps_) invalidated = photons_->invalidate_all();
         indirect_->invalidate_all();
     }
     const FrameBudgets budgets =
@@ -174,10 +178,12 @@ void Pipeline::hand_over(PipelineStats& stats) {
 int Pipeline::prime(int max_frames) {
     sync();
     const Clock::time_point t0 = Clock::now();
-    photons_->invalidate_all();
-    photons_->trace_all();
+    if (uses_photon_maps_) {
+        photons_->invalidate_all();
+        photons_->trace_all();
+    }
     const Clock::time_point t1 = Clock::now();
-    const int aim_texels = aim_->rebuild_all(photons_->maps());
+    const int aim_texels = uses_photon_maps_ ? aim_->rebuild_all(photons_->maps()) : 0;
     const Clock::time_point t2 = Clock::now();
     for (int a : aim_->take_dirty_texels()) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     std::vector<int> all(staged_aim_.size());
@@ -210,7 +216,8 @@ GLuint Pipeline::iim_texture() const {
 }
 
 bool Pipeline::converged() const {
-    return photons_->settled() && aim_dirty_.empty() && indirect_->settled() &&
+    return (photons_->settled() || !uses_photon_maps_) && aim_dirty_.empty() &&
+           indirect_->settled() &&
            caustic_frames_since_edit_ > scene_.settings.caustics.frames;  // +1: drawn next frame
 }
 

@@ -21,6 +21,7 @@
 #include "gpu/lightmap_texture.h"
 #include "gpu/scene_meshes.h"
 #include "shared/parallel.h"
+#include "shared/pipeline/gpu_pm_method.h"
 #include "shared/pipeline/iim_method.h"
 #include "shared/pipeline/indirect_method.h"
 #include "shared/pipeline/pipeline_stats.h"
@@ -39,11 +40,13 @@ struct PipelineOptions {
     std::function<void()> on_cpu_work_start, on_gl_drawn;
 };
 
-// Makes the indirect method named by settings.indirect.method.
+// Makes the indirect method named by settings.indirect.method (screen-space methods render at
+// width × height).
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
-                                                     const std::vector<glm::vec3>& aim_values);
+                                                     const std::vector<glm::vec3>& aim_values,
+                                                     int width, int height);
 
 class Pipeline {
 public:
@@ -107,6 +110,7 @@ private:
     std::unique_ptr<gpu::CausticsRenderer> caustics_;
     gpu::LightmapTexture aim_texture_;
     std::unique_ptr<IndirectMethod> indirect_;
+    bool uses_photon_maps_ = true;  // indirect_ reads the CPU photon maps and AIMs
     FrameScheduler scheduler_;
 
     // Results of the CPU side, written by the worker, read only after the hand-over.

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <stdexcept>
 
@@ -145,6 +146,74 @@ TEST(Metrics, HeatmapRampsFromBlackAndGreysOutMaskedPixels) {
     EXPECT_GT(luminance(heat.rgb(1, 0)), luminance(heat.rgb(0, 0)));  // e = 1/√1.01: near the top
     EXPECT_NEAR(heat.rgb(2, 0).r, heat.rgb(2, 0).g, 1e-6f);           // masked: grey
     EXPECT_NEAR(heat.rgb(2, 0).g, heat.rgb(2, 0).b, 1e-6f);
+}
+
+// 8-bit metrics (Jimenez Kwast 2016 §4.1). Images built from byte values decode back to them.
+namespace {
+Image from_bytes(int w, int h, const std::function<glm::ivec3(int, int)>& byte) {
+    Image image(w, h);
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const glm::ivec3 b = byte(x, y);
+            image.set_rgb(
+                x, y,
+                glm::vec3(srgb_decode(float(b.r) / 255.0f), srgb_decode(float(b.g) / 255.0f),
+                          srgb_decode(float(b.b) / 255.0f)));
+        }
+    return image;
+}
+}  // namespace
+
+TEST(LdrMetrics, BytesRoundTripThroughTheLinearImage) {
+    for (int b = 0; b < 256; ++b) EXPECT_EQ(ldr_byte(srgb_decode(float(b) / 255.0f)), b);
+    EXPECT_EQ(ldr_byte(7.0f), 255);  // clamped like the PNG
+    EXPECT_EQ(ldr_byte(-1.0f), 0);
+    EXPECT_EQ(ldr_byte(0.25f, 2.0f), 255);  // exposure scales before encoding
+}
+
+TEST(LdrMetrics, MseAndNrmseOfAKnownByteOffset) {
+    // Reference bytes 20..226 (range 206, as in the thesis's numbers); the test image is 5 brighter
+    // in red, 3 darker in blue: MSE = (25 + 0 + 9) / 3, NRMSE = √MSE / 206.
+    const auto ref = from_bytes(32, 24, [](int x, int y) {
+        return glm::ivec3(20 + (x * 7 + y * 3) % 200, 100, x == 0 && y == 0 ? 226 : 50);
+    });
+    const auto test = from_bytes(32, 24, [](int x, int y) {
+        return glm::ivec3(25 + (x * 7 + y * 3) % 200, 100, x == 0 && y == 0 ? 223 : 47);
+    });
+    const LdrMetrics m = compare_ldr(test, ref);
+    EXPECT_EQ(m.range, 206);
+    EXPECT_NEAR(m.mse, 34.0 / 3.0, 1e-9);
+    EXPECT_NEAR(m.nrmse, std::sqrt(34.0 / 3.0) / 206.0, 1e-12);
+    EXPECT_EQ(m.pixels, size_t(32 * 24));
+    const LdrMetrics same = compare_ldr(ref, ref);
+    EXPECT_EQ(same.mse, 0.0);
+    EXPECT_EQ(same.nrmse, 0.0);
+    EXPECT_NEAR(same.mssim, 1.0, 1e-12);
+}
+
+TEST(LdrMetrics, MssimOfFlatImagesIsTheLuminanceTerm) {
+    // σ = 0 in both: SSIM = (2 μx μy + C1) / (μx² + μy² + C1), C1 = (0.01·255)².
+    const auto a = from_bytes(16, 16, [](int, int) { return glm::ivec3(100); });
+    const auto b = from_bytes(16, 16, [](int, int) { return glm::ivec3(140); });
+    const double c1 = 2.55 * 2.55;
+    EXPECT_NEAR(compare_ldr(a, b).mssim, (2.0 * 100 * 140 + c1) / (100.0 * 100 + 140 * 140 + c1),
+                1e-12);
+}
+
+TEST(LdrMetrics, MssimAveragesOnlyWholeWindows) {
+    // A pixel differing on the border lies in no whole window's centre but in several windows;
+    // one in a corner lies in exactly one window (centre (5,5)), so MSSIM drops less there.
+    const auto base = [](int x, int y) { return glm::ivec3((x * 37 + y * 91) % 256); };
+    const auto ref = from_bytes(21, 21, base);
+    const auto corner = from_bytes(
+        21, 21, [&](int x, int y) { return x == 0 && y == 0 ? glm::ivec3(255) : base(x, y); });
+    const auto middle = from_bytes(
+        21, 21, [&](int x, int y) { return x == 10 && y == 10 ? glm::ivec3(255) : base(x, y); });
+    const double c = compare_ldr(corner, ref).mssim, mid = compare_ldr(middle, ref).mssim;
+    EXPECT_LT(c, 1.0);
+    EXPECT_LT(mid, c);
+    EXPECT_THROW(compare_ldr(from_bytes(10, 30, base), from_bytes(10, 30, base)),
+                 std::invalid_argument);
 }
 
 }  // namespace ag

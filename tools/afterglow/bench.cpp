@@ -19,6 +19,7 @@
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
+#include "tools/afterglow/bench_gpu_pm.h"
 #include "tools/afterglow/bench_soak.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/convergence.h"
@@ -27,7 +28,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak [SCENE...|SCENE:SCRIPT...] [options]",
+    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm [SCENE...|SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -47,7 +48,11 @@ const Command kBenchCommand{
     "of random edits (every dynamic object moved near its start and the first light's colour "
     "toggled, every frame) at --size N (default 64); RSS, frame time and the scene's change log "
     "sampled into --csv (default out/bench-soak.csv), growth from frame min(10000, N/10) to the "
-    "end reported (docs/robustness.md).",
+    "end reported (docs/robustness.md). 'gpu_pm [SCENE]': Jimenez Kwast's Table 6.1 grid for "
+    "--indirect gpu_pm (--paths x --radii, radius as a fraction of the scene diagonal) at --size "
+    "(default 256x256): stored photons, frame time mean and sigma over --frames (default 20), "
+    "pixels refined at full resolution, and with --reference the 8-bit MSE, NRMSE and MSSIM of the "
+    "frame (docs/gpu_pm.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -80,6 +85,11 @@ const Command kBenchCommand{
              "'settle': the modes to run, comma-separated (selective, full, full-budget); "
              "selective's speed-up needs full-budget",
              "selective,full,full-budget"),
+        text("paths", "LIST", "'gpu_pm': photon paths per frame, comma-separated",
+             "500,1000,2500,5000,7500"),
+        text("radii", "LIST", "'gpu_pm': radii as fractions of the scene diagonal, comma-separated",
+             "0.0125,0.025,0.05,0.075,0.1"),
+        text("reference", "REF.exr", "'gpu_pm': reference frame for the 8-bit metrics"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },
@@ -471,8 +481,16 @@ int run_bench(const Args& args) {
             args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
             size);
     }
+    if (what == "gpu_pm") {
+        int width = 0, height = 0;
+        bench_size(args, 256, 256, width, height);
+        return bench_gpu_pm(
+            args,
+            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell_kwast.json",
+            width, height);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle or soak)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak or gpu_pm)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

@@ -153,6 +153,7 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
 
     ConvergenceRun run;
     run.mode = mode;
+    run.indirect = scene.settings.indirect.method;
     run.component = component;
     run.frames.reserve(size_t(frames));
     double wall = 0.0;
@@ -209,7 +210,12 @@ std::string convergence_csv(const ConvergenceRun& run) {
     std::ostringstream csv;
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
            "retraced,aim_texels,iim_texels,iim_pending\n";
-    const char* method = kPipelineModeNames[size_t(run.mode)];
+    // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
+    // (and its mode, unless selective) so both join one methods plot.
+    std::string method = kPipelineModeNames[size_t(run.mode)];
+    if (run.indirect != IndirectMethodKind::iim)
+        method = std::string(kIndirectMethodNames[size_t(run.indirect)]) +
+                 (run.mode == PipelineMode::selective ? "" : "-" + method);
     for (const FrameRecord& r : run.frames)
         csv << method << ',' << r.frame << ',' << r.wall_s << ',' << r.frame_ms << ','
             << (r.edited ? 1 : 0) << ',' << r.relmse << ',' << r.rmse << ',' << r.ssim << ','

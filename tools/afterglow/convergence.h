@@ -63,6 +63,7 @@ struct SettleAnalysis {
 
 struct ConvergenceRun {
     PipelineMode mode = PipelineMode::selective;
+    IndirectMethodKind indirect = IndirectMethodKind::iim;
     std::string component;
     std::vector<FrameRecord> frames;
     SettleAnalysis settle;

@@ -1,0 +1,193 @@
+// GPU photon mapping (Jimenez Kwast 2016) as an indirect method: photon energy against Embree for
+// every light type, tile lists against the thesis's brute-force binning, no CPU rays and no
+// read-back per frame, restart after an edit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "../gpu/gl_fixture.h"
+#include "cpu/ray_tracer.h"
+#include "cpu/sampling.h"
+#include "gpu/g_buffer.h"
+#include "gpu/gpu_photon_mapper.h"
+#include "shared/photon_sampling.h"
+#include "shared/pipeline/gpu_pm_method.h"
+#include "shared/pipeline/pipeline.h"
+#include "shared/scene_edit.h"
+#include "shared/scene_file.h"
+
+namespace ag {
+
+namespace {
+
+Scene cornell() { return load_scene(AG_SOURCE_DIR "/scenes/cornell.json"); }
+
+// The cornell scene with its light replaced by one of another type near the ceiling.
+Scene cornell_with(LightType type) {
+    Scene s = cornell();
+    Light& l = s.lights.at(0);
+    const glm::vec3 c = l.position;
+    l.type = type;
+    if (type == LightType::quad) {
+        l.corners = {c + glm::vec3(-60, -1, -60), c + glm::vec3(60, -1, -60),
+                     c + glm::vec3(60, -1, 60), c + glm::vec3(-60, -1, 60)};
+        if (glm::dot(l.quad_normal(), glm::vec3(0, 1, 0)) > 0.0f)
+            std::swap(l.corners[1], l.corners[3]);
+        l.radiance = glm::vec3(20.0f);
+    } else if (type == LightType::spot) {
+        l.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+        l.cone_inner = 25.0f;
+        l.cone_outer = 50.0f;
+    } else if (type == LightType::sun) {
+        l.direction = glm::normalize(glm::vec3(0.2f, -1.0f, 0.9f));  // through the open front
+        l.irradiance = glm::vec3(5.0f);
+        update_sun_discs(s);
+    }
+    init_versions(s);
+    return s;
+}
+
+// Paths out of `n` whose bounce off the first (diffuse) hit hits again, with Embree and the CPU's
+// own emission (cpu::emission_ray) and independent random numbers.
+double embree_second_hit_fraction(const Scene& scene, int n) {
+    cpu::RayTracer rays(scene);
+    std::mt19937 rng(99);
+    std::uniform_real_distribution<float> u(0.0f, 1.0f);
+    int second = 0;
+    double weight_sum = 0.0;
+    for (int i = 0; i < n; ++i) {
+        const cpu::EmissionRay e = cpu::emission_ray(scene, scene.lights[0], {u(rng), u(rng)},
+                                                     {u(rng), u(rng)}, rays.epsilon());
+        weight_sum += e.weight;
+        const cpu::RayHit h = rays.intersect(e.ray);
+        if (!h.hit || scene.objects[size_t(h.object)].material.type != MaterialType::diffuse)
+            continue;
+        glm::vec3 nrm = h.normal;
+        if (glm::dot(nrm, e.ray.direction) > 0.0f) nrm = -nrm;
+        const glm::vec3 d = photon::cosine_direction({u(rng), u(rng)}, nrm);
+        if (rays.intersect({h.position + rays.epsilon() * nrm, d}).hit) second += 1;
+    }
+    EXPECT_NEAR(weight_sum / n, 1.0, 0.05);  // emission weights average 1 (spot)
+    return double(second) / n;
+}
+
+}  // namespace
+
+class GpuPmTest : public test::GlTest {};
+
+TEST_F(GpuPmTest, StoredOverEmittedMatchesEmbreesHitFractionForEveryLightType) {
+    for (const LightType type :
+         {LightType::point, LightType::quad, LightType::spot, LightType::sun}) {
+        Scene scene = cornell_with(type);
+        scene.settings.gpu_pm.paths = 200000;
+        scene.settings.gpu_pm.frames = 1;
+        gpu::SceneMeshes meshes(scene);
+        gpu::GBuffer g(scene, meshes, 16, 16);
+        gpu::GpuPhotonMapper m(scene, g);
+        m.trace();
+        const double gpu = double(m.stored_photons()) / double(m.paths_traced());
+        const double embree = embree_second_hit_fraction(scene, 200000);
+        EXPECT_NEAR(gpu / embree, 1.0, 0.02)
+            << "light type " << int(type) << ": gpu " << gpu << " embree " << embree;
+        EXPECT_GT(gpu, 0.05);
+        std::printf("light type %d: stored/emitted %.4f, Embree %.4f\n", int(type), gpu, embree);
+    }
+}
+
+TEST_F(GpuPmTest, StoredPowerIsEmittedPowerTimesTheBounce) {
+    // Single bounce: every stored photon carries Φ_light/N × albedo of the surface it left, so
+    // Σ power ≤ Φ · max albedo and ≥ 0; with a grey box the ratio is stored fraction × albedo.
+    Scene scene = cornell();
+    for (Object& o : scene.objects) o.material.albedo = glm::vec3(0.5f);
+    scene.settings.gpu_pm.paths = 20000;
+    scene.settings.gpu_pm.frames = 1;
+    gpu::SceneMeshes meshes(scene);
+    gpu::GBuffer g(scene, meshes, 16, 16);
+    gpu::GpuPhotonMapper m(scene, g);
+    m.trace();
+    glm::dvec3 sum(0.0);
+    const auto photons = m.read_photons();
+    for (const auto& p : photons) sum += glm::dvec3(p.power);
+    const glm::dvec3 expected = glm::dvec3(scene.lights[0].power()) * 0.5 *
+                                (double(photons.size()) / double(m.paths_traced()));
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(sum[c] / expected[c], 1.0, 1e-4);
+    // estimator: kwast carries his code's ×100 at emission and 1/π at the bounce (same paths).
+    scene.settings.gpu_pm.estimator = GpuPmEstimator::kwast;
+    gpu::GpuPhotonMapper kwast(scene, g);
+    kwast.trace();
+    glm::dvec3 kwast_sum(0.0);
+    for (const auto& p : kwast.read_photons()) kwast_sum += glm::dvec3(p.power);
+    for (int c = 0; c < 3; ++c) EXPECT_NEAR(kwast_sum[c] / sum[c], 100.0 / M_PI, 1e-3);
+}
+
+TEST_F(GpuPmTest, TileListsEqualTheBruteForceBinning) {
+    Scene scene = cornell();
+    scene.settings.gpu_pm.paths = 3000;
+    scene.settings.gpu_pm.frames = 1;
+    gpu::SceneMeshes meshes(scene);
+    gpu::GBuffer g(scene, meshes, 100, 76);  // partial tiles on both edges
+    gpu::GpuPhotonMapper m(scene, g);
+    m.trace();
+    g.render();
+    scene.settings.gpu_pm.binning = GpuPmBinning::scatter;
+    m.render();
+    const auto scatter = m.read_tile_lists();
+    EXPECT_FALSE(m.index_overflow());
+    scene.settings.gpu_pm.binning = GpuPmBinning::brute;
+    m.render();
+    const auto brute = m.read_tile_lists();
+    ASSERT_EQ(scatter.size(), size_t(m.tiles_x() * m.tiles_y()));
+    size_t entries = 0, empty = 0;
+    for (size_t t = 0; t < brute.size(); ++t) {
+        EXPECT_EQ(scatter[t], brute[t]) << "tile " << t;
+        entries += brute[t].size();
+        empty += brute[t].empty() ? 1 : 0;
+    }
+    EXPECT_GT(entries, 3000u);           // photons reach several tiles each
+    EXPECT_LT(empty, brute.size() / 2);  // and most tiles hold some
+}
+
+TEST_F(GpuPmTest, NoCpuRaysAndNoReadBackPerFrame) {
+    Scene scene = cornell();
+    scene.settings.indirect.method = IndirectMethodKind::gpu_pm;
+    scene.settings.gpu_pm.paths = 500;
+    scene.settings.gpu_pm.frames = 4;
+    Pipeline pipeline(scene, PipelineOptions{32, 32});
+    const uint64_t rays = pipeline.photons().rays().rays_cast();
+    const uint64_t readbacks = gpu::readback_count();
+    for (int f = 0; f < 6; ++f) pipeline.frame();
+    EXPECT_EQ(pipeline.photons().rays().rays_cast(), rays);  // no CPU photon ray for the term
+    EXPECT_EQ(gpu::readback_count(), readbacks);
+    const auto* method = dynamic_cast<const GpuPmMethod*>(&pipeline.indirect());
+    ASSERT_NE(method, nullptr);
+    EXPECT_EQ(method->mapper().frames_accumulated(), 4);  // accumulated, then settled
+    EXPECT_TRUE(method->settled());
+    EXPECT_GT(method->mapper().stored_photons(), 1000u);
+}
+
+TEST_F(GpuPmTest, AnEditRestartsTheAccumulationACameraMoveDoesNot) {
+    Scene scene = cornell();
+    scene.settings.indirect.method = IndirectMethodKind::gpu_pm;
+    scene.settings.gpu_pm.paths = 200;
+    scene.settings.gpu_pm.frames = 3;
+    Pipeline pipeline(scene, PipelineOptions{32, 32});
+    for (int f = 0; f < 3; ++f) pipeline.frame();
+    const auto* method = dynamic_cast<const GpuPmMethod*>(&pipeline.indirect());
+    ASSERT_NE(method, nullptr);
+    EXPECT_TRUE(method->settled());
+    pipeline.sync();
+    Camera camera = scene.camera;
+    camera.eye.x += 10.0f;
+    set_camera(scene, camera);
+    pipeline.frame();
+    EXPECT_TRUE(method->settled());
+    EXPECT_EQ(method->restarts(), 0);
+    pipeline.sync();
+    set_albedo(scene, 1, glm::vec3(0.2f));
+    pipeline.frame();
+    EXPECT_EQ(method->restarts(), 1);
+    EXPECT_EQ(method->mapper().frames_accumulated(), 1);
+}
+
+}  // namespace ag
