@@ -347,7 +347,8 @@ private:
                 const glm::uvec3 t = flip ? glm::uvec3(a, c, b) : glm::uvec3(a, b, c);
                 part.mesh.triangles.push_back(t);
                 if (!vertex_uv.empty())
-                    for (int k = 0; k < 3; ++k) part.mesh.texcoords.push_back(vertex_uv[t[k]]);
+                    for (int corner = 0; corner < 3; ++corner)
+                        part.mesh.texcoords.push_back(vertex_uv[t[corner]]);
             };
             if (mode == TINYGLTF_MODE_TRIANGLES)
                 for (size_t i = 0; i + 2 < indices.size(); i += 3)
