@@ -16,8 +16,16 @@ inline constexpr std::array kGatherBackendNames = {"auto", "gl", "cpu"};
 // (Larsen ch. 11: renormalise; Gautron 2006 Table 4.1: stretch the border pixels).
 // Where the indirect term comes from (DESIGN.md "Indirect methods on one scene graph"): each is an
 // ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11).
-enum class IndirectMethodKind { iim };
-inline constexpr std::array kIndirectMethodNames = {"iim"};
+// `vpl`: a screen-space sum over virtual point lights with visibility (Barczak 2006).
+enum class IndirectMethodKind { iim, vpl };
+inline constexpr std::array kIndirectMethodNames = {"iim", "vpl"};
+
+// Where the VPLs come from (Barczak 2006 §4.1): `photons`, the stored hits of the first
+// vpl.photons_per_group photons of every QMC group of the selective photon tracer, so the set
+// follows edits through group invalidation; `random_walk`, the thesis's static set of cosine
+// random walks (power × BRDF / paths, at most vpl.walk_bounces bounces), traced once.
+enum class VplSource { photons, random_walk };
+inline constexpr std::array kVplSourceNames = {"photons", "random_walk"};
 
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
@@ -78,6 +86,16 @@ struct IndirectSettings {
     IndirectMethodKind method = IndirectMethodKind::iim;
 };
 
+struct VplSettings {
+    VplSource source = VplSource::photons;
+    int photons_per_group = 4;    // photons of each group whose hits become VPLs (power × P/k)
+    int walk_paths = 275;         // random_walk: paths per light (thesis Fig. 5-10: 275 indirect)
+    int walk_bounces = 5;         // random_walk: VPLs stored along each path at most (thesis: 5)
+    float clamp = 0.0f;           // 1/d² is clamped at 1/clamp² (world units); 0 = no clamp
+    int updates_per_frame = 100;  // K: VPLs whose visibility is recomputed per frame (thesis: 100)
+    int resolution_divisor = 4;   // the screen-space term is computed at frame size / this
+};
+
 struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
@@ -103,6 +121,7 @@ struct Settings {
     AimSettings aim;
     GatherSettings gather;
     IndirectSettings indirect;
+    VplSettings vpl;
     ScheduleSettings schedule;
     CausticSettings caustics;
     DirectSettings direct;
@@ -191,6 +210,21 @@ void visit_settings(Settings& s, Visitor& v) {
     v.section("indirect", "the indirect term: which method supplies it");
     v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{
         "method", s.indirect.method, kIndirectMethodNames, "indirect method"});
+    v.end_section();
+    v.section("vpl", "virtual point lights with visibility, Barczak 2006");
+    v.field(EnumField<VplSource, kVplSourceNames.size()>{"source", s.vpl.source, kVplSourceNames,
+                                                         "where the VPLs come from"});
+    v.field(Field<int>{"photons_per_group", s.vpl.photons_per_group, 1, 1e6,
+                       "photons of each QMC group whose hits become VPLs"});
+    v.field(Field<int>{"walk_paths", s.vpl.walk_paths, 1, 1e7, "random_walk: paths per light"});
+    v.field(Field<int>{"walk_bounces", s.vpl.walk_bounces, 1, 1000,
+                       "random_walk: VPLs along each path at most"});
+    v.field(Field<float>{"clamp", s.vpl.clamp, 0, 1e30,
+                         "1/d^2 clamped at 1/clamp^2 (world units); 0 = off"});
+    v.field(Field<int>{"updates_per_frame", s.vpl.updates_per_frame, 1, 1e7,
+                       "VPLs whose visibility is recomputed per frame"});
+    v.field(Field<int>{"resolution_divisor", s.vpl.resolution_divisor, 1, 64,
+                       "screen-space term at frame size / this"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});
