@@ -39,11 +39,13 @@ struct PipelineOptions {
     std::function<void()> on_cpu_work_start, on_gl_drawn;
 };
 
-// Makes the indirect method named by settings.indirect.method.
+// Makes the indirect method named by settings.indirect.method (screen-space methods compute
+// their term for a width × height frame).
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
-                                                     const std::vector<glm::vec3>& aim_values);
+                                                     const std::vector<glm::vec3>& aim_values,
+                                                     int width, int height);
 
 class Pipeline {
 public:

@@ -1,0 +1,91 @@
+// The indirect term as a screen-space sum over virtual point lights with visibility (Barczak
+// 2006 §4.3): E(x) = Σ_i Φ_i/π · G(x, i) · V(x, i), computed at the visible points of a G-buffer
+// (frame size / vpl.resolution_divisor) and read by the frame per pixel. VPLs come from the
+// selective photon tracer's groups (cpu::group_vpls), one slot per (light, group), so an edit
+// that invalidates a group changes only its slot; or from the thesis's static random walks.
+// Visibility here is exact (Embree shadow rays, the CPU backend); a slot's contribution is
+// recomputed when its VPLs change or a moved object may change what they see, at most
+// vpl.updates_per_frame VPLs a frame, brightest × longest stale first (Barczak §4.6's shadow-map
+// update priority), so the term is current ⌈N/K⌉ frames after an edit.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+#include "cpu/ray_tracer.h"
+#include "cpu/vpl_shading.h"
+#include "cpu/vpl_source.h"
+#include "gpu/gl_objects.h"
+#include "shared/parallel.h"
+#include "shared/pipeline/indirect_method.h"
+
+namespace ag {
+
+class VplMethod final : public IndirectMethod {
+public:
+    // `width` × `height`: the frame the term is composed into.
+    VplMethod(const Scene& scene, int width, int height);
+
+    IndirectMethodKind kind() const override { return IndirectMethodKind::vpl; }
+    void update(const IndirectInputs& in, PipelineStats& stats) override;
+    void hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) override;
+    void invalidate_all() override;
+    void prime(cpu::PhotonSimulation& photons, uint64_t frame) override;
+    gpu::IndirectTerm term() const override;
+    bool settled() const override { return stale_vpls() == 0 && stale_slots() == 0; }
+    uint64_t changes_seen() const override { return seen_sequence_; }
+
+    // The VPLs the term shows now, slot by slot (for the VPL view and tests).
+    std::vector<cpu::Vpl> vpls() const;
+    int vpl_count() const;
+    int stale_slots() const;
+    int stale_vpls() const;  // VPLs of stale slots (their shown or pending set, the larger)
+    // Σ over shown slots of what vpl.clamp removed / the unclamped energy (0 without a clamp).
+    double clamp_bias() const;
+    int term_width() const { return tw_; }
+    int term_height() const { return th_; }
+    // E (W/m², rows top-first) at the G-buffer points as shown now.
+    const std::vector<glm::vec3>& irradiance() const { return sum_; }
+    const std::vector<cpu::SurfacePoint>& points() const { return points_; }
+
+private:
+    struct Slot {
+        std::vector<cpu::Vpl> shown, next;  // `next`: the VPLs to show once it is updated
+        bool has_next = false;
+        bool stale = false;
+        uint64_t stale_since = 0;
+        std::vector<glm::vec3> e;  // its contribution at every point
+        double energy = 0.0, clamped = 0.0;
+        double brightness = 0.0;  // max channel of Σ power (the priority's "intensity")
+    };
+
+    // Casts the G-buffer's camera rays; returns the points that differ from before.
+    std::vector<size_t> make_points();
+    // Re-shades every slot's shown VPLs at `changed` points only (a moved object uncovered or
+    // covered them: their sum must be whole at once, not over frames).
+    void reshade_points(const std::vector<size_t>& changed);
+    // Marks a slot for recomputation (keeping how long it has been stale).
+    void mark(Slot& s, uint64_t frame);
+    void take_vpls(cpu::PhotonSimulation& photons, uint64_t frame);
+    void shade(Slot& s);
+    void upload();
+    // Reads scene changes: true if an object moved (visibility may change for every VPL).
+    bool read_changes();
+
+    const Scene& scene_;
+    int width_, height_, tw_, th_;
+    cpu::RayTracer rays_;
+    ThreadPool pool_;
+    std::vector<cpu::SurfacePoint> points_;  // [y * tw + x], y top-first; zero normal: none
+    std::vector<Slot> slots_;
+    std::vector<glm::vec3> sum_;
+    gpu::Texture texture_;
+    uint64_t revision_ = 1;
+    uint64_t camera_version_ = 0;
+    uint64_t seen_sequence_ = 0;
+    uint64_t frame_ = 0;
+    size_t round_robin_ = 0;  // full_budget: next slot
+};
+
+}  // namespace ag
