@@ -12,19 +12,9 @@
 #include "cpu/photon_map.h"
 #include "cpu/ray_tracer.h"
 #include "shared/scene.h"
+#include "shared/vpl.h"
 
 namespace ag::cpu {
-
-// Radiant intensity I(ω) = power/π · cos θ towards ω in front of `normal`, so the irradiance at a
-// point x with normal n is E = power/π · cos θ_l cos θ_x / d² (Barczak eq. in §4.3, times V).
-struct Vpl {
-    glm::vec3 position{0.0f};  // world space
-    glm::vec3 normal{0.0f};    // unit, world space: the side it emits to
-    glm::vec3 power{0.0f};     // reflected flux Φ_in · ρ, W
-    int light = -1, group = -1;
-    int bounce = 0;  // 0: its flux came straight from the light
-    bool operator==(const Vpl&) const = default;
-};
 
 // The VPLs of one photon group: every stored hit of its first `photons` photons (all of them if
 // there are fewer), with power Φ_hit · ρ · P/photons so that the VPLs of the whole group carry

@@ -47,22 +47,27 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
         gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
         gl::DeleteShader(s);
         throw GlError("shader '" + name +
-                      (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
+                      (type == GL_VERTEX_SHADER     ? "' (vertex)"
+                       : type == GL_GEOMETRY_SHADER ? "' (geometry)"
+                                                    : "' (fragment)") +
                       " does not compile:\n" + log);
     }
     return s;
 }
 }  // namespace
 
-Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment) {
-    const GLuint vs = compile(name, GL_VERTEX_SHADER, vertex);
-    const GLuint fs = compile(name, GL_FRAGMENT_SHADER, fragment);
+Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment)
+    : Program(name, vertex, "", fragment) {}
+
+Program::Program(const std::string& name, const std::string& vertex, const std::string& geometry,
+                 const std::string& fragment) {
+    std::vector<GLuint> shaders = {compile(name, GL_VERTEX_SHADER, vertex)};
+    if (!geometry.empty()) shaders.push_back(compile(name, GL_GEOMETRY_SHADER, geometry));
+    shaders.push_back(compile(name, GL_FRAGMENT_SHADER, fragment));
     id_ = Handle<detail::delete_program>(gl::CreateProgram());
-    gl::AttachShader(id_.get(), vs);
-    gl::AttachShader(id_.get(), fs);
+    for (GLuint sh : shaders) gl::AttachShader(id_.get(), sh);
     gl::LinkProgram(id_.get());
-    gl::DeleteShader(vs);
-    gl::DeleteShader(fs);
+    for (GLuint sh : shaders) gl::DeleteShader(sh);
     GLint ok = 0;
     gl::GetProgramiv(id_.get(), GL_LINK_STATUS, &ok);
     if (!ok) {

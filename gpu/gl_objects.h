@@ -74,6 +74,9 @@ class Program {
 public:
     Program() = default;
     Program(const std::string& name, const std::string& vertex, const std::string& fragment);
+    // With a geometry stage between them (layered rendering: gl_Layer); "" = none.
+    Program(const std::string& name, const std::string& vertex, const std::string& geometry,
+            const std::string& fragment);
     void use() const { gl::UseProgram(id_.get()); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
     void set(const char* u, int v) const { gl::Uniform1i(location(u), v); }

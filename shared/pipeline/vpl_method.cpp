@@ -36,11 +36,11 @@ VplMethod::VplMethod(const Scene& scene, int width, int height)
         slots_.resize(scene_.lights.size() * size_t(scene_.settings.photons.groups));
     } else {
         // The thesis's static set: traced once, in the scene as it is now.
-        const std::vector<cpu::Vpl> walk = cpu::random_walk_vpls(
-            scene_, rays_, vs.walk_paths, vs.walk_bounces, scene_.settings.seed);
+        const std::vector<Vpl> walk = cpu::random_walk_vpls(scene_, rays_, vs.walk_paths,
+                                                            vs.walk_bounces, scene_.settings.seed);
         const int per_light = (vs.walk_paths + kWalkPathsPerSlot - 1) / kWalkPathsPerSlot;
         slots_.resize(scene_.lights.size() * size_t(per_light));
-        for (const cpu::Vpl& v : walk) {
+        for (const Vpl& v : walk) {
             Slot& s = slots_[size_t(v.light * per_light + v.group / kWalkPathsPerSlot)];
             s.next.push_back(v);
             s.has_next = true;
@@ -123,7 +123,7 @@ void VplMethod::shade(Slot& s) {
     s.e.assign(points_.size(), glm::vec3(0.0f));
     glm::dvec3 power = cpu::total_power(s.shown);
     s.brightness = std::max({power.x, power.y, power.z});
-    cpu::VplShadeStats st;
+    VplShadeStats st;
     if (!s.shown.empty())
         cpu::add_vpl_irradiance(rays_, points_, s.shown.data(), s.shown.size(),
                                 scene_.settings.vpl.clamp, s.e.data(), pool_, &st);
@@ -233,7 +233,7 @@ void VplMethod::take_vpls(cpu::PhotonSimulation& photons, uint64_t frame) {
     if (scene_.settings.vpl.source != VplSource::photons) return;  // the thesis's set is static
     const int groups = scene_.settings.photons.groups;
     const int k = scene_.settings.vpl.photons_per_group;
-    std::vector<cpu::Vpl> now;
+    std::vector<Vpl> now;
     for (size_t l = 0; l < scene_.lights.size(); ++l)
         for (int g = 0; g < groups; ++g) {
             // A queued group still holds the hits of the old state: keep showing them until it
@@ -242,7 +242,7 @@ void VplMethod::take_vpls(cpu::PhotonSimulation& photons, uint64_t frame) {
             now.clear();
             cpu::group_vpls(scene_, photons.maps(), int(l), g, k, now);
             Slot& s = slots_[l * size_t(groups) + size_t(g)];
-            const std::vector<cpu::Vpl>& current = s.has_next ? s.next : s.shown;
+            const std::vector<Vpl>& current = s.has_next ? s.next : s.shown;
             if (now == current && (s.has_next || !s.e.empty() || now.empty())) continue;
             s.next = now;
             s.has_next = true;
@@ -269,8 +269,8 @@ gpu::IndirectTerm VplMethod::term() const {
     return gpu::IndirectTerm{texture_.get(), gpu::IndirectSpace::screen, revision_};
 }
 
-std::vector<cpu::Vpl> VplMethod::vpls() const {
-    std::vector<cpu::Vpl> out;
+std::vector<Vpl> VplMethod::vpls() const {
+    std::vector<Vpl> out;
     for (const Slot& s : slots_) out.insert(out.end(), s.shown.begin(), s.shown.end());
     return out;
 }

@@ -37,7 +37,7 @@ public:
     uint64_t changes_seen() const override { return seen_sequence_; }
 
     // The VPLs the term shows now, slot by slot (for the VPL view and tests).
-    std::vector<cpu::Vpl> vpls() const;
+    std::vector<Vpl> vpls() const;
     int vpl_count() const;
     int stale_slots() const;
     int stale_vpls() const;  // VPLs of stale slots (their shown or pending set, the larger)
@@ -51,7 +51,7 @@ public:
 
 private:
     struct Slot {
-        std::vector<cpu::Vpl> shown, next;  // `next`: the VPLs to show once it is updated
+        std::vector<Vpl> shown, next;  // `next`: the VPLs to show once it is updated
         bool has_next = false;
         bool stale = false;
         uint64_t stale_since = 0;
