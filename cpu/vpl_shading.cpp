@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <glm/gtc/constants.hpp>
 
+#include "shared/camera.h"
+
 namespace ag::cpu {
 
 float vpl_geometry(const Vpl& vpl, const glm::vec3& x, const glm::vec3& n, float clamp,
@@ -17,6 +19,30 @@ float vpl_geometry(const Vpl& vpl, const glm::vec3& x, const glm::vec3& n, float
     if (cos_x <= 0.0f || cos_l <= 0.0f) return 0.0f;
     if (unclamped) *unclamped = cos_x * cos_l / d2;
     return cos_x * cos_l / std::max(d2, clamp * clamp);
+}
+
+std::vector<SurfacePoint> camera_points(const Scene& scene, const RayTracer& rays, int width,
+                                        int height, ThreadPool& pool) {
+    std::vector<SurfacePoint> points(size_t(width) * size_t(height));
+    const Camera& cam = scene.camera;
+    pool.parallel_for(
+        size_t(height),
+        [&](size_t y) {
+            for (int x = 0; x < width; ++x) {
+                const float px = (float(x) + 0.5f) * float(cam.width) / float(width);
+                const float py = (float(y) + 0.5f) * float(cam.height) / float(height);
+                const glm::vec3 dir = camera_ray_direction(cam, px, py);
+                const RayHit hit = rays.intersect({cam.eye, dir});
+                if (!hit.hit) continue;
+                if (scene.objects[size_t(hit.object)].material.type != MaterialType::diffuse)
+                    continue;
+                SurfacePoint& p = points[y * size_t(width) + size_t(x)];
+                p.position = hit.position;
+                p.normal = glm::dot(dir, hit.normal) < 0.0f ? hit.normal : -hit.normal;
+            }
+        },
+        1);
+    return points;
 }
 
 bool vpl_visible(const RayTracer& rays, const Vpl& vpl, const glm::vec3& x, const glm::vec3& n) {

@@ -15,12 +15,12 @@
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
 #include "shared/scene.h"
+#include "shared/settings.h"
 #include "shared/vpl.h"
 
 namespace ag::gpu {
 
-enum class VplMapKind { octahedral, paraboloid };
-inline constexpr std::array kVplMapKindNames = {"octahedral", "paraboloid"};
+using ag::VplMapKind;  // shared/settings.h
 
 // GLSL shared by the map passes and their readers: the VPL buffer layout (three vec4 per VPL:
 // position, normal, power; binding 0), the tangent frame about a VPL's normal (Duff et al.

@@ -86,8 +86,19 @@ struct IndirectSettings {
     IndirectMethodKind method = IndirectMethodKind::iim;
 };
 
+// How VPL visibility is found: `gl`, hemispherical shadow maps (gpu::VplShadowMaps) and a
+// per-pixel sum in a shader, every frame; `cpu`, exact Embree shadow rays per point and VPL.
+enum class VplBackend { gl, cpu };
+inline constexpr std::array kVplBackendNames = {"gl", "cpu"};
+// The shadow maps' parameterisation of the hemisphere (Barczak §4.2, Fig. 4-3).
+enum class VplMapKind { octahedral, paraboloid };
+inline constexpr std::array kVplMapKindNames = {"octahedral", "paraboloid"};
+
 struct VplSettings {
     VplSource source = VplSource::photons;
+    VplBackend backend = VplBackend::gl;
+    VplMapKind map = VplMapKind::octahedral;
+    int map_size = 128;           // shadow-map texels across (thesis: 512 with 25-100 lights)
     int photons_per_group = 4;    // photons of each group whose hits become VPLs (power × P/k)
     int walk_paths = 275;         // random_walk: paths per light (thesis Fig. 5-10: 275 indirect)
     int walk_bounces = 5;         // random_walk: VPLs stored along each path at most (thesis: 5)
@@ -214,6 +225,11 @@ void visit_settings(Settings& s, Visitor& v) {
     v.section("vpl", "virtual point lights with visibility, Barczak 2006");
     v.field(EnumField<VplSource, kVplSourceNames.size()>{"source", s.vpl.source, kVplSourceNames,
                                                          "where the VPLs come from"});
+    v.field(EnumField<VplBackend, kVplBackendNames.size()>{"backend", s.vpl.backend,
+                                                           kVplBackendNames, "visibility backend"});
+    v.field(EnumField<VplMapKind, kVplMapKindNames.size()>{"map", s.vpl.map, kVplMapKindNames,
+                                                           "shadow-map parameterisation"});
+    v.field(Field<int>{"map_size", s.vpl.map_size, 8, 4096, "shadow-map texels across"});
     v.field(Field<int>{"photons_per_group", s.vpl.photons_per_group, 1, 1e6,
                        "photons of each QMC group whose hits become VPLs"});
     v.field(Field<int>{"walk_paths", s.vpl.walk_paths, 1, 1e7, "random_walk: paths per light"});

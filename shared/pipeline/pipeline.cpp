@@ -27,7 +27,7 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
         case IndirectMethodKind::iim:
             return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
         case IndirectMethodKind::vpl:
-            return std::make_unique<VplMethod>(scene, width, height);
+            return std::make_unique<VplMethod>(scene, meshes, width, height);
     }
     return nullptr;
 }

@@ -5,7 +5,6 @@
 #include <numeric>
 
 #include "gpu/gl.h"
-#include "shared/camera.h"
 #include "shared/scene_edit.h"
 
 namespace ag {
@@ -15,8 +14,9 @@ namespace {
 constexpr int kWalkPathsPerSlot = 25;
 }  // namespace
 
-VplMethod::VplMethod(const Scene& scene, int width, int height)
+VplMethod::VplMethod(const Scene& scene, const gpu::SceneMeshes& meshes, int width, int height)
     : scene_(scene),
+      backend_(scene.settings.vpl.backend),
       width_(width),
       height_(height),
       tw_(std::max(1, width / std::max(1, scene.settings.vpl.resolution_divisor))),
@@ -30,6 +30,15 @@ VplMethod::VplMethod(const Scene& scene, int width, int height)
     gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gpu::gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     sum_.assign(size_t(tw_) * size_t(th_), glm::vec3(0.0f));
+    if (backend_ == VplBackend::gl) {
+        Bounds b;
+        for (const Object& o : scene.objects)
+            for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+        const float near = 1e-4f * std::max(1e-3f, glm::length(b.extent()));
+        maps_ = std::make_unique<gpu::VplShadowMaps>(scene, meshes, scene.settings.vpl.map_size,
+                                                     scene.settings.vpl.map, near);
+        gather_ = std::make_unique<gpu::VplGather>(tw_, th_);
+    }
     if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
     const VplSettings& vs = scene_.settings.vpl;
     if (vs.source == VplSource::photons) {
@@ -53,25 +62,7 @@ VplMethod::VplMethod(const Scene& scene, int width, int height)
 std::vector<size_t> VplMethod::make_points() {
     camera_version_ = scene_.camera_version;
     const std::vector<cpu::SurfacePoint> before = std::move(points_);
-    points_.assign(size_t(tw_) * size_t(th_), cpu::SurfacePoint{});
-    const Camera& cam = scene_.camera;
-    pool_.parallel_for(
-        size_t(th_),
-        [&](size_t y) {
-            for (int x = 0; x < tw_; ++x) {
-                const float px = (float(x) + 0.5f) * float(cam.width) / float(tw_);
-                const float py = (float(y) + 0.5f) * float(cam.height) / float(th_);
-                const glm::vec3 dir = camera_ray_direction(cam, px, py);
-                const cpu::RayHit hit = rays_.intersect({cam.eye, dir});
-                if (!hit.hit) continue;
-                const Material& m = scene_.objects[size_t(hit.object)].material;
-                if (m.type != MaterialType::diffuse) continue;  // the frame shades these itself
-                cpu::SurfacePoint& p = points_[y * size_t(tw_) + size_t(x)];
-                p.position = hit.position;
-                p.normal = glm::dot(dir, hit.normal) < 0.0f ? hit.normal : -hit.normal;
-            }
-        },
-        1);
+    points_ = cpu::camera_points(scene_, rays_, tw_, th_, pool_);
     std::vector<size_t> changed;
     for (size_t i = 0; i < points_.size(); ++i)
         if (before.size() != points_.size() || before[i].position != points_[i].position ||
@@ -81,7 +72,7 @@ std::vector<size_t> VplMethod::make_points() {
 }
 
 void VplMethod::reshade_points(const std::vector<size_t>& changed) {
-    if (changed.empty()) return;
+    if (changed.empty() || backend_ != VplBackend::cpu) return;
     std::vector<cpu::SurfacePoint> subset;
     for (size_t i : changed) subset.push_back(points_[i]);
     std::vector<glm::vec3> e(subset.size());
@@ -113,17 +104,64 @@ bool VplMethod::read_changes() {
     return moved;
 }
 
-void VplMethod::shade(Slot& s) {
+void VplMethod::refresh(Slot& s) {
     if (s.has_next) {
         s.shown = std::move(s.next);
         s.next.clear();
         s.has_next = false;
     }
     s.stale = false;
-    s.e.assign(points_.size(), glm::vec3(0.0f));
-    glm::dvec3 power = cpu::total_power(s.shown);
+    s.shown_once = true;
+    const glm::dvec3 power = cpu::total_power(s.shown);
     s.brightness = std::max({power.x, power.y, power.z});
-    VplShadeStats st;
+    if (backend_ == VplBackend::cpu) {
+        shade(s);
+        return;
+    }
+    if (int(s.shown.size()) > s.layers) return;  // layout() makes room, then renders all
+    for (int i = 0; i < s.layers; ++i)
+        records_[size_t(s.layer + i)] = i < int(s.shown.size()) ? s.shown[size_t(i)] : Vpl{};
+    records_dirty_ = true;
+}
+
+bool VplMethod::layout() {
+    bool fits = !records_.empty();
+    for (const Slot& s : slots_) fits = fits && int(s.shown.size()) <= s.layers;
+    if (fits) return false;
+    // Room for half as many again as each slot holds now (photon groups vary a little).
+    int layer = 0;
+    for (Slot& s : slots_) {
+        s.layer = layer;
+        s.layers = (int(s.shown.size()) * 3 + 1) / 2;
+        layer += s.layers;
+    }
+    records_.assign(size_t(std::max(1, layer)), Vpl{});
+    for (const Slot& s : slots_)
+        for (size_t i = 0; i < s.shown.size(); ++i) records_[size_t(s.layer) + i] = s.shown[i];
+    records_dirty_ = true;
+    return true;
+}
+
+void VplMethod::render_maps(const Slot& s) {
+    if (s.layers > 0) maps_->render(s.layer, s.layers);
+}
+
+void VplMethod::upload_points() {
+    // The gather reads the points per pixel with GL's rows bottom-first.
+    std::vector<glm::vec3> positions(points_.size()), normals(points_.size());
+    for (int y = 0; y < th_; ++y)
+        for (int x = 0; x < tw_; ++x) {
+            const cpu::SurfacePoint& p = points_[size_t(y) * size_t(tw_) + size_t(x)];
+            const size_t i = size_t(th_ - 1 - y) * size_t(tw_) + size_t(x);
+            positions[i] = p.position;
+            normals[i] = p.normal;
+        }
+    gather_->set_points(positions, normals);
+}
+
+void VplMethod::shade(Slot& s) {
+    s.e.assign(points_.size(), glm::vec3(0.0f));
+    cpu::VplShadeStats st;
     if (!s.shown.empty())
         cpu::add_vpl_irradiance(rays_, points_, s.shown.data(), s.shown.size(),
                                 scene_.settings.vpl.clamp, s.e.data(), pool_, &st);
@@ -132,6 +170,11 @@ void VplMethod::shade(Slot& s) {
 }
 
 void VplMethod::upload() {
+    ++revision_;
+    if (backend_ == VplBackend::gl) {
+        gather_->shade(*maps_, scene_.settings.vpl.clamp, glm::one_over_pi<float>());
+        return;
+    }
     // Σ over slots in slot order (no running sums: no drift, the same on any thread count).
     std::fill(sum_.begin(), sum_.end(), glm::vec3(0.0f));
     for (const Slot& s : slots_)
@@ -148,7 +191,6 @@ void VplMethod::upload() {
         }
     gpu::gl::BindTexture(GL_TEXTURE_2D, texture_.get());
     gpu::gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, tw_, th_, GL_RGBA, GL_FLOAT, rgba.data());
-    ++revision_;
 }
 
 void VplMethod::update(const IndirectInputs& in, PipelineStats& stats) {
@@ -160,9 +202,13 @@ void VplMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     if (points_.empty() || camera_version_ != scene_.camera_version) {
         // A new view makes every stored contribution useless: recompute them all now.
         (void)make_points();
-        for (Slot& s : slots_) {
-            shade(s);
-            updated += int(s.shown.size());
+        if (backend_ == VplBackend::gl) {
+            upload_points();
+        } else {
+            for (Slot& s : slots_) {
+                if (s.shown_once) shade(s);
+                updated += int(s.shown.size());
+            }
         }
         changed = true;
     } else {
@@ -172,6 +218,7 @@ void VplMethod::update(const IndirectInputs& in, PipelineStats& stats) {
             // culling yet): every slot is stale.
             const std::vector<size_t> changed_points = make_points();
             reshade_points(changed_points);
+            if (backend_ == VplBackend::gl && !changed_points.empty()) upload_points();
             changed = !changed_points.empty();
             invalidate_all();
         }
@@ -216,10 +263,8 @@ void VplMethod::update(const IndirectInputs& in, PipelineStats& stats) {
                 break;
             }
         }
-        for (size_t i : order) {
-            shade(slots_[i]);
-            updated += int(slots_[i].shown.size());
-        }
+        refresh(order);
+        for (size_t i : order) updated += int(slots_[i].shown.size());
         changed = changed || !order.empty();
     }
     if (changed) upload();
@@ -243,7 +288,7 @@ void VplMethod::take_vpls(cpu::PhotonSimulation& photons, uint64_t frame) {
             cpu::group_vpls(scene_, photons.maps(), int(l), g, k, now);
             Slot& s = slots_[l * size_t(groups) + size_t(g)];
             const std::vector<Vpl>& current = s.has_next ? s.next : s.shown;
-            if (now == current && (s.has_next || !s.e.empty() || now.empty())) continue;
+            if (now == current && (s.has_next || s.shown_once || now.empty())) continue;
             s.next = now;
             s.has_next = true;
             mark(s, frame);
@@ -261,12 +306,40 @@ void VplMethod::prime(cpu::PhotonSimulation& photons, uint64_t frame) {
     read_changes();
     take_vpls(photons, frame);
     (void)make_points();
-    for (Slot& s : slots_) shade(s);
+    if (backend_ == VplBackend::gl) upload_points();
+    std::vector<size_t> all(slots_.size());
+    std::iota(all.begin(), all.end(), size_t(0));
+    refresh(all);
     upload();
 }
 
+void VplMethod::refresh(const std::vector<size_t>& slots) {
+    for (size_t i : slots) refresh(slots_[i]);
+    if (backend_ != VplBackend::gl) return;
+    if (layout()) {
+        maps_->set_vpls(records_);
+        maps_->render_all();
+    } else {
+        if (records_dirty_) maps_->set_vpls(records_);
+        for (size_t i : slots) render_maps(slots_[i]);
+    }
+    records_dirty_ = false;
+}
+
 gpu::IndirectTerm VplMethod::term() const {
-    return gpu::IndirectTerm{texture_.get(), gpu::IndirectSpace::screen, revision_};
+    const GLuint t = backend_ == VplBackend::gl ? gather_->texture() : texture_.get();
+    return gpu::IndirectTerm{t, gpu::IndirectSpace::screen, revision_};
+}
+
+std::vector<glm::vec3> VplMethod::irradiance() const {
+    if (backend_ == VplBackend::cpu) return sum_;
+    const std::vector<glm::vec3> e = gather_->read_back();  // E/π, rows bottom-first
+    std::vector<glm::vec3> out(e.size());
+    for (int y = 0; y < th_; ++y)
+        for (int x = 0; x < tw_; ++x)
+            out[size_t(y) * size_t(tw_) + size_t(x)] =
+                e[size_t(th_ - 1 - y) * size_t(tw_) + size_t(x)] * glm::pi<float>();
+    return out;
 }
 
 std::vector<Vpl> VplMethod::vpls() const {

@@ -20,6 +20,7 @@
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
 #include "tools/afterglow/bench_soak.h"
+#include "tools/afterglow/bench_vpl.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/convergence.h"
 
@@ -27,7 +28,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak [SCENE...|SCENE:SCRIPT...] [options]",
+    "photons|knn|gather|frame|caustics|settle|soak|vpl [SCENE...|SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -47,7 +48,10 @@ const Command kBenchCommand{
     "of random edits (every dynamic object moved near its start and the first light's colour "
     "toggled, every frame) at --size N (default 64); RSS, frame time and the scene's change log "
     "sampled into --csv (default out/bench-soak.csv), growth from frame min(10000, N/10) to the "
-    "end reported (docs/robustness.md).",
+    "end reported (docs/robustness.md). 'vpl [SCENE]': Barczak 2006's claims on the VPL path "
+    "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
+    "150/100/50 map updates a frame, static maps, no visibility and exact CPU rays; fps against "
+    "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -471,8 +475,16 @@ int run_bench(const Args& args) {
             args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
             size);
     }
+    if (what == "vpl") {
+        auto context = bench_context(args);
+        int width = 0, height = 0;
+        bench_size(args, 256, 192, width, height);
+        return bench_vpl(
+            args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
+            width, height, repeat);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle or soak)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak or vpl)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);
