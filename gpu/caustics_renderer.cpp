@@ -12,20 +12,23 @@ namespace {
 const char* kGeometryVertex = R"(
 layout(location = 0) in vec3 position;
 layout(location = 1) in vec3 normal;
+layout(location = 4) in vec2 texcoord;
 uniform mat4 model, view_projection;
 out vec3 v_world;
 out vec3 v_normal;
+out vec2 v_texcoord;
 void main() {
     vec4 world = model * vec4(position, 1.0);
     v_world = world.xyz;
     v_normal = mat3(model) * normal;
+    v_texcoord = texcoord;
     gl_Position = view_projection * world;
 }
 )";
 
 // Position, albedo and the world area the pixel covers there (eq. 12.2, with the pixel's footprint
 // growing as 1/cos of the angle between the surface normal and the view direction).
-const char* kGeometryFragment = R"(
+const std::string kGeometryFragment = std::string(kAlbedoGlsl) + R"(
 in vec3 v_world;
 in vec3 v_normal;
 uniform vec3 eye;
@@ -40,7 +43,7 @@ void main() {
     float cos_n = abs(dot(normalize(v_normal), to_eye / d));
     float side = d * pixel_at_unit_distance;
     out_position = vec4(v_world, 1.0);
-    out_surface = vec4(albedo, diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
+    out_surface = vec4(surface_albedo(albedo), diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
 }
 )";
 
@@ -249,8 +252,9 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     for (size_t o = 0; o < scene_.objects.size(); ++o) {
         const Object& obj = scene_.objects[o];
         geometry_.set("model", model_matrix(obj));
-        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? obj.material.albedo
+        geometry_.set("albedo", obj.material.type == MaterialType::diffuse ? base_albedo(obj)
                                                                            : glm::vec3(0.0f));
+        meshes_.bind_albedo(geometry_, o, kAlbedoUnit);
         geometry_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
         meshes_.draw(o);
     }

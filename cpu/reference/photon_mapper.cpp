@@ -132,6 +132,7 @@ void PhotonMapper::trace(Ray ray, glm::vec3 power, const Sampler& s, int dim, bo
                          std::vector<Photon>& out) const {
     const float eps = rays_.epsilon();
     bool specular_seen = false, diffuse_seen = false;
+    int diffuse_hits = 0;  // stored in the global map so far
     for (int bounce = 0; bounce < settings_.max_depth; ++bounce, dim += 3) {
         const RayHit hit = rays_.intersect(ray);
         if (!hit.hit) return;
@@ -149,12 +150,19 @@ void PhotonMapper::trace(Ray ray, glm::vec3 power, const Sampler& s, int dim, bo
             if (specular_seen) out.push_back(photon);
             return;
         }
+        // With --indirect-bounces N the global map keeps the light that has made at most N − 1
+        // diffuse bounces: read at a final-gather hit it reaches x after at most N.
+        const int limit = settings_.indirect_bounces;
+        if (limit >= 0 && diffuse_hits >= limit) return;
         out.push_back(photon);
         diffuse_seen = true;
+        if (limit >= 0 && ++diffuse_hits >= limit) return;
         // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
-        const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
+        const glm::vec3 albedo =
+            albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+        const float p = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
         if (!(p > 0.0f) || s.get(dim) >= p) return;
-        power *= m.albedo / p;
+        power *= albedo / p;
         ray = {hit.position + eps * hit.normal,
                cosine_direction(hit.normal, s.get(dim + 1), s.get(dim + 2))};
     }
@@ -284,8 +292,9 @@ glm::vec3 PhotonMapper::gather_ray(Ray ray, uint64_t key) const {
         if (front && object_lights_[size_t(hit.object)] < 0) radiance += m.emission;
         if (m.type == MaterialType::diffuse) {
             if (front)
-                radiance += m.albedo / std::numbers::pi_v<float> *
-                            cached_irradiance(hit.position, hit.normal);
+                radiance +=
+                    albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric) /
+                    std::numbers::pi_v<float> * cached_irradiance(hit.position, hit.normal);
             break;
         }
         ray = specular_bounce(m, hit, ray.direction, hashed_uniform(key, uint64_t(depth)),
@@ -380,13 +389,17 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
             continue;
         }
         if (!front) break;
-        const glm::vec3 brdf = m.albedo / std::numbers::pi_v<float>;
+        const glm::vec3 albedo =
+            albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+        const glm::vec3 brdf = albedo / std::numbers::pi_v<float>;
         const glm::vec3 direct =
             brdf * direct_irradiance(scene_, rays_, hit.position, hit.normal,
                                      settings_.area_light_samples, s.get(2), s.get(3));
         const glm::vec3 caustics = brdf * caustic_irradiance(hit.position, hit.normal);
         // Cosine-weighted gather: ρ/π · E = ρ/π · π · mean(L) = ρ · mean(L).
-        const glm::vec3 indirect = m.albedo * gather(hit.position, hit.normal, key, index);
+        const glm::vec3 indirect = settings_.indirect_bounces == 0
+                                       ? glm::vec3(0.0f)
+                                       : albedo * gather(hit.position, hit.normal, key, index);
         if (depth == 0) {
             out[FrameTerm::direct] += direct;
             out[FrameTerm::caustics] += caustics;
