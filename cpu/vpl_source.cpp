@@ -24,7 +24,9 @@ void group_vpls(const Scene& scene, const PhotonMaps& maps, int light, int group
         Vpl vpl;
         vpl.position = pv.position;
         vpl.normal = pv.normal;
-        vpl.power = hit.power * o.material.albedo * scale;
+        // Path vertices keep no texture coordinates: a textured surface reflects with its mean
+        // albedo here (exact for untextured ones).
+        vpl.power = hit.power * base_albedo(o) * scale;
         vpl.light = light;
         vpl.group = group;
         vpl.bounce = hit.bounce;
@@ -63,7 +65,8 @@ std::vector<Vpl> random_walk_vpls(const Scene& scene, const RayTracer& rays, int
                     if (!front) break;  // back faces absorb, as in the photon tracer
                     // Thesis: the VPL's intensity is the path's power times the BRDF (× π for
                     // the cosine lobe normalisation), and the walk carries power × albedo on.
-                    power *= m.albedo;
+                    power *=
+                        albedo_at(scene.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
                     out.push_back(Vpl{hit.position, facing, power, int(li), p, stored});
                     ++stored;
                     ray.origin = hit.position + eps * facing;
