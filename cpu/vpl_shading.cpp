@@ -22,8 +22,9 @@ float vpl_geometry(const Vpl& vpl, const glm::vec3& x, const glm::vec3& n, float
 }
 
 std::vector<SurfacePoint> camera_points(const Scene& scene, const RayTracer& rays, int width,
-                                        int height, ThreadPool& pool) {
+                                        int height, ThreadPool& pool, std::vector<RayHit>* hits) {
     std::vector<SurfacePoint> points(size_t(width) * size_t(height));
+    if (hits) hits->assign(points.size(), RayHit{});
     const Camera& cam = scene.camera;
     pool.parallel_for(
         size_t(height),
@@ -33,6 +34,7 @@ std::vector<SurfacePoint> camera_points(const Scene& scene, const RayTracer& ray
                 const float py = (float(y) + 0.5f) * float(cam.height) / float(height);
                 const glm::vec3 dir = camera_ray_direction(cam, px, py);
                 const RayHit hit = rays.intersect({cam.eye, dir});
+                if (hits) (*hits)[y * size_t(width) + size_t(x)] = hit;
                 if (!hit.hit) continue;
                 if (scene.objects[size_t(hit.object)].material.type != MaterialType::diffuse)
                     continue;

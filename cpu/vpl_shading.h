@@ -37,8 +37,10 @@ void add_vpl_irradiance(const RayTracer& rays, const std::vector<SurfacePoint>& 
 // The points a w × h view of scene.camera sees at its pixel centres (rows top-first): the first
 // hit's position and the normal facing the camera; a zero normal where it sees nothing or a
 // mirror or glass (their light is the frame's business). Deterministic.
+// `hits` (optional) gets each pixel's first hit (object, triangle, barycentrics).
 std::vector<SurfacePoint> camera_points(const Scene& scene, const RayTracer& rays, int width,
-                                        int height, ThreadPool& pool);
+                                        int height, ThreadPool& pool,
+                                        std::vector<RayHit>* hits = nullptr);
 
 // Whether the segment between x (normal n) and the VPL is unblocked (offset at both ends).
 bool vpl_visible(const RayTracer& rays, const Vpl& vpl, const glm::vec3& x, const glm::vec3& n);

@@ -86,10 +86,13 @@ void VisibilityDatabase::make_shape(int object) {
 
 void VisibilityDatabase::add_nodes(int object) {
     const Object& o = scene_.objects[size_t(object)];
+    root_of_.resize(scene_.objects.size());
     if (o.material.type != MaterialType::diffuse) return;  // only diffuse patches are shaded
-    for (const glm::uvec3& t : o.mesh.triangles)
+    for (const glm::uvec3& t : o.mesh.triangles) {
         roots_.push_back(add_node(
             {o.mesh.positions[t.x], o.mesh.positions[t.y], o.mesh.positions[t.z]}, object, -1, 0));
+        root_of_[size_t(object)].push_back(roots_.back());
+    }
 }
 
 int VisibilityDatabase::add_node(const std::array<glm::vec3, 3>& local, int object, int parent,
@@ -259,6 +262,31 @@ void VisibilityDatabase::object_moved(int object) {
                 update(root, l, object);
         }
     }
+}
+
+int VisibilityDatabase::leaf_at(int object, int triangle, glm::vec2 uv) const {
+    if (object < 0 || size_t(object) >= root_of_.size() || root_of_[size_t(object)].empty())
+        return -1;
+    int node = root_of_[size_t(object)][size_t(triangle)];
+    // Barycentrics (b0, b1, b2) = (1 − u − v, u, v); fill()'s children are the corner
+    // triangles at v0, v1, v2 and the middle one.
+    float b1 = uv.x, b2 = uv.y;
+    while (nodes_[size_t(node)].first_child >= 0) {
+        const float b0 = 1.0f - b1 - b2;
+        const int first = nodes_[size_t(node)].first_child;
+        if (b0 >= 0.5f) {
+            node = first, b1 = 2.0f * b1, b2 = 2.0f * b2;
+        } else if (b1 >= 0.5f) {  // (m01, v1, m12): c1 = 1 − 2 b0 − 2 b2, c2 = 2 b2
+            node = first + 1, b1 = 1.0f - 2.0f * b0 - 2.0f * b2, b2 = 2.0f * b2;
+        } else if (b2 >= 0.5f) {  // (m20, m12, v2): c1 = 2 b1, c2 = 1 − 2 b0 − 2 b1
+            node = first + 2, b2 = 1.0f - 2.0f * b0 - 2.0f * b1, b1 = 2.0f * b1;
+        } else {  // (m01, m12, m20): c1 = 1 − 2 b0, c2 = 1 − 2 b1
+            node = first + 3;
+            const float c1 = 1.0f - 2.0f * b0, c2 = 1.0f - 2.0f * b1;
+            b1 = c1, b2 = c2;
+        }
+    }
+    return node;
 }
 
 VisibilityCounters VisibilityDatabase::counters() const {

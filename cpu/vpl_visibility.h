@@ -50,6 +50,9 @@ public:
     Occlusion state(int node, int light) const { return pair(node, light).state; }
     // The label of (node, light) from a single blocker object, as the pyramid test gives it.
     Occlusion classify(int node, int light, int object) const;
+    // The leaf holding the point at Embree barycentrics `uv` of (object, triangle); -1 if that
+    // object has no patches (mirrors, glass).
+    int leaf_at(int object, int triangle, glm::vec2 uv) const;
     // Leaf labels now (recounted) and the work counters since construction.
     VisibilityCounters counters() const;
     int light_count() const { return int(lights_.size()); }
@@ -96,6 +99,7 @@ private:
     int depth_, polygon_limit_;
     std::vector<Node> nodes_;
     std::vector<int> roots_;
+    std::vector<std::vector<int>> root_of_;  // [object][triangle] → root node
     std::vector<Pair> pairs_;
     std::vector<BlockerShape> shapes_;  // per object
     mutable VisibilityCounters work_;

@@ -10,12 +10,15 @@ namespace {
 const char* const kGatherFragment = R"(
 uniform sampler2D positions, normals;
 uniform sampler2DArray maps;
-uniform int count, kind, visibility;
+uniform int count, kind, visibility, labelled;
+layout(std430, binding = 1) readonly buffer Labels { uint labels[]; };
 uniform float clamp2, scale, offset_scale, relative_bias;
 layout(location = 0) out vec4 out_e;
 void main() {
     ivec2 px = ivec2(gl_FragCoord.xy);
-    vec3 x = texelFetch(positions, px, 0).xyz;
+    vec4 xw = texelFetch(positions, px, 0);
+    vec3 x = xw.xyz;
+    int patch_base = int(xw.w) * count;
     vec3 n = texelFetch(normals, px, 0).xyz;
     out_e = vec4(0.0, 0.0, 0.0, 1.0);
     if (n == vec3(0.0)) return;
@@ -27,7 +30,9 @@ void main() {
         float inv = inversesqrt(d2);
         float cos_x = dot(n, d) * inv, cos_l = -dot(vpl_normal(i), d) * inv;
         if (cos_x <= 0.0 || cos_l <= 0.0) continue;
-        if (visibility != 0) {
+        uint label = labelled != 0 ? labels[patch_base + i] : 1u;
+        if (label >= 2u) continue;
+        if (visibility != 0 && label == 1u) {
             // The point moved off its surface by about a texel's footprint at its distance
             // (normal offset), compared with a small relative bias: no self-shadowing acne.
             float r = d2 * inv;
@@ -49,6 +54,7 @@ VplGather::VplGather(int width, int height)
       height_(height),
       program_("vpl gather", kFullScreenTriangleVertex, std::string(kVplMapGlsl) + kGatherFragment),
       fbo_(make_framebuffer()),
+      labels_(make_buffer()),
       empty_vao_(make_vertex_array()) {
     positions_ = make_float_texture(width, height);
     normals_ = make_float_texture(width, height);
@@ -61,11 +67,14 @@ VplGather::VplGather(int width, int height)
 }
 
 void VplGather::set_points(const std::vector<glm::vec3>& positions,
-                           const std::vector<glm::vec3>& normals) {
+                           const std::vector<glm::vec3>& normals, const std::vector<int>& patches) {
     auto upload = [&](const Texture& t, const std::vector<glm::vec3>& v) {
         std::vector<float> rgba(v.size() * 4, 0.0f);
-        for (size_t i = 0; i < v.size(); ++i)
+        for (size_t i = 0; i < v.size(); ++i) {
             for (int c = 0; c < 3; ++c) rgba[4 * i + size_t(c)] = v[i][c];
+            // Patch indices ride in alpha (exact in float up to 2^24).
+            if (&v == &positions && i < patches.size()) rgba[4 * i + 3] = float(patches[i]);
+        }
         gl::BindTexture(GL_TEXTURE_2D, t.get());
         gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT, rgba.data());
     };
@@ -74,7 +83,17 @@ void VplGather::set_points(const std::vector<glm::vec3>& positions,
     check_gl("VplGather::set_points");
 }
 
-void VplGather::shade(const VplShadowMaps& maps, float clamp, float scale, bool visibility) {
+void VplGather::set_labels(const std::vector<uint32_t>& labels) {
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, labels_.get());
+    const std::vector<uint32_t> one(1, 1u);
+    const std::vector<uint32_t>& data = labels.empty() ? one : labels;
+    gl::BufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(data.size() * sizeof(uint32_t)),
+                   data.data(), GL_STATIC_DRAW);
+    check_gl("VplGather::set_labels");
+}
+
+void VplGather::shade(const VplShadowMaps& maps, float clamp, float scale, bool visibility,
+                      bool labelled) {
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     const GLenum buffer = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &buffer);
@@ -98,6 +117,8 @@ void VplGather::shade(const VplShadowMaps& maps, float clamp, float scale, bool 
     program_.set("count", maps.count());
     program_.set("kind", int(maps.kind()));
     program_.set("visibility", visibility && maps.count() > 0 ? 1 : 0);
+    program_.set("labelled", labelled ? 1 : 0);
+    gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, 1, labels_.get());
     program_.set("clamp2", clamp * clamp);
     program_.set("scale", scale * glm::one_over_pi<float>());
     // Half a texel's angle (the map spans about π over `size` texels) at unit distance.

@@ -16,10 +16,17 @@ public:
     VplGather(int width, int height);
 
     // World positions and unit normals per pixel, rows bottom-first; a zero normal: no point.
-    void set_points(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals);
+    // `patches` (optional): each pixel's patch index into the labels of set_labels().
+    void set_points(const std::vector<glm::vec3>& positions, const std::vector<glm::vec3>& normals,
+                    const std::vector<int>& patches = {});
+    // Visibility labels per (patch, VPL), patch-major (Barczak §4.3.1): 0 unoccluded (no
+    // shadow-map lookup), 1 partly occluded (lookup), 2 or more no light (skipped). Used by
+    // shade() when `labelled`.
+    void set_labels(const std::vector<uint32_t>& labels);
     // Writes scale · E at every point from the maps' VPLs; `visibility` off ignores the maps
     // (the unshadowed sum).
-    void shade(const VplShadowMaps& maps, float clamp, float scale, bool visibility = true);
+    void shade(const VplShadowMaps& maps, float clamp, float scale, bool visibility = true,
+               bool labelled = false);
 
     GLuint texture() const { return output_.get(); }
     // scale · E per pixel, rows bottom-first.
@@ -32,6 +39,7 @@ private:
     Program program_;
     Texture positions_, normals_, output_;
     Framebuffer fbo_;
+    Buffer labels_;
     VertexArray empty_vao_;
 };
 

@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "cpu/photon_simulation.h"
+#include "cpu/sampling.h"
 #include "cpu/vpl_shading.h"
 #include "cpu/vpl_source.h"
 #include "test_scenes.h"
@@ -175,6 +176,36 @@ TEST(VplVisibility, FullLabelsAgreeWithEmbreeRaysUnderABlocker) {
     checked = check_labels(db, kLight, RayTracer(scene));
     EXPECT_GT(checked[0], 0);  // leaves beside the blocker's shadow
     EXPECT_GT(db.counters().partial, 0u);
+}
+
+// leaf_at() descends to the leaf whose triangle holds the point.
+TEST(VplVisibility, LeafAtFindsTheLeafHoldingAPoint) {
+    const Scene scene = floor_and_blocker(Occlusion::none);
+    const VisibilityDatabase db(scene, kLight, 3);
+    const Mesh& m = scene.objects[0].mesh;
+    for (int t = 0; t < int(m.triangles.size()); ++t)
+        for (int i = 0; i < 40; ++i) {
+            const float u = hashed_uniform(uint64_t(t), uint64_t(2 * i)),
+                        v = hashed_uniform(uint64_t(t), uint64_t(2 * i + 1));
+            const glm::vec2 uv = u + v > 1.0f ? glm::vec2(1.0f - u, 1.0f - v) : glm::vec2(u, v);
+            const glm::uvec3 tri = m.triangles[size_t(t)];
+            const glm::vec3 p = (1.0f - uv.x - uv.y) * m.positions[tri.x] +
+                                uv.x * m.positions[tri.y] + uv.y * m.positions[tri.z];
+            const int leaf = db.leaf_at(0, t, uv);
+            ASSERT_GE(leaf, 0);
+            EXPECT_TRUE(db.leaf(leaf));
+            // p inside the leaf: its barycentrics there are all ≥ 0 (within rounding).
+            const auto& v3 = db.nodes()[size_t(leaf)].v;
+            const glm::vec3 e1 = v3[1] - v3[0], e2 = v3[2] - v3[0], d = p - v3[0];
+            const float d11 = glm::dot(e1, e1), d12 = glm::dot(e1, e2), d22 = glm::dot(e2, e2);
+            const float den = d11 * d22 - d12 * d12;
+            const float b1 = (d22 * glm::dot(d, e1) - d12 * glm::dot(d, e2)) / den;
+            const float b2 = (d11 * glm::dot(d, e2) - d12 * glm::dot(d, e1)) / den;
+            EXPECT_GE(b1, -1e-4f);
+            EXPECT_GE(b2, -1e-4f);
+            EXPECT_LE(b1 + b2, 1.0f + 1e-4f);
+        }
+    EXPECT_EQ(db.leaf_at(1, 0, {0.2f, 0.2f}) >= 0, true);  // the blocker is diffuse too
 }
 
 }  // namespace

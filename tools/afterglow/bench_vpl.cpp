@@ -8,6 +8,7 @@
 #include "cpu/ray_tracer.h"
 #include "cpu/vpl_shading.h"
 #include "cpu/vpl_source.h"
+#include "cpu/vpl_visibility.h"
 #include "gpu/gl.h"
 #include "gpu/scene_meshes.h"
 #include "gpu/vpl_gather.h"
@@ -59,8 +60,9 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
     ThreadPool pool(scene.settings.threads);
     // The thesis's indirect VPLs: cosine random walks, up to 5 bounces; enough for the sweep.
     const std::vector<Vpl> all = cpu::random_walk_vpls(scene, rays, 600, 5, scene.settings.seed);
+    std::vector<cpu::RayHit> hits;
     const std::vector<cpu::SurfacePoint> points =
-        cpu::camera_points(scene, rays, width, height, pool);
+        cpu::camera_points(scene, rays, width, height, pool, &hits);
     gpu::SceneMeshes meshes(scene);
     Bounds b;
     for (const Object& o : scene.objects)
@@ -106,6 +108,40 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         row(label, ms);
     }
     row("static maps (sum only)", sum_only);
+    {
+        // Barczak's visibility determination (VD): F/P/N labels per (patch, VPL); only P pairs
+        // read a shadow map, F and "behind" pairs are skipped. Against every pair labelled P.
+        const Clock::time_point t = Clock::now();
+        const cpu::VisibilityDatabase db(scene, v300, 2);
+        const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+        std::vector<int> patch(points.size(), 0);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const cpu::RayHit& h = hits[size_t(y) * size_t(width) + size_t(x)];
+                const int leaf = h.hit ? db.leaf_at(h.object, h.triangle, h.barycentric) : -1;
+                patch[size_t(height - 1 - y) * size_t(width) + size_t(x)] = std::max(0, leaf);
+            }
+        std::vector<uint32_t> labels(db.nodes().size() * v300.size());
+        for (size_t node = 0; node < db.nodes().size(); ++node)
+            for (int l = 0; l < n; ++l)
+                labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
+        gather.set_points(column(points, width, height, false), column(points, width, height, true),
+                          patch);
+        gather.set_labels(labels);
+        const double vd = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, true, true); });
+        std::fill(labels.begin(), labels.end(), 1u);
+        gather.set_labels(labels);
+        const double all_p =
+            best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, true, true); });
+        row("VD labels, static maps", vd);
+        row("all labelled P, static", all_p);
+        const cpu::VisibilityCounters c = db.counters();
+        std::printf(
+            "(VD: %zu patches, leaf pairs N %llu / P %llu / F %llu / behind %llu, built in "
+            "%.1f ms on the CPU)\n",
+            db.nodes().size(), (unsigned long long)c.none, (unsigned long long)c.partial,
+            (unsigned long long)c.full, (unsigned long long)c.behind, build_ms);
+    }
     row("no visibility (floor)", unshadowed);
     std::printf("(of the naive frame: maps %.2f ms, per-pixel sum %.2f ms)\n", maps_only, sum_only);
     {
