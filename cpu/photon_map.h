@@ -25,6 +25,7 @@ struct PathVertex {
     glm::vec3 position{0.0f};  // world space, for comparison with a re-traced path
     glm::vec3 local{0.0f};     // object space: a hit must also stay put on its moving object
     int32_t hit = -1;          // slot in the surface's hits, -1 if nothing was stored
+    glm::vec3 normal{0.0f};    // world space, the side the photon arrived from (VPL orientation)
 };
 
 struct PhotonGroup {

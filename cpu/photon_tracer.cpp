@@ -133,6 +133,7 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
         v.position = hit.position;
         v.local_position = glm::conjugate(object.transform.rotation) *
                            (hit.position - object.transform.translation);
+        v.normal = facing;
         v.power = power;
         v.bounce = uint8_t(std::min(bounce, 255));
         const int dim = 3 + 3 * bounce;

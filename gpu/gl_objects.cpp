@@ -49,18 +49,25 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
         gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
         gl::DeleteShader(s);
         throw GlError("shader '" + name +
-                      (type == GL_VERTEX_SHADER    ? "' (vertex)"
-                       : type == GL_COMPUTE_SHADER ? "' (compute)"
-                                                   : "' (fragment)") +
+                      (type == GL_VERTEX_SHADER     ? "' (vertex)"
+                       : type == GL_COMPUTE_SHADER  ? "' (compute)"
+                       : type == GL_GEOMETRY_SHADER ? "' (geometry)"
+                                                    : "' (fragment)") +
                       " does not compile:\n" + log);
     }
     return s;
 }
 }  // namespace
 
-Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment) {
-    link(name,
-         {compile(name, GL_VERTEX_SHADER, vertex), compile(name, GL_FRAGMENT_SHADER, fragment)});
+Program::Program(const std::string& name, const std::string& vertex, const std::string& fragment)
+    : Program(name, vertex, "", fragment) {}
+
+Program::Program(const std::string& name, const std::string& vertex, const std::string& geometry,
+                 const std::string& fragment) {
+    std::vector<GLuint> shaders = {compile(name, GL_VERTEX_SHADER, vertex)};
+    if (!geometry.empty()) shaders.push_back(compile(name, GL_GEOMETRY_SHADER, geometry));
+    shaders.push_back(compile(name, GL_FRAGMENT_SHADER, fragment));
+    link(name, shaders);
 }
 
 Program Program::compute(const std::string& name, const std::string& source) {

@@ -78,6 +78,9 @@ public:
     Program(const std::string& name, const std::string& vertex, const std::string& fragment);
     // A compute program (GLSL 4.50 with the shared constants prepended, like the others).
     static Program compute(const std::string& name, const std::string& source);
+    // With a geometry stage between them (layered rendering: gl_Layer); "" = none.
+    Program(const std::string& name, const std::string& vertex, const std::string& geometry,
+            const std::string& fragment);
     void use() const { gl::UseProgram(id_.get()); }
     explicit operator bool() const { return bool(id_); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }

@@ -93,4 +93,9 @@ void SceneMeshes::draw(size_t i) const {
     gl::DrawArrays(GL_TRIANGLES, 0, objects_[i].triangles * 3);
 }
 
+void SceneMeshes::draw_instanced(size_t i, int instances) const {
+    gl::BindVertexArray(objects_[i].vao.get());
+    gl::DrawArraysInstanced(GL_TRIANGLES, 0, objects_[i].triangles * 3, instances);
+}
+
 }  // namespace ag::gpu

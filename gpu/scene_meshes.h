@@ -22,6 +22,8 @@ public:
     size_t object_count() const { return objects_.size(); }
     // Draws object `i` (binds its VAO); the caller sets the program and uniforms.
     void draw(size_t i) const;
+    // The same, `instances` times (gl_InstanceID picks what each copy is for).
+    void draw_instanced(size_t i, int instances) const;
     int triangle_count(size_t i) const { return objects_[i].triangles; }
     // Binds object `i`'s albedo texture (if any) to texture unit `unit` and sets the program's
     // `albedo_map` and `has_albedo_map` uniforms (kAlbedoGlsl).

@@ -18,8 +18,8 @@ inline constexpr std::array kGatherBackendNames = {"auto", "gl", "cpu"};
 // ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11);
 // `gpu_pm`: photons traced on the GPU, binned into screen tiles, cone-filtered (Jimenez Kwast
 // 2016).
-enum class IndirectMethodKind { iim, gpu_pm };
-inline constexpr std::array kIndirectMethodNames = {"iim", "gpu_pm"};
+enum class IndirectMethodKind { iim, gpu_pm, vpl };
+inline constexpr std::array kIndirectMethodNames = {"iim", "gpu_pm", "vpl"};
 
 // GPU photon mapping's radiance estimate: `standard`, eq. 5.6 (E = Σ Φ w / ((1 − 2/3k) π r²));
 // `kwast`, with the thesis code's extra factors (×100 photon power, 1/π at the bounce, N·L at the
@@ -30,6 +30,14 @@ inline constexpr std::array kGpuPmEstimatorNames = {"standard", "kwast"};
 // thesis's every-photon-against-every-tile test (§5.3.3.1), kept for comparison.
 enum class GpuPmBinning { scatter, brute };
 inline constexpr std::array kGpuPmBinningNames = {"scatter", "brute"};
+// `vpl`: a screen-space sum over virtual point lights with visibility (Barczak 2006).
+
+// Where the VPLs come from (Barczak 2006 §4.1): `photons`, the stored hits of the first
+// vpl.photons_per_group photons of every QMC group of the selective photon tracer, so the set
+// follows edits through group invalidation; `random_walk`, the thesis's static set of cosine
+// random walks (power × BRDF / paths, at most vpl.walk_bounces bounces), traced once.
+enum class VplSource { photons, random_walk };
+inline constexpr std::array kVplSourceNames = {"photons", "random_walk"};
 
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
@@ -104,6 +112,27 @@ struct GpuPmSettings {
     GpuPmBinning binning = GpuPmBinning::scatter;
 };
 
+// How VPL visibility is found: `gl`, hemispherical shadow maps (gpu::VplShadowMaps) and a
+// per-pixel sum in a shader, every frame; `cpu`, exact Embree shadow rays per point and VPL.
+enum class VplBackend { gl, cpu };
+inline constexpr std::array kVplBackendNames = {"gl", "cpu"};
+// The shadow maps' parameterisation of the hemisphere (Barczak §4.2, Fig. 4-3).
+enum class VplMapKind { octahedral, paraboloid };
+inline constexpr std::array kVplMapKindNames = {"octahedral", "paraboloid"};
+
+struct VplSettings {
+    VplSource source = VplSource::photons;
+    VplBackend backend = VplBackend::gl;
+    VplMapKind map = VplMapKind::octahedral;
+    int map_size = 128;           // shadow-map texels across (thesis: 512 with 25-100 lights)
+    int photons_per_group = 4;    // photons of each group whose hits become VPLs (power × P/k)
+    int walk_paths = 275;         // random_walk: paths per light (thesis Fig. 5-10: 275 indirect)
+    int walk_bounces = 5;         // random_walk: VPLs stored along each path at most (thesis: 5)
+    float clamp = 0.0f;           // 1/d² is clamped at 1/clamp² (world units); 0 = no clamp
+    int updates_per_frame = 100;  // K: VPLs whose visibility is recomputed per frame (thesis: 100)
+    int resolution_divisor = 4;   // the screen-space term is computed at frame size / this
+};
+
 struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
@@ -130,6 +159,7 @@ struct Settings {
     GatherSettings gather;
     IndirectSettings indirect;
     GpuPmSettings gpu_pm;
+    VplSettings vpl;
     ScheduleSettings schedule;
     CausticSettings caustics;
     DirectSettings direct;
@@ -238,6 +268,26 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(EnumField<GpuPmBinning, kGpuPmBinningNames.size()>{
         "binning", s.gpu_pm.binning, kGpuPmBinningNames,
         "scatter (photon writes its tiles) or brute (every photon against every tile)"});
+    v.end_section();
+    v.section("vpl", "virtual point lights with visibility, Barczak 2006");
+    v.field(EnumField<VplSource, kVplSourceNames.size()>{"source", s.vpl.source, kVplSourceNames,
+                                                         "where the VPLs come from"});
+    v.field(EnumField<VplBackend, kVplBackendNames.size()>{"backend", s.vpl.backend,
+                                                           kVplBackendNames, "visibility backend"});
+    v.field(EnumField<VplMapKind, kVplMapKindNames.size()>{"map", s.vpl.map, kVplMapKindNames,
+                                                           "shadow-map parameterisation"});
+    v.field(Field<int>{"map_size", s.vpl.map_size, 8, 4096, "shadow-map texels across"});
+    v.field(Field<int>{"photons_per_group", s.vpl.photons_per_group, 1, 1e6,
+                       "photons of each QMC group whose hits become VPLs"});
+    v.field(Field<int>{"walk_paths", s.vpl.walk_paths, 1, 1e7, "random_walk: paths per light"});
+    v.field(Field<int>{"walk_bounces", s.vpl.walk_bounces, 1, 1000,
+                       "random_walk: VPLs along each path at most"});
+    v.field(Field<float>{"clamp", s.vpl.clamp, 0, 1e30,
+                         "1/d^2 clamped at 1/clamp^2 (world units); 0 = off"});
+    v.field(Field<int>{"updates_per_frame", s.vpl.updates_per_frame, 1, 1e7,
+                       "VPLs whose visibility is recomputed per frame"});
+    v.field(Field<int>{"resolution_divisor", s.vpl.resolution_divisor, 1, 64,
+                       "screen-space term at frame size / this"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});

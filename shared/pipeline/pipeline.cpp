@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "gpu/gl.h"
+#include "shared/pipeline/vpl_method.h"
 #include "shared/scene_edit.h"
 
 namespace ag {
@@ -27,6 +28,8 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
             return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
         case IndirectMethodKind::gpu_pm:
             return std::make_unique<GpuPmMethod>(scene, meshes, width, height);
+        case IndirectMethodKind::vpl:
+            return std::make_unique<VplMethod>(scene, meshes, width, height);
     }
     return nullptr;
 }

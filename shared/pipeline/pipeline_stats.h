@@ -16,6 +16,9 @@ struct PipelineStats {
     int iim_texels_gathered = 0;
     int iim_texels_pending = 0;
     int iim_texels_invalid = 0;  // back-face texels repaired from neighbours
+    // The VPL method: VPLs re-shaded this frame, shown, still stale; the clamp's relative bias.
+    int vpl_updated = 0, vpl_count = 0, vpl_stale = 0;
+    double vpl_clamp_bias = 0.0;
     // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
     // thread; wait_ms is what the GL thread then waited for them.
     // The scheduler's budgets for this frame (fixed counts without a frame-time target).

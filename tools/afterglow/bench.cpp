@@ -21,6 +21,7 @@
 #include "shared/shapes.h"
 #include "tools/afterglow/bench_gpu_pm.h"
 #include "tools/afterglow/bench_soak.h"
+#include "tools/afterglow/bench_vpl.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/convergence.h"
 
@@ -28,7 +29,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm [SCENE...|SCENE:SCRIPT...] [options]",
+    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl [SCENE...|SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -52,7 +53,10 @@ const Command kBenchCommand{
     "--indirect gpu_pm (--paths x --radii, radius as a fraction of the scene diagonal) at --size "
     "(default 256x256): stored photons, frame time mean and sigma over --frames (default 20), "
     "pixels refined at full resolution, and with --reference the 8-bit MSE, NRMSE and MSSIM of the "
-    "frame (docs/gpu_pm.md).",
+    "frame (docs/gpu_pm.md). 'vpl [SCENE]': Barczak 2006's claims on the VPL path "
+    "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
+    "150/100/50 map updates a frame, static maps, no visibility and exact CPU rays; fps against "
+    "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -489,8 +493,17 @@ int run_bench(const Args& args) {
             args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell_kwast.json",
             width, height);
     }
+    if (what == "vpl") {
+        auto context = bench_context(args);
+        int width = 0, height = 0;
+        bench_size(args, 256, 192, width, height);
+        return bench_vpl(
+            args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
+            width, height, repeat);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle, soak or gpu_pm)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm or "
+                   "vpl)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

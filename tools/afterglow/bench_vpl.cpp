@@ -1,0 +1,210 @@
+#include "tools/afterglow/bench_vpl.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <glm/gtc/constants.hpp>
+
+#include "cpu/ray_tracer.h"
+#include "cpu/vpl_shading.h"
+#include "cpu/vpl_source.h"
+#include "cpu/vpl_visibility.h"
+#include "gpu/gl.h"
+#include "gpu/scene_meshes.h"
+#include "gpu/vpl_gather.h"
+#include "gpu/vpl_shadow_maps.h"
+#include "shared/charts.h"
+#include "shared/mesh_io.h"
+#include "shared/scene_edit.h"
+#include "shared/scene_file.h"
+#include "shared/shapes.h"
+
+namespace ag::cli {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+// Best wall time of `repeat` runs of `f` (GL finished), ms; one warm-up run first.
+template <class F>
+double best_ms(int repeat, F&& f) {
+    f();
+    gpu::gl::Finish();
+    double best = 1e30;
+    for (int r = 0; r < repeat; ++r) {
+        const Clock::time_point t = Clock::now();
+        f();
+        gpu::gl::Finish();
+        best = std::min(best, std::chrono::duration<double, std::milli>(Clock::now() - t).count());
+    }
+    return best;
+}
+
+std::vector<glm::vec3> column(const std::vector<cpu::SurfacePoint>& p, int w, int h, bool normals) {
+    std::vector<glm::vec3> out(p.size());
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const cpu::SurfacePoint& s = p[size_t(y) * size_t(w) + size_t(x)];
+            out[size_t(h - 1 - y) * size_t(w) + size_t(x)] = normals ? s.normal : s.position;
+        }
+    return out;
+}
+
+}  // namespace
+
+int bench_vpl(const Args& args, const std::string& scene_path, int width, int height, int repeat) {
+    Scene scene = load_scene(scene_path);
+    args.apply_settings(scene);
+    const VplSettings& vs = scene.settings.vpl;
+    cpu::RayTracer rays(scene);
+    ThreadPool pool(scene.settings.threads);
+    // The thesis's indirect VPLs: cosine random walks, up to 5 bounces; enough for the sweep.
+    const std::vector<Vpl> all = cpu::random_walk_vpls(scene, rays, 600, 5, scene.settings.seed);
+    std::vector<cpu::RayHit> hits;
+    const std::vector<cpu::SurfacePoint> points =
+        cpu::camera_points(scene, rays, width, height, pool, &hits);
+    gpu::SceneMeshes meshes(scene);
+    Bounds b;
+    for (const Object& o : scene.objects)
+        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    const float near = 1e-4f * glm::length(b.extent());
+    gpu::VplShadowMaps maps(scene, meshes, vs.map_size, vs.map, near);
+    gpu::VplGather gather(width, height);
+    gather.set_points(column(points, width, height, false), column(points, width, height, true));
+    const float scale = glm::one_over_pi<float>();
+    auto take = [&](size_t n) {
+        return std::vector<Vpl>(all.begin(), all.begin() + std::ptrdiff_t(std::min(n, all.size())));
+    };
+    std::printf("scene %s, %zu triangles, %dx%d, %d² %s maps, %zu random-walk VPLs available\n",
+                scene_path.c_str(), scene.triangle_count(), width, height, vs.map_size,
+                kVplMapKindNames[size_t(vs.map)], all.size());
+
+    // 1. Naive against each optimisation at 300 lights.
+    const std::vector<Vpl> v300 = take(300);
+    maps.set_vpls(v300);
+    maps.render_all();
+    const int n = int(v300.size());
+    const double naive = best_ms(repeat, [&] {
+        maps.render_all();
+        gather.shade(maps, vs.clamp, scale);
+    });
+    const double maps_only = best_ms(repeat, [&] { maps.render_all(); });
+    const double sum_only = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale); });
+    const double unshadowed = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, false); });
+    std::printf("\n%d VPLs               %10s %8s %9s\n", n, "ms/frame", "fps", "speed-up");
+    auto row = [&](const char* what, double ms) {
+        std::printf("%-24s %10.2f %8.2f %8.2fx\n", what, ms, 1000.0 / ms, naive / ms);
+    };
+    row("naive (all maps + sum)", naive);
+    for (int k : {150, 100, 50}) {
+        int next = 0;
+        const double ms = best_ms(repeat, [&] {
+            maps.render(next, k);
+            next = (next + k) % n;
+            gather.shade(maps, vs.clamp, scale);
+        });
+        char label[64];
+        std::snprintf(label, sizeof label, "K=%d map updates/frame", k);
+        row(label, ms);
+    }
+    row("static maps (sum only)", sum_only);
+    {
+        // Barczak's visibility determination (VD): F/P/N labels per (patch, VPL); only P pairs
+        // read a shadow map, F and "behind" pairs are skipped. Against every pair labelled P.
+        const Clock::time_point t = Clock::now();
+        const cpu::VisibilityDatabase db(scene, v300, 2);
+        const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+        std::vector<int> patch(points.size(), 0);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const cpu::RayHit& h = hits[size_t(y) * size_t(width) + size_t(x)];
+                const int leaf = h.hit ? db.leaf_at(h.object, h.triangle, h.barycentric) : -1;
+                patch[size_t(height - 1 - y) * size_t(width) + size_t(x)] = std::max(0, leaf);
+            }
+        std::vector<uint32_t> labels(db.nodes().size() * v300.size());
+        for (size_t node = 0; node < db.nodes().size(); ++node)
+            for (int l = 0; l < n; ++l)
+                labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
+        gather.set_points(column(points, width, height, false), column(points, width, height, true),
+                          patch);
+        gather.set_labels(labels);
+        const double vd = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, true, true); });
+        std::fill(labels.begin(), labels.end(), 1u);
+        gather.set_labels(labels);
+        const double all_p =
+            best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, true, true); });
+        row("VD labels, static maps", vd);
+        row("all labelled P, static", all_p);
+        const cpu::VisibilityCounters c = db.counters();
+        std::printf(
+            "(VD: %zu patches, leaf pairs N %llu / P %llu / F %llu / behind %llu, built in "
+            "%.1f ms on the CPU)\n",
+            db.nodes().size(), (unsigned long long)c.none, (unsigned long long)c.partial,
+            (unsigned long long)c.full, (unsigned long long)c.behind, build_ms);
+    }
+    row("no visibility (floor)", unshadowed);
+    std::printf("(of the naive frame: maps %.2f ms, per-pixel sum %.2f ms)\n", maps_only, sum_only);
+    {
+        std::vector<glm::vec3> e(points.size(), glm::vec3(0.0f));
+        const Clock::time_point t = Clock::now();
+        cpu::add_vpl_irradiance(rays, points, v300.data(), v300.size(), vs.clamp, e.data(), pool);
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+        std::printf("%-24s %10.2f %8.2f %8.2fx  (%d threads)\n", "exact CPU rays", ms, 1000.0 / ms,
+                    naive / ms, pool.size());
+    }
+
+    // 2. Frame rate against the number of VPLs.
+    std::printf("\n%8s %14s %14s %14s\n", "VPLs", "naive fps", "K=100 fps", "static fps");
+    for (size_t count : {25, 50, 100, 200, 300, 600, 1000}) {
+        if (count > all.size()) break;
+        maps.set_vpls(take(count));
+        maps.render_all();
+        const int c = int(count);
+        const double nv = best_ms(repeat, [&] {
+            maps.render_all();
+            gather.shade(maps, vs.clamp, scale);
+        });
+        int next = 0;
+        const double k100 = best_ms(repeat, [&] {
+            maps.render(next, std::min(100, c));
+            next = (next + 100) % c;
+            gather.shade(maps, vs.clamp, scale);
+        });
+        const double st = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale); });
+        std::printf("%8zu %14.2f %14.2f %14.2f\n", count, 1000.0 / nv, 1000.0 / k100, 1000.0 / st);
+    }
+
+    // 3. Shadow-map update cost against the mover's vertex count (thesis: bunny 3000 vs torus
+    // 820 vertices, time in their ratio): 300 maps of a scene holding only the mover.
+    std::printf("\n%-28s %9s %14s %14s\n", "mover", "vertices", "300 maps ms", "us/kvertex");
+    std::vector<std::pair<std::string, Mesh>> movers;
+    for (int s : {1, 2, 3, 4})
+        movers.emplace_back("sphere subdivision " + std::to_string(s), make_sphere(1.0f, s));
+    for (auto& [name, mesh] : movers) {
+        Scene m;
+        m.path = name;
+        Object o;
+        o.name = name;
+        o.mesh = mesh;
+        m.objects.push_back(o);
+        init_versions(m);
+        make_surfaces_and_atlas(m);
+        gpu::SceneMeshes mm(m);
+        gpu::VplShadowMaps mover_maps(m, mm, vs.map_size, vs.map, 1e-3f);
+        std::vector<Vpl> ring;
+        for (int i = 0; i < 300; ++i) {
+            const float a = 6.2831853f * float(i) / 300.0f;
+            const glm::vec3 p(3.0f * std::cos(a), -1.5f, 3.0f * std::sin(a));
+            ring.push_back(Vpl{p, glm::normalize(-p), glm::vec3(1.0f)});
+        }
+        mover_maps.set_vpls(ring);
+        const double ms = best_ms(repeat, [&] { mover_maps.render_all(); });
+        const size_t verts = o.mesh.positions.size();
+        std::printf("%-28s %9zu %14.2f %14.2f\n", name.c_str(), verts, ms,
+                    1000.0 * ms / (300.0 * double(verts) / 1000.0));
+    }
+    std::printf("(best of %d; GL timings include glFinish)\n", repeat);
+    return 0;
+}
+
+}  // namespace ag::cli
