@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "cpu/reference/reference.h"
@@ -44,7 +45,8 @@ std::vector<IrradianceRecord> IrradianceGather::gather(const std::vector<GatherP
 
 IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
                                               const RecordRadiance& radiance,
-                                              const RecordGatherOptions& options) const {
+                                              const RecordGatherOptions& options,
+                                              std::vector<RecordSample>* samples) const {
     const int m = std::max(1, options.theta), n_phi = std::max(3, options.phi);
     const glm::vec3 n = glm::normalize(point.normal);
     glm::vec3 t, b;
@@ -58,6 +60,7 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
     glm::vec3 sum(0.0f);
     double inverse_distances = 0.0;
     glm::mat3 rotation(0.0f);
+    if (samples) samples->assign(l.size(), RecordSample{});
     uint32_t h = hash_u32(options.seed * 0x9e3779b9u ^ hash_u32(point.key + 0x7f4a7c15u));
     for (int k = 0; k < n_phi; ++k)
         for (int j = 0; j < m; ++j) {
@@ -83,6 +86,11 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
             const size_t at = size_t(j) * size_t(n_phi) + size_t(k);
             l[at] = radiance_jk;
             dist[at] = r;
+            if (samples && hit.hit) {
+                const Transform& tr = scene_.objects[size_t(hit.object)].transform;
+                (*samples)[at] = {radiance_jk, hit.t, hit.object,
+                                  glm::inverse(tr.rotation) * (hit.position - tr.translation)};
+            }
             sum += radiance_jk;
             // Ward & Heckbert eq. 8: tilting n towards azimuth u raises cos θ of this sample by
             // sin θ per radian, i.e. its cosine-weighted share by tan θ; the tilt is a rotation
@@ -91,13 +99,13 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
             const glm::vec3 axis = glm::cross(n, u);
             for (int c = 0; c < 3; ++c) rotation[c] += tan_t * radiance_jk[c] * axis;
         }
-    const float samples = float(m) * float(n_phi);
+    const float count = float(m) * float(n_phi);
     IrradianceRecord rec;
     rec.position = point.position;
     rec.normal = n;
-    rec.iim = sum / samples;
-    rec.rotation_gradient = rotation / samples;
-    const double harmonic = inverse_distances > 0.0 ? samples / inverse_distances : 1e30;
+    rec.iim = sum / count;
+    rec.rotation_gradient = rotation / count;
+    const double harmonic = inverse_distances > 0.0 ? count / inverse_distances : 1e30;
     rec.harmonic_distance =
         float(std::clamp(harmonic, double(options.min_distance), double(options.max_distance)));
 
@@ -130,6 +138,85 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
     }
     rec.translation_gradient = translation * float(std::numbers::inv_pi);
     return rec;
+}
+
+glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
+                           const std::vector<Transform>& next, int theta, int phi) {
+    const int m = std::max(1, theta), n_phi = std::max(3, phi);
+    const glm::vec3 n = record.normal;
+    glm::vec3 t, b;
+    orthonormal_basis(n, t, b);
+    const float inf = std::numeric_limits<float>::infinity();
+    std::vector<float> depth(samples.size(), inf);
+    std::vector<glm::vec3> value(samples.size(), glm::vec3(0.0f));
+    for (size_t i = 0; i < samples.size(); ++i) {
+        const RecordSample& s = samples[i];
+        if (s.object < 0) {
+            // The ray left the scene: the sky stays where it is, behind everything.
+            if (depth[i] == inf) depth[i] = std::numeric_limits<float>::max();
+            continue;
+        }
+        const Transform& to = next[size_t(s.object)];
+        const glm::vec3 x = to.apply_point(s.local);
+        const glm::vec3 d = x - record.position;
+        const float dist = glm::length(d);
+        if (dist <= 0.0f) continue;
+        const glm::vec3 w = d / dist;
+        const float cos_t = glm::dot(w, n);
+        if (cos_t <= 0.0f) continue;
+        const float sin2 = std::max(0.0f, 1.0f - cos_t * cos_t);
+        float phi_angle = std::atan2(glm::dot(w, b), glm::dot(w, t));
+        if (phi_angle < 0.0f) phi_angle += 2.0f * std::numbers::pi_v<float>;
+        const int j = std::min(m - 1, int(sin2 * float(m)));
+        const int k =
+            std::min(n_phi - 1, int(phi_angle / (2.0f * std::numbers::pi_v<float>)*float(n_phi)));
+        const size_t at = size_t(j) * size_t(n_phi) + size_t(k);
+        if (dist < depth[at]) {  // the Z-test of the point splat
+            depth[at] = dist;
+            value[at] = s.radiance;
+        }
+    }
+    glm::vec3 sum(0.0f);
+    for (int j = 0; j < m; ++j)
+        for (int k = 0; k < n_phi; ++k) {
+            const size_t at = size_t(j) * size_t(n_phi) + size_t(k);
+            if (std::isfinite(depth[at])) {
+                sum += value[at];
+                continue;
+            }
+            // A hole: what moved away uncovered what lay behind it, so the farthest neighbour
+            // that received a sample of geometry (Gautron's background fill; the sky only when
+            // no neighbour shows geometry, else the edge of an approaching object turns black).
+            float farthest = -1.0f;
+            glm::vec3 fill(0.0f);
+            const int nj[4] = {j - 1, j + 1, j, j},
+                      nk[4] = {k, k, (k + 1) % n_phi, (k + n_phi - 1) % n_phi};
+            for (int q = 0; q < 4; ++q) {
+                if (nj[q] < 0 || nj[q] >= m) continue;
+                const size_t o = size_t(nj[q]) * size_t(n_phi) + size_t(nk[q]);
+                const float d = depth[o] == std::numeric_limits<float>::max() ? 0.0f : depth[o];
+                if (std::isfinite(d) && d > farthest) {
+                    farthest = d;
+                    fill = value[o];
+                }
+            }
+            sum += fill;
+        }
+    return sum / (float(m) * float(n_phi));
+}
+
+int record_lifespan(const glm::vec3& now, const glm::vec3& next, float temporal_accuracy,
+                    int max_lifespan) {
+    auto lum = [](const glm::vec3& c) { return 0.2126f * c.x + 0.7152f * c.y + 0.0722f * c.z; };
+    const float e0 = lum(now), e1 = lum(next);
+    int frames = std::max(1, max_lifespan);
+    if (e0 > 0.0f) {
+        const float change = std::abs(e1 / e0 - 1.0f);  // |τ − 1|
+        if (change > 0.0f) frames = std::min(frames, std::max(1, int(temporal_accuracy / change)));
+    } else if (e1 > 0.0f) {
+        frames = 1;  // from black to lit: no ratio, expire at once
+    }
+    return frames;
 }
 
 }  // namespace ag::cpu

@@ -34,6 +34,15 @@ struct RecordGatherOptions {
     uint32_t seed = 1;
 };
 
+// What one stratum's ray saw, kept for reprojection (Gautron §5.2.4): its radiance, distance and
+// the hit in its object's own space (object −1: the ray left the scene).
+struct RecordSample {
+    glm::vec3 radiance{0.0f};
+    float distance = 0.0f;
+    int object = -1;
+    glm::vec3 local{0.0f};
+};
+
 struct RecordGatherStats {
     uint64_t rays = 0;
     int records = 0;
@@ -46,8 +55,10 @@ public:
     std::vector<IrradianceRecord> gather(const std::vector<GatherPoint>& points,
                                          const RecordRadiance& radiance,
                                          const RecordGatherOptions& options);
+    // `samples`, if given, receives the M × N strata (index j·N + k).
     IrradianceRecord gather_one(const GatherPoint& point, const RecordRadiance& radiance,
-                                const RecordGatherOptions& options) const;
+                                const RecordGatherOptions& options,
+                                std::vector<RecordSample>* samples = nullptr) const;
     const RecordGatherStats& stats() const { return stats_; }
 
 private:
@@ -56,5 +67,17 @@ private:
     ThreadPool& pool_;
     RecordGatherStats stats_;
 };
+
+// E(t0+1)/π of a record by reprojection (Gautron §5.2.4, the render cache of Walter et al.): each
+// stratum's hit moves with its object to `next` (per object, the next frame's transforms) and
+// carries its radiance; per stratum the nearest arrival wins; strata nothing lands in take the
+// farthest of their neighbours (the background, Gautron's hole filling) or keep their own value.
+glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
+                           const std::vector<Transform>& next, int theta, int phi);
+
+// Gautron eq. 5.5-5.8: the frames a record made now may live, min(δt_max, a^t / |τ − 1|) with
+// τ = E(t0+1)/E(t0) on luminance, at least 1.
+int record_lifespan(const glm::vec3& now, const glm::vec3& next, float temporal_accuracy,
+                    int max_lifespan);
 
 }  // namespace ag::cpu

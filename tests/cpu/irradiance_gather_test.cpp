@@ -42,14 +42,14 @@ struct EmitterScene {
 };
 
 // E/π at (p, n) from the emitter by midpoint quadrature over its area: (1/π) ∫ L cos θ cos θ' / r².
-double exact_iim(const glm::vec3& p, const glm::vec3& n) {
+double exact_iim(const glm::vec3& p, const glm::vec3& n, const glm::vec3& centre = kEmitterCentre) {
     constexpr int kSteps = 600;
     const double step = 2.0 * kHalf / kSteps;
     double sum = 0.0;
     for (int j = 0; j < kSteps; ++j)
         for (int i = 0; i < kSteps; ++i) {
-            const glm::dvec3 q(kEmitterCentre.x - kHalf + (i + 0.5) * step, kEmitterCentre.y,
-                               kEmitterCentre.z - kHalf + (j + 0.5) * step);
+            const glm::dvec3 q(centre.x - kHalf + (i + 0.5) * step, centre.y,
+                               centre.z - kHalf + (j + 0.5) * step);
             const glm::dvec3 d = q - glm::dvec3(p);
             const double r2 = glm::dot(d, d), r = std::sqrt(r2);
             const double cos_p = std::max(0.0, glm::dot(glm::dvec3(n), d) / r);
@@ -145,6 +145,34 @@ TEST(IrradianceGather, GradientsImproveTheExtrapolation) {
         extrapolated += std::abs(extrapolate(r, q, n).x - truth);
     }
     EXPECT_LT(extrapolated, 0.5 * flat);
+}
+
+// Gautron §5.2.4: the next frame's irradiance from the record's own samples moved with their
+// objects; a still scene reprojects to itself (τ = 1, the longest life).
+TEST(IrradianceGather, ReprojectionFollowsAMovingEmitter) {
+    EmitterScene e;
+    RayTracer rays(e.scene);
+    ThreadPool pool(2);
+    IrradianceGather gather(e.scene, rays, pool);
+    RecordGatherOptions o;
+    o.theta = 16;
+    o.phi = 64;
+    const glm::vec3 p(-0.3f, 0.0f, 0.1f), n(0.0f, 1.0f, 0.0f);
+    std::vector<RecordSample> samples;
+    const IrradianceRecord r =
+        gather.gather_one({p, n, 9}, aim_radiance_source(e.scene, e.aim), o, &samples);
+    std::vector<Transform> now, next;
+    for (const Object& obj : e.scene.objects) now.push_back(obj.transform);
+    EXPECT_NEAR(reproject_record(r, samples, now, o.theta, o.phi).x, r.iim.x, 1e-3f * r.iim.x);
+    EXPECT_EQ(record_lifespan(r.iim, r.iim, 0.05f, 20), 20);
+    next = now;
+    const glm::vec3 shift(-0.1f, 0.0f, 0.0f);  // a frame's move, closer to overhead
+    next[1].translation += shift;
+    const float moved = reproject_record(r, samples, next, o.theta, o.phi).x;
+    const double truth = exact_iim(p, n, kEmitterCentre + shift);
+    ASSERT_GT(truth, 1.1 * r.iim.x);  // a real change
+    EXPECT_NEAR(moved, truth, 0.05 * truth);
+    EXPECT_LT(record_lifespan(r.iim, glm::vec3(moved), 0.05f, 20), 2);
 }
 
 }  // namespace ag::cpu
