@@ -20,10 +20,14 @@ const std::vector<int> kNoneGathered;
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
-                                                     const std::vector<glm::vec3>& aim_values) {
+                                                     const std::vector<glm::vec3>& aim_values,
+                                                     int width, int height) {
     switch (scene.settings.indirect.method) {
         case IndirectMethodKind::iim:
             return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
+        case IndirectMethodKind::irradiance_cache:
+            return std::make_unique<IrradianceCacheMethod>(scene, meshes, aim_values, width,
+                                                           height);
     }
     return nullptr;
 }
@@ -44,7 +48,7 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);
     caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
     staged_aim_.assign(size_t(scene_.atlas.width) * size_t(scene_.atlas.height), glm::vec3(0.0f));
-    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_);
+    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_, width, height);
     if (mode_ == PipelineMode::full_budget) {
         // The baseline knows nothing of what changed: no verification, no moved-object query.
         photons_->set_verification(false);

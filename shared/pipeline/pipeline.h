@@ -23,6 +23,7 @@
 #include "shared/parallel.h"
 #include "shared/pipeline/iim_method.h"
 #include "shared/pipeline/indirect_method.h"
+#include "shared/pipeline/irradiance_cache_method.h"
 #include "shared/pipeline/pipeline_stats.h"
 #include "shared/pipeline/scheduler.h"
 #include "shared/scene.h"
@@ -43,7 +44,8 @@ struct PipelineOptions {
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
-                                                     const std::vector<glm::vec3>& aim_values);
+                                                     const std::vector<glm::vec3>& aim_values,
+                                                     int width, int height);
 
 class Pipeline {
 public:
