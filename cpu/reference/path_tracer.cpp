@@ -21,6 +21,7 @@ PathTracer::PathTracer(const Scene& scene, const RayTracer& rays, const Referenc
     : scene_(scene),
       rays_(rays),
       max_depth_(std::max(1, settings.max_depth)),
+      indirect_bounces_(settings.indirect_bounces),
       seed_(settings.seed),
       halton_(kPixelDims + kVertexDims * kQmcVertices, hash_u32(settings.seed) | 1u),
       object_lights_(object_lights(scene)) {}
@@ -37,6 +38,8 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
     bool diffuse_seen = false;     // some diffuse vertex on the path so far
     bool diffuse_after_x = false;  // a diffuse vertex after the first one, x
     bool after_specular = false;   // the ray leaves a specular vertex
+    int diffuse_vertices = 0;      // diffuse vertices so far, x included
+    bool specular_only = false;    // --indirect-bounces reached: end at the next diffuse vertex
     for (int depth = 0; depth < max_depth_; ++depth) {
         const int dim = kPixelDims + kVertexDims * depth;
         const RayHit hit = rays_.intersect(ray);
@@ -74,12 +77,17 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
         if (m.type == MaterialType::diffuse) {
             // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the
             // photon tracer), so it is black.
-            if (!front) break;
+            if (!front || specular_only) break;
             out[here] += throughput * m.albedo / std::numbers::pi_v<float> *
                          direct_irradiance(scene_, rays_, hit.position, hit.normal, 1,
                                            s.get(dim + 4), s.get(dim + 5));
             if (depth > 0) diffuse_after_x = true;
             diffuse_seen = true;
+            // Light arriving at the k-th diffuse vertex after x has made k bounces to reach x.
+            // After the last bounce allowed has had its next-event estimate the path goes on
+            // through mirrors and glass only, to find the lights they show (L S+ D paths).
+            if (indirect_bounces_ >= 0 && ++diffuse_vertices > indirect_bounces_)
+                specular_only = true;
             after_specular = false;
             // Cosine sampling makes BRDF · cos / pdf = ρ.
             throughput *= m.albedo;

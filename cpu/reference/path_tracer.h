@@ -19,6 +19,7 @@ private:
     const Scene& scene_;
     const RayTracer& rays_;
     int max_depth_;
+    int indirect_bounces_;  // < 0: all
     uint32_t seed_;
     Halton halton_;
     std::vector<int> object_lights_;  // per object: its mesh light, or -1

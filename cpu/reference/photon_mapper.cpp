@@ -132,6 +132,7 @@ void PhotonMapper::trace(Ray ray, glm::vec3 power, const Sampler& s, int dim, bo
                          std::vector<Photon>& out) const {
     const float eps = rays_.epsilon();
     bool specular_seen = false, diffuse_seen = false;
+    int diffuse_hits = 0;  // stored in the global map so far
     for (int bounce = 0; bounce < settings_.max_depth; ++bounce, dim += 3) {
         const RayHit hit = rays_.intersect(ray);
         if (!hit.hit) return;
@@ -149,8 +150,13 @@ void PhotonMapper::trace(Ray ray, glm::vec3 power, const Sampler& s, int dim, bo
             if (specular_seen) out.push_back(photon);
             return;
         }
+        // With --indirect-bounces N the global map keeps the light that has made at most N − 1
+        // diffuse bounces: read at a final-gather hit it reaches x after at most N.
+        const int limit = settings_.indirect_bounces;
+        if (limit >= 0 && diffuse_hits >= limit) return;
         out.push_back(photon);
         diffuse_seen = true;
+        if (limit >= 0 && ++diffuse_hits >= limit) return;
         // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
         const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
         if (!(p > 0.0f) || s.get(dim) >= p) return;
@@ -386,7 +392,9 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
                                      settings_.area_light_samples, s.get(2), s.get(3));
         const glm::vec3 caustics = brdf * caustic_irradiance(hit.position, hit.normal);
         // Cosine-weighted gather: ρ/π · E = ρ/π · π · mean(L) = ρ · mean(L).
-        const glm::vec3 indirect = m.albedo * gather(hit.position, hit.normal, key, index);
+        const glm::vec3 indirect = settings_.indirect_bounces == 0
+                                       ? glm::vec3(0.0f)
+                                       : m.albedo * gather(hit.position, hit.normal, key, index);
         if (depth == 0) {
             out[FrameTerm::direct] += direct;
             out[FrameTerm::caustics] += caustics;

@@ -39,6 +39,11 @@ struct ReferenceSettings {
                               // At least one pass always completes; with neither, one pass.
     uint32_t seed = 1;        // scrambles every sequence; same seed, same image
     int max_depth = 256;      // path length cap (Russian roulette ends paths long before)
+    // Diffuse bounces between the light and the visible point x that the indirect term keeps:
+    // 1 = light reflected by one surface on its way to x (the single-bounce methods' term),
+    // 0 = no indirect light, < 0 = all. Direct light, caustics (L S+ D x) and what mirrors show
+    // keep their definitions; bounces are counted at diffuse vertices after x (docs/reference.md).
+    int indirect_bounces = -1;
 
     // Photon mapping only.
     int photons = 1000000;          // global map: photons emitted from all lights together

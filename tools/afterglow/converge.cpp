@@ -51,6 +51,10 @@ const Command kConvergeCommand{
         text("cache", "DIR", "reference cache", "out/reference-cache"),
         integer("ref-spp", "N", "samples per pixel of a computed reference", 1, 1000000, 64),
         integer("ref-photons", "N", "photons of a computed pm reference", 1000, 100000000, 400000),
+        integer("reference-bounces", "N",
+                "score against a reference whose indirect term keeps N diffuse bounces (1 for "
+                "single-bounce methods; default all)",
+                0, 1 << 16),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
         gather_option(),
@@ -96,6 +100,7 @@ int run_converge(const Args& args) {
         request.spp = args.get_int("ref-spp");
         request.photons = args.get_int("ref-photons");
         request.threads = threads;
+        request.indirect_bounces = args.get_int("reference-bounces", -1);
         reference_path = cached_reference(scene, script_path, frames, request);
     }
     const Image reference = read_reference(reference_path, component, width, height);

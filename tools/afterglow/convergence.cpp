@@ -52,6 +52,7 @@ uint64_t state_hash(const Scene& scene, const cpu::ReferenceSettings& rs) {
     add(rs.method), add(rs.spp), add(rs.seed), add(rs.photons), add(rs.caustic_photons),
         add(rs.knn);
     add(rs.caustic_knn), add(rs.gather_rays), add(rs.area_light_samples), add(rs.max_depth);
+    add(rs.indirect_bounces);
     return h;
 }
 
@@ -74,6 +75,7 @@ std::string cached_reference(const Scene& scene, const std::string& script_path,
     rs.method = cpu::ReferenceMethod::photon_mapping;
     rs.spp = request.spp;
     rs.photons = request.photons;
+    rs.indirect_bounces = request.indirect_bounces;
     rs.caustic_photons = rs.photons;
     rs.seed = scene.settings.seed;
     char hex[32];

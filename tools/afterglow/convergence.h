@@ -23,7 +23,8 @@ struct ReferenceRequest {
     std::string name;  // file-name stem in the cache (the scene's)
     std::string cache = "out/reference-cache";
     int spp = 64, photons = 400000;
-    int threads = 0;                                // worker threads of the reference renderer
+    int threads = 0;            // worker threads of the reference renderer
+    int indirect_bounces = -1;  // the reference's indirect term: this many bounces (< 0 = all)
     std::string log_prefix = "afterglow converge";  // for the messages on stderr
 };
 

@@ -50,6 +50,10 @@ const Command kReferenceCommand{
                 1 << 20, cpu::ReferenceSettings{}.gather_rays),
         integer("area-samples", "N", "pm: shadow rays per quad light per sample", 1, 1 << 16,
                 cpu::ReferenceSettings{}.area_light_samples),
+        integer("indirect-bounces", "N",
+                "diffuse bounces the indirect term keeps (1 = single bounce, 0 = none; default "
+                "all)",
+                0, 1 << 16),
         flag("quiet,q", "no progress bar (there is none unless stderr is a terminal)"),
     },
     1,
@@ -109,6 +113,7 @@ int run_reference(const Args& args) {
     settings.caustic_radius = float(args.get_double("caustic-radius", 0.0));
     settings.gather_rays = args.get_int("gather-rays");
     settings.area_light_samples = args.get_int("area-samples");
+    settings.indirect_bounces = args.get_int("indirect-bounces", -1);
     ThreadPool pool(args.get_int("threads", scene.settings.threads));
 
     // The bar only where someone watches: a terminal, as `afterglow render` does.
