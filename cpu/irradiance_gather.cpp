@@ -141,7 +141,8 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
 }
 
 glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
-                           const std::vector<Transform>& next, int theta, int phi) {
+                           const std::vector<Transform>& now, const std::vector<Transform>& next,
+                           int theta, int phi) {
     const int m = std::max(1, theta), n_phi = std::max(3, phi);
     const glm::vec3 n = record.normal;
     glm::vec3 t, b;
@@ -157,6 +158,14 @@ glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<Rec
             continue;
         }
         const Transform& to = next[size_t(s.object)];
+        const Transform& from = now[size_t(s.object)];
+        if (to.translation == from.translation && to.rotation == from.rotation) {
+            if (s.distance < depth[i]) {
+                depth[i] = s.distance;
+                value[i] = s.radiance;
+            }
+            continue;
+        }
         const glm::vec3 x = to.apply_point(s.local);
         const glm::vec3 d = x - record.position;
         const float dist = glm::length(d);

@@ -69,11 +69,13 @@ private:
 };
 
 // E(t0+1)/π of a record by reprojection (Gautron §5.2.4, the render cache of Walter et al.): each
-// stratum's hit moves with its object to `next` (per object, the next frame's transforms) and
+// stratum's hit moves with its object from `now` to `next` (per object, this and the next frame's
+// transforms; hits on objects that stay keep their stratum exactly) and
 // carries its radiance; per stratum the nearest arrival wins; strata nothing lands in take the
 // farthest of their neighbours (the background, Gautron's hole filling) or keep their own value.
 glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
-                           const std::vector<Transform>& next, int theta, int phi);
+                           const std::vector<Transform>& now, const std::vector<Transform>& next,
+                           int theta, int phi);
 
 // Gautron eq. 5.5-5.8: the frames a record made now may live, min(δt_max, a^t / |τ − 1|) with
 // τ = E(t0+1)/E(t0) on luminance, at least 1.

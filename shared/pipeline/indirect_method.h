@@ -54,6 +54,11 @@ public:
     // The last entry of scene.changes this method has read (its sequence), so the pipeline can
     // trim the log; a method that never reads the log has nothing to wait for.
     virtual uint64_t changes_seen() const { return std::numeric_limits<uint64_t>::max(); }
+    // Methods that plan with the next frame's scene (temporal radiance caching, Gautron ch. 5)
+    // say so; the frame loop then keeps a copy of the scene one script frame ahead and hands it
+    // over before every frame (null where there is no script).
+    virtual bool wants_lookahead() const { return false; }
+    virtual void set_lookahead(const Scene* /*next*/) {}
 };
 
 }  // namespace ag

@@ -67,14 +67,15 @@ IrradianceRecord IrradianceCacheMethod::make_record(const GatherPoint& at, int f
     if (!temporal) return r;  // lives until an edit or an AIM change retires it
     int life = rc.max_lifespan;
     if (lookahead_) {
-        std::vector<Transform> next;
+        std::vector<Transform> now, next;
+        for (const Object& o : scene_.objects) now.push_back(o.transform);
         for (const Object& o : lookahead_->objects) next.push_back(o.transform);
         const glm::vec3 predicted =
-            cpu::reproject_record(r, samples, next, options.theta, options.phi);
+            cpu::reproject_record(r, samples, now, next, options.theta, options.phi);
         life = cpu::record_lifespan(r.iim, predicted, rc.temporal_accuracy, rc.max_lifespan);
         // Extrapolated temporal gradient (Gautron eq. 5.12): the change over the next frame.
         r.temporal_gradient = predicted - r.iim;
-        predictions_.push_back({r, predicted});
+        predictions_.push_back({r, predicted, at.key});
     }
     r.expires = frame + life - 1;
     return r;

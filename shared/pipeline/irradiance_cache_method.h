@@ -47,7 +47,8 @@ public:
 
     // The scene one frame ahead (the edit script run ahead; Gautron's "predefined animation"),
     // or null: then records near an object that moves expire at once.
-    void set_lookahead(const Scene* next) { lookahead_ = next; }
+    bool wants_lookahead() const override { return scene_.settings.rc.max_lifespan > 0; }
+    void set_lookahead(const Scene* next) override { lookahead_ = next; }
 
     const std::vector<IrradianceRecord>& records() const { return records_; }
     const IrradianceCacheStats& last_stats() const { return stats_; }
@@ -57,6 +58,7 @@ public:
     struct Prediction {
         IrradianceRecord record;
         glm::vec3 predicted{0.0f};
+        uint32_t key = 0;  // the gather's jitter key, so a gather at t+1 repeats its strata
     };
     const std::vector<Prediction>& last_predictions() const { return predictions_; }
     cpu::RecordRadiance radiance_source(const Scene& scene, const cpu::RayTracer& rays) const;

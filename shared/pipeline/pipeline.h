@@ -73,6 +73,7 @@ public:
     gpu::FrameImages images() const { return renderer_->read_back(); }
     const gpu::FrameRenderer& renderer() const { return *renderer_; }
     const IndirectMethod& indirect() const { return *indirect_; }
+    IndirectMethod& indirect() { return *indirect_; }
     // The IIM method when it is the active one, else null (for lightmap views and statistics).
     IimMethod* iim_method() { return dynamic_cast<IimMethod*>(indirect_.get()); }
     const IimMethod* iim_method() const { return dynamic_cast<const IimMethod*>(indirect_.get()); }
