@@ -93,8 +93,8 @@ struct RcSettings {
     RcSource source = RcSource::aim;
     RcScan scan = RcScan::gpu;
     float accuracy = 0.3f;  // a: zone of influence a·R_k, new records where Σ w < a
-    int theta_strata = 8;   // M × N stratified rays per record (Ward & Heckbert 1992)
-    int phi_strata = 32;
+    int theta_strata = 16;  // M × N stratified rays per record (Ward & Heckbert 1992)
+    int phi_strata = 64;
     float min_radius = 0.01f;  // R_k clamped to [min, max] × scene diagonal
     float max_radius = 0.25f;
     int records_per_frame = 400;  // new or replaced records per frame (thesis: ≤ 100)
