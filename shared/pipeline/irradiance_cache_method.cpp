@@ -125,9 +125,26 @@ void IrradianceCacheMethod::run(int frame, int budget, bool everything) {
     }
     predictions_.clear();
     stats_.added = stats_.replaced = 0;
+    const Clock::time_point t1 = Clock::now();
+    splat_.render_gbuffer();
+    const std::vector<SplatPixel> pixels = splat_.read_gbuffer();
+    double splat_ms = ms_since(t1);
+
     const Clock::time_point t0 = Clock::now();
     // Expired records first, oldest first, recomputed where they are (Gautron §5.2.3: the
-    // accuracy pattern stays put, so nothing flickers).
+    // accuracy pattern stays put, so nothing flickers); an expired record no pixel uses any more
+    // (left in the air by a moving object, or out of view) is deleted instead (Gautron §5.3, there
+    // by occlusion queries; the view may come back to it, and a cache miss then makes a new one).
+    const float cutoff = 1.0f / a;
+    auto used = [&](const IrradianceRecord& r) {
+        for (const SplatPixel& px : pixels)
+            if (px.covered && ward_weight(r, px.position, px.normal) >= cutoff) return true;
+        return false;
+    };
+    const size_t before = records_.size();
+    std::erase_if(records_,
+                  [&](const IrradianceRecord& r) { return r.expires < frame && !used(r); });
+    stats_.deleted = int(before - records_.size());
     std::vector<size_t> expired;
     for (size_t k = 0; k < records_.size(); ++k)
         if (records_[k].expires < frame) expired.push_back(k);
@@ -142,13 +159,11 @@ void IrradianceCacheMethod::run(int frame, int budget, bool everything) {
     stats_.expired_pending = int(expired.size() - replace);
     const double replace_ms = ms_since(t0);
 
-    const Clock::time_point t1 = Clock::now();
-    splat_.render_gbuffer();
-    const std::vector<SplatPixel> pixels = splat_.read_gbuffer();
+    const Clock::time_point t3 = Clock::now();
     splat_.clear();
     splat_.splat(records_, a, frame);
     gpu::gl::Finish();
-    stats_.splat_ms = ms_since(t1);
+    stats_.splat_ms = splat_ms + ms_since(t3);
 
     const Clock::time_point t2 = Clock::now();
     const int left = everything ? std::numeric_limits<int>::max() : budget - int(replace);

@@ -23,6 +23,7 @@ struct IrradianceCacheStats {
     int added = 0;              // new records this frame (cache misses)
     int replaced = 0;           // expired records recomputed in place
     int dropped = 0;            // records removed by edits
+    int deleted = 0;            // expired records no pixel used any more, deleted
     int expired_pending = 0;    // expired records left for later frames (budget)
     uint64_t records_made = 0;  // every record ever computed (added + replaced)
     double splat_ms = 0.0, scan_ms = 0.0, gather_ms = 0.0;
