@@ -148,3 +148,13 @@ foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
               "--size: expects N or WxH with positive integers up to 16384, got '${size}'"
               bench soak --size ${size})
 endforeach()
+
+# Irradiance cache (Gautron 2006, docs/irradiance_cache.md): the bench's three variants run on a
+# few tiny frames of Cube in a Box; a bad rc setting names its key.
+add_test(NAME cli.bench_irradiance_cache
+         COMMAND ${AG_EXPECT} 0 "forever +[0-9]+ +[0-9]+" ${AG_BIN} bench
+                 irradiance_cache --frames 6 --size 24x24 --ref-spp 1 --threads 1
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.bench_irradiance_cache PROPERTIES LABELS gl)
+ag_cli_test(rc_bad_source 2 "rc/source: expected one of aim, direct" render scenes/cornell.json -o x.exr
+            --set rc.source=glossy)
