@@ -75,6 +75,13 @@ void main() {
     vec3 value = rec[b + 2].rgb + float(frame - int(rec[b + 1].w)) * rec[b + 3].rgb;
     value += vec3(dot(axis, rec[b + 4].xyz), dot(axis, rec[b + 5].xyz), dot(axis, rec[b + 6].xyz));
     value += vec3(dot(d, rec[b + 7].xyz), dot(d, rec[b + 8].xyz), dot(d, rec[b + 9].xyz));
+#ifdef RECORD_VIEW
+    // The record's own colour, brighter towards it (w/(1/a) grows from 1 at the rim).
+    uint h = uint(v_record) * 2654435761u;
+    vec3 c = vec3(float(h & 255u), float((h >> 8) & 255u), float((h >> 16) & 255u)) / 255.0;
+    float near = clamp(0.25 * w * accuracy, 0.0, 1.0);
+    value = length(d) < 0.02 * r ? vec3(40.0) : mix(0.3 * c, c, near);
+#endif
     color = vec4(w * max(value, vec3(0.0)), w);
 }
 )";
@@ -140,10 +147,14 @@ RadianceCacheSplat::RadianceCacheSplat(const Scene& scene, const SceneMeshes& me
     splat_ = Program("radiance cache splat", kSplatVertex, kSplatFragment);
     normalise_ = Program("radiance cache normalise", kFullScreenTriangleVertex, kNormaliseFragment);
     scan_ = Program("radiance cache scan", kFullScreenTriangleVertex, kScanFragment);
+    view_program_ = Program("radiance cache record view", kSplatVertex,
+                            "#define RECORD_VIEW\n" + kSplatFragment);
     position_ = float_target(width, height);
     normal_ = float_target(width, height);
     sums_ = float_target(width, height);
     term_ = float_target(width, height);
+    view_ = float_target(width, height);
+    view_sums_ = float_target(width, height);
     depth_ = make_renderbuffer();
     gl::BindRenderbuffer(GL_RENDERBUFFER, depth_.get());
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH_COMPONENT32F, width, height);
@@ -165,6 +176,15 @@ RadianceCacheSplat::RadianceCacheSplat(const Scene& scene, const SceneMeshes& me
     gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, term_.get(), 0);
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("radiance cache splat: term framebuffer incomplete");
+    view_sums_fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, view_sums_fbo_.get());
+    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, view_sums_.get(),
+                             0);
+    view_fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, view_fbo_.get());
+    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D, view_.get(), 0);
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("radiance cache splat: view framebuffer incomplete");
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     records_ = make_buffer();
     tiles_ = make_buffer();
@@ -210,9 +230,27 @@ void RadianceCacheSplat::clear() {
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
 }
 
+void RadianceCacheSplat::render_record_view(const std::vector<IrradianceRecord>& records,
+                                            float accuracy) {
+    gl::BindFramebuffer(GL_FRAMEBUFFER, view_sums_fbo_.get());
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    gl::DrawBuffers(1, &draw);
+    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::ClearColor(0, 0, 0, 0);
+    gl::Clear(GL_COLOR_BUFFER_BIT);
+    draw_records(view_program_, view_sums_fbo_.get(), records, accuracy, 0);
+    normalise_into(view_sums_.get(), view_fbo_.get());  // Σ w c / Σ w, as the term is
+}
+
 void RadianceCacheSplat::splat(const std::vector<IrradianceRecord>& records, float accuracy,
                                int frame) {
     last_splatted_ = int(records.size());
+    draw_records(splat_, splat_fbo_.get(), records, accuracy, frame);
+}
+
+void RadianceCacheSplat::draw_records(const Program& program, GLuint framebuffer,
+                                      const std::vector<IrradianceRecord>& records, float accuracy,
+                                      int frame) {
     if (records.empty()) return;
     std::vector<glm::vec4> data(records.size() * kRecordVec4s);
     for (size_t k = 0; k < records.size(); ++k) {
@@ -232,7 +270,7 @@ void RadianceCacheSplat::splat(const std::vector<IrradianceRecord>& records, flo
                    data.data(), GL_STREAM_DRAW);
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, 0, records_.get());
 
-    gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
+    gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
     const GLenum draw = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &draw);
     gl::Viewport(0, 0, width_, height_);
@@ -241,12 +279,12 @@ void RadianceCacheSplat::splat(const std::vector<IrradianceRecord>& records, flo
     gl::Disable(GL_STENCIL_TEST);
     gl::Enable(GL_BLEND);
     gl::BlendFunc(GL_ONE, GL_ONE);  // float additive blending: (Σ w E, Σ w)
-    splat_.use();
-    splat_.set("view_projection", camera_view_projection(scene_, width_, height_));
-    splat_.set("accuracy", accuracy);
-    splat_.set("frame", frame);
-    splat_.set("positions", 0);
-    splat_.set("normals", 1);
+    program.use();
+    program.set("view_projection", camera_view_projection(scene_, width_, height_));
+    program.set("accuracy", accuracy);
+    program.set("frame", frame);
+    program.set("positions", 0);
+    program.set("normals", 1);
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, position_.get());
     gl::ActiveTexture(GL_TEXTURE1);
@@ -259,7 +297,7 @@ void RadianceCacheSplat::splat(const std::vector<IrradianceRecord>& records, flo
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, 0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
-    check_gl("RadianceCacheSplat::splat");
+    check_gl("RadianceCacheSplat::draw_records");
 }
 
 std::vector<glm::vec4> RadianceCacheSplat::read_sums() const {
@@ -280,8 +318,10 @@ std::vector<glm::vec3> RadianceCacheSplat::read_term() const {
     return out;
 }
 
-void RadianceCacheSplat::normalise() {
-    gl::BindFramebuffer(GL_FRAMEBUFFER, term_fbo_.get());
+void RadianceCacheSplat::normalise() { normalise_into(sums_.get(), term_fbo_.get()); }
+
+void RadianceCacheSplat::normalise_into(GLuint sums, GLuint framebuffer) {
+    gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
     const GLenum draw = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &draw);
     gl::Viewport(0, 0, width_, height_);
@@ -290,7 +330,7 @@ void RadianceCacheSplat::normalise() {
     normalise_.use();
     normalise_.set("sums", 0);
     gl::ActiveTexture(GL_TEXTURE0);
-    gl::BindTexture(GL_TEXTURE_2D, sums_.get());
+    gl::BindTexture(GL_TEXTURE_2D, sums);
     gl::BindVertexArray(empty_.get());
     gl::DrawArrays(GL_TRIANGLES, 0, 3);
     gl::BindVertexArray(0);

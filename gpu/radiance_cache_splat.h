@@ -60,17 +60,27 @@ public:
                              const MakeRecord& make, int max_new, int tile = 8);
     int last_rounds() const { return rounds_; }  // scan rounds of the last add_records_gpu_scan
 
+    // A picture of the records for the viewer: each record's zone of influence (w ≥ 1/a) in a
+    // colour of its own, mixed by weight, brighter towards the record, the record itself white;
+    // into the texture record_view() (RGBA32F, width × height).
+    void render_record_view(const std::vector<IrradianceRecord>& records, float accuracy);
+    GLuint record_view() const { return view_.get(); }
+
     // Records drawn by the last splat() (zero-area quads included).
     int last_splatted() const { return last_splatted_; }
 
 private:
+    void draw_records(const Program& program, GLuint framebuffer,
+                      const std::vector<IrradianceRecord>& records, float accuracy, int frame);
+    void normalise_into(GLuint sums, GLuint framebuffer);
+
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int width_, height_;
-    Program gbuffer_, splat_, normalise_, scan_;
-    Texture position_, normal_, sums_, term_;
+    Program gbuffer_, splat_, normalise_, scan_, view_program_;
+    Texture position_, normal_, sums_, term_, view_, view_sums_;
     Renderbuffer depth_;
-    Framebuffer gbuffer_fbo_, splat_fbo_, term_fbo_;
+    Framebuffer gbuffer_fbo_, splat_fbo_, term_fbo_, view_fbo_, view_sums_fbo_;
     Buffer records_, tiles_;
     VertexArray empty_;
     int last_splatted_ = 0;

@@ -54,6 +54,11 @@ public:
     const std::vector<IrradianceRecord>& records() const { return records_; }
     const IrradianceCacheStats& last_stats() const { return stats_; }
     const gpu::RadianceCacheSplat& splat() const { return splat_; }
+    // The viewer's picture of the records and their zones (gpu::RadianceCacheSplat).
+    GLuint render_record_view() {
+        splat_.render_record_view(records_, scene_.settings.rc.accuracy);
+        return splat_.record_view();
+    }
     // Reprojected E(t+1)/π and the record it was made for, for every record made by the last
     // update() with a look-ahead (Table 5.1's error is measured against a gather at t+1).
     struct Prediction {
