@@ -18,8 +18,8 @@ inline constexpr std::array kGatherBackendNames = {"auto", "gl", "cpu"};
 // ag::IndirectMethod of the pipeline. `iim`: Larsen's lightmaps gathered from AIMs (ch. 8-11);
 // `gpu_pm`: photons traced on the GPU, binned into screen tiles, cone-filtered (Jimenez Kwast
 // 2016).
-enum class IndirectMethodKind { iim, gpu_pm, vpl };
-inline constexpr std::array kIndirectMethodNames = {"iim", "gpu_pm", "vpl"};
+enum class IndirectMethodKind { iim, gpu_pm, vpl, irradiance_cache };
+inline constexpr std::array kIndirectMethodNames = {"iim", "gpu_pm", "vpl", "irradiance_cache"};
 
 // GPU photon mapping's radiance estimate: `standard`, eq. 5.6 (E = Σ Φ w / ((1 − 2/3k) π r²));
 // `kwast`, with the thesis code's extra factors (×100 photon power, 1/π at the bounce, N·L at the
@@ -38,6 +38,16 @@ inline constexpr std::array kGpuPmBinningNames = {"scatter", "brute"};
 // random walks (power × BRDF / paths, at most vpl.walk_bounces bounces), traced once.
 enum class VplSource { photons, random_walk };
 inline constexpr std::array kVplSourceNames = {"photons", "random_walk"};
+// `irradiance_cache`: Gautron 2006's splatted irradiance cache records (docs/irradiance_cache.md).
+
+// What irradiance cache records gather: the AIMs (every bounce the photons carry) or the lights'
+// direct light on the surfaces the rays hit (one bounce, as Gautron's records).
+enum class RcSource { aim, direct };
+inline constexpr std::array kRcSourceNames = {"aim", "direct"};
+// How pixels Σ w < a are found: GPU tiles (no read-back of the splat buffer) or the thesis's CPU
+// scan of the read-back buffer.
+enum class RcScan { gpu, cpu };
+inline constexpr std::array kRcScanNames = {"gpu", "cpu"};
 
 enum class BorderCorrection { none, renormalize, stretch };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
@@ -133,6 +143,24 @@ struct VplSettings {
     int resolution_divisor = 4;   // the screen-space term is computed at frame size / this
 };
 
+// Irradiance cache splatting and temporal radiance caching (Gautron 2006 ch. 4, 5).
+struct RcSettings {
+    RcSource source = RcSource::aim;
+    RcScan scan = RcScan::gpu;
+    float accuracy = 0.3f;  // a: zone of influence a·R_k, new records where Σ w < a
+    int theta_strata = 16;  // M × N stratified rays per record (Ward & Heckbert 1992)
+    int phi_strata = 64;
+    float min_radius = 0.01f;  // R_k clamped to [min, max] × scene diagonal
+    float max_radius = 0.25f;
+    int records_per_frame = 400;  // new or replaced records per frame (thesis: ≤ 100)
+    int shadow_samples = 4;       // `direct`: shadow rays per area light at each ray's hit
+    // Temporal caching (ch. 5): a record made at t0 lives while 1/(|τ−1|(t−t0)) ≥ 1/a^t and
+    // t − t0 < δt_max; τ = E(t0+1)/E(t0) from the next frame's transforms. 0 = no temporal
+    // caching: every edit drops the records it may affect.
+    float temporal_accuracy = 0.05f;  // a^t
+    int max_lifespan = 0;             // δt_max in frames (Cube in a Box: 20); 1 = per frame
+};
+
 struct CausticSettings {
     int photons = 10000;  // caustic photons per light (thesis: 10,000)
     int frames = 8;       // all photons re-traced over this many frames (thesis: 8)
@@ -160,6 +188,7 @@ struct Settings {
     IndirectSettings indirect;
     GpuPmSettings gpu_pm;
     VplSettings vpl;
+    RcSettings rc;
     ScheduleSettings schedule;
     CausticSettings caustics;
     DirectSettings direct;
@@ -288,6 +317,25 @@ void visit_settings(Settings& s, Visitor& v) {
                        "VPLs whose visibility is recomputed per frame"});
     v.field(Field<int>{"resolution_divisor", s.vpl.resolution_divisor, 1, 64,
                        "screen-space term at frame size / this"});
+    v.end_section();
+    v.section("rc", "irradiance cache splatting and temporal caching, Gautron 2006");
+    v.field(EnumField<RcSource, kRcSourceNames.size()>{"source", s.rc.source, kRcSourceNames,
+                                                       "what records gather: aim or direct"});
+    v.field(EnumField<RcScan, kRcScanNames.size()>{"scan", s.rc.scan, kRcScanNames,
+                                                   "cache-miss scan: gpu tiles or cpu read-back"});
+    v.field(Field<float>{"accuracy", s.rc.accuracy, 0.01, 1.0, "a: records cover a·R_k"});
+    v.field(Field<int>{"theta_strata", s.rc.theta_strata, 1, 1024, "record rays: strata in θ"});
+    v.field(Field<int>{"phi_strata", s.rc.phi_strata, 3, 4096, "record rays: strata in φ"});
+    v.field(Field<float>{"min_radius", s.rc.min_radius, 0, 10, "R_k ≥ this × scene diagonal"});
+    v.field(Field<float>{"max_radius", s.rc.max_radius, 0, 10, "R_k ≤ this × scene diagonal"});
+    v.field(Field<int>{"records_per_frame", s.rc.records_per_frame, 1, 1e8,
+                       "records made or replaced per frame"});
+    v.field(Field<int>{"shadow_samples", s.rc.shadow_samples, 1, 4096,
+                       "direct: shadow rays per area light per hit"});
+    v.field(Field<float>{"temporal_accuracy", s.rc.temporal_accuracy, 1e-6, 1e6,
+                         "a^t: temporal accuracy"});
+    v.field(Field<int>{"max_lifespan", s.rc.max_lifespan, 0, 1e6,
+                       "δt_max in frames; 0 = no temporal caching"});
     v.end_section();
     v.section("caustics", "caustic photons and screen-space filtering, Larsen ch. 12");
     v.field(Field<int>{"photons", s.caustics.photons, 0, 1e8, "caustic photons per light"});

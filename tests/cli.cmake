@@ -157,3 +157,13 @@ ag_cli_test(compare_ldr_json 0 "\"mse\":0.0" compare --ldr --json docs/images/sp
 ag_cli_test(bench_gpu_pm_bad_paths 2 "--paths: expects positive numbers separated by commas"
             bench gpu_pm --paths 1,x)
 ag_cli_test(bench_gpu_pm_bad_radii 2 "--radii: expects positive numbers" bench gpu_pm --radii 0)
+
+# Irradiance cache (Gautron 2006, docs/irradiance_cache.md): the bench's three variants run on a
+# few tiny frames of Cube in a Box; a bad rc setting names its key.
+add_test(NAME cli.bench_irradiance_cache
+         COMMAND ${AG_EXPECT} 0 "forever +[0-9]+ +[0-9]+" ${AG_BIN} bench
+                 irradiance_cache --frames 6 --size 24x24 --ref-spp 1 --threads 1
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.bench_irradiance_cache PROPERTIES LABELS gl)
+ag_cli_test(rc_bad_source 2 "rc/source: expected one of aim, direct" render scenes/cornell.json -o x.exr
+            --set rc.source=glossy)

@@ -15,8 +15,24 @@ FrameLoop::FrameLoop(Pipeline& pipeline, Script* script) : pipeline_(pipeline) {
 void FrameLoop::start_script(Script* script) {
     script_ = script;
     script_frame_ = 0;
+    lookahead_scene_.reset();
+    lookahead_script_.reset();
+    lookahead_frame_ = 0;
+    pipeline_.indirect().set_lookahead(nullptr);
     if (!script_) return;
     begin_edits();
+    if (pipeline_.indirect().wants_lookahead()) {
+        try {
+            lookahead_script_ = std::make_unique<Script>(script_->path());
+            lookahead_scene_ = std::make_unique<Scene>(pipeline_.scene());
+            lookahead_script_->on_start(*lookahead_scene_);
+        } catch (const std::exception&) {
+            // A script made from text has no file to load twice: no look-ahead, records near
+            // edits then expire at once.
+            lookahead_script_.reset();
+            lookahead_scene_.reset();
+        }
+    }
     if (!script_->on_start(pipeline_.scene())) {
         ++script_errors_;
         on_script_error(*script_->last_error());
@@ -38,6 +54,15 @@ bool FrameLoop::run_script() {
 PipelineStats FrameLoop::step(bool play) {
     begin_edits();
     if (play) run_script();
+    if (lookahead_script_) {
+        // The copy runs the frame after the one just run: the scene as the next frame sees it.
+        while (lookahead_frame_ <= script_frame_) {
+            lookahead_script_->on_frame(*lookahead_scene_, lookahead_frame_,
+                                        lookahead_frame_ / kScriptFramesPerSecond);
+            ++lookahead_frame_;
+        }
+        pipeline_.indirect().set_lookahead(lookahead_scene_.get());
+    }
     edited_ = pipeline_.scene().version != version_after_frame_;
     const PipelineStats stats = pipeline_.frame();
     version_after_frame_ = pipeline_.scene().version;

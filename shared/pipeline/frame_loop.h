@@ -4,6 +4,7 @@
 #pragma once
 
 #include <functional>
+#include <memory>
 #include <string>
 
 #include "shared/pipeline/pipeline.h"
@@ -43,6 +44,11 @@ private:
     int frames_ = 0, script_frame_ = 0, script_errors_ = 0;
     uint64_t version_after_frame_ = 0;
     bool edited_ = false;
+    // For methods that want the next frame's scene: a copy run by a second instance of the
+    // script one frame ahead (Gautron's predefined animation).
+    std::unique_ptr<Scene> lookahead_scene_;
+    std::unique_ptr<Script> lookahead_script_;
+    int lookahead_frame_ = 0;
 };
 
 struct FrameEvent {

@@ -57,6 +57,11 @@ public:
     // Whether the method reads the CPU photon maps and AIMs; if not, the pipeline traces no
     // diffuse photons and builds no AIMs (caustic photons are traced either way).
     virtual bool uses_photon_maps() const { return true; }
+    // Methods that plan with the next frame's scene (temporal radiance caching, Gautron ch. 5)
+    // say so; the frame loop then keeps a copy of the scene one script frame ahead and hands it
+    // over before every frame (null where there is no script).
+    virtual bool wants_lookahead() const { return false; }
+    virtual void set_lookahead(const Scene* /*next*/) {}
 };
 
 }  // namespace ag

@@ -30,6 +30,9 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
             return std::make_unique<GpuPmMethod>(scene, meshes, width, height);
         case IndirectMethodKind::vpl:
             return std::make_unique<VplMethod>(scene, meshes, width, height);
+        case IndirectMethodKind::irradiance_cache:
+            return std::make_unique<IrradianceCacheMethod>(scene, meshes, aim_values, width,
+                                                           height);
     }
     return nullptr;
 }

@@ -24,6 +24,7 @@
 #include "shared/pipeline/gpu_pm_method.h"
 #include "shared/pipeline/iim_method.h"
 #include "shared/pipeline/indirect_method.h"
+#include "shared/pipeline/irradiance_cache_method.h"
 #include "shared/pipeline/pipeline_stats.h"
 #include "shared/pipeline/scheduler.h"
 #include "shared/scene.h"
@@ -74,6 +75,7 @@ public:
     gpu::FrameImages images() const { return renderer_->read_back(); }
     const gpu::FrameRenderer& renderer() const { return *renderer_; }
     const IndirectMethod& indirect() const { return *indirect_; }
+    IndirectMethod& indirect() { return *indirect_; }
     // The IIM method when it is the active one, else null (for lightmap views and statistics).
     IimMethod* iim_method() { return dynamic_cast<IimMethod*>(indirect_.get()); }
     const IimMethod* iim_method() const { return dynamic_cast<const IimMethod*>(indirect_.get()); }

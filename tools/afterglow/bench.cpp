@@ -20,6 +20,7 @@
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
 #include "tools/afterglow/bench_gpu_pm.h"
+#include "tools/afterglow/bench_irradiance_cache.h"
 #include "tools/afterglow/bench_soak.h"
 #include "tools/afterglow/bench_vpl.h"
 #include "tools/afterglow/commands.h"
@@ -29,7 +30,8 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl [SCENE...|SCENE:SCRIPT...] [options]",
+    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl|irradiance_cache [SCENE...|"
+    "SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
     "(1,000,000 random photons in 1/10/100/1,000 maps; build and 500-nearest lookup) and Table "
@@ -56,7 +58,13 @@ const Command kBenchCommand{
     "frame (docs/gpu_pm.md). 'vpl [SCENE]': Barczak 2006's claims on the VPL path "
     "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
     "150/100/50 map updates a frame, static maps, no visibility and exact CPU rays; fps against "
-    "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md).",
+    "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md). "
+    "'irradiance_cache [SCENE]' (default "
+    "scenes/cube_in_a_box.json): Gautron 2006 Tables 5.1 and 5.2 at --size WxH (default 128x128) "
+    "over --frames (default 400): temporal radiance caching as the scene sets it against a new "
+    "cache every frame and records kept forever; records made, record, splat and scan time, "
+    "flicker over static pixels, indirect relMSE against pt references (--ref-spp) at four frames, "
+    "the reprojection error (docs/irradiance_cache.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -501,9 +509,17 @@ int run_bench(const Args& args) {
             args, args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cornell.json",
             width, height, repeat);
     }
+    if (what == "irradiance_cache") {
+        int width = 0, height = 0;
+        bench_size(args, 128, 128, width, height);
+        return bench_irradiance_cache(
+            args,
+            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cube_in_a_box.json",
+            width, height);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm or "
-                   "vpl)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm, vpl "
+                   "or irradiance_cache)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

@@ -76,7 +76,7 @@ int run_render(const Args& args) {
 
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(scene, PipelineOptions{width, height, threads});
-    if (scene.settings.gather.backend == GatherBackend::automatic)
+    if (scene.settings.gather.backend == GatherBackend::automatic && pipeline.iim_method())
         std::fprintf(
             stderr,
             "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
@@ -91,6 +91,15 @@ int run_render(const Args& args) {
         });
     progress.finish();
 
+    if (const auto* rc = dynamic_cast<const IrradianceCacheMethod*>(&pipeline.indirect())) {
+        const IrradianceCacheStats& s = rc->last_stats();
+        std::fprintf(stderr,
+                     "afterglow render: irradiance cache: %zu records (%llu made in all; last "
+                     "frame %d new, %d replaced, %d deleted), splat %.2f ms, scan %.2f ms, "
+                     "records %.2f ms\n",
+                     rc->records().size(), (unsigned long long)s.records_made, s.added, s.replaced,
+                     s.deleted, s.splat_ms, s.scan_ms, s.gather_ms);
+    }
     const gpu::FrameImages images = pipeline.images();
     std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
     write_image(images.frame, out);

@@ -842,6 +842,10 @@ int Viewer::run() {
                 break;
             case ViewMode::surfaces:
                 break;
+            case ViewMode::records:
+                if (auto* rc = dynamic_cast<IrradianceCacheMethod*>(&pipeline_->indirect()))
+                    source = rc->render_record_view();
+                break;
         }
         const int highlight =
             state_.selection.kind == Selection::Kind::object ? state_.selection.index : -1;

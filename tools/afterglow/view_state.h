@@ -24,12 +24,13 @@ enum class ViewMode {
     specular = 1 + kFrameTermSpecular,
     aim = 1 + kFrameTermCount,
     iim,
-    surfaces
+    surfaces,
+    records  // irradiance cache records and their zones (docs/irradiance_cache.md)
 };
 inline constexpr std::array kViewModeNames = {
     "frame", kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2], kFrameTermNames[3], "aim",
-    "iim",   "surfaces"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::surfaces) + 1);
+    "iim",   "surfaces",         "records"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::records) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
