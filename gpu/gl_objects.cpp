@@ -1,5 +1,7 @@
 #include "gpu/gl_objects.h"
 
+#include <cassert>
+
 #include "shared/host_device_shared.h"
 
 namespace ag::gpu {
@@ -96,8 +98,10 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
 void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
                       const glm::vec4& clear) {
     gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
-                           GL_COLOR_ATTACHMENT3};
+    const GLenum all[8] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                           GL_COLOR_ATTACHMENT3, GL_COLOR_ATTACHMENT4, GL_COLOR_ATTACHMENT5,
+                           GL_COLOR_ATTACHMENT6, GL_COLOR_ATTACHMENT7};
+    assert(buffers >= 1 && buffers <= 8);
     gl::DrawBuffers(buffers, all);
     gl::Viewport(0, 0, width, height);
     gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

@@ -12,6 +12,7 @@
 
 #include "shared/host_device_shared.h"
 #include "shared/lightmap.h"
+#include "shared/media.h"
 #include "shared/mesh.h"
 #include "shared/settings.h"
 
@@ -36,6 +37,11 @@ struct Material {
     // Emission makes the object a mesh light (Scene::lights gets one for it on load) rather than
     // only a visible lamp; scene files say "light": false for a lamp lit by a separate light.
     bool emits_light = true;
+    // Glass only (Pfeuti 2009): the medium filling the object, and a Perlin perturbation of its
+    // index n(p) = ior + ior_noise(p) (docs/media.md).
+    bool has_interior = false;
+    Medium interior;
+    MediumNoise ior_noise;
 };
 
 // Rigid transform: world = rotation * object + translation. Scale is baked into the mesh at load.
@@ -172,6 +178,7 @@ struct Scene {
     Camera camera;
     std::vector<Object> objects;
     std::vector<Light> lights;
+    std::vector<Medium> media;  // participating media in world boxes (disjoint), docs/media.md
     Settings settings;
 
     // Derived by make_surfaces_and_atlas() (shared/charts.h); rebuilt only if meshes change.

@@ -22,13 +22,20 @@ enum class ViewMode {
     indirect = 1 + kFrameTermIndirect,
     caustics = 1 + kFrameTermCaustics,
     specular = 1 + kFrameTermSpecular,
+    volume = 1 + kFrameTermVolume,
     aim = 1 + kFrameTermCount,
     iim,
     surfaces
 };
-inline constexpr std::array kViewModeNames = {
-    "frame", kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2], kFrameTermNames[3], "aim",
-    "iim",   "surfaces"};
+inline constexpr std::array kViewModeNames = {"frame",
+                                              kFrameTermNames[0],
+                                              kFrameTermNames[1],
+                                              kFrameTermNames[2],
+                                              kFrameTermNames[3],
+                                              kFrameTermNames[4],
+                                              "aim",
+                                              "iim",
+                                              "surfaces"};
 static_assert(kViewModeNames.size() == size_t(ViewMode::surfaces) + 1);
 
 struct Selection {
