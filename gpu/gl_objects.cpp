@@ -49,7 +49,9 @@ GLuint compile(const std::string& name, GLenum type, const std::string& source) 
         gl::GetShaderInfoLog(s, sizeof log, nullptr, log);
         gl::DeleteShader(s);
         throw GlError("shader '" + name +
-                      (type == GL_VERTEX_SHADER ? "' (vertex)" : "' (fragment)") +
+                      (type == GL_VERTEX_SHADER    ? "' (vertex)"
+                       : type == GL_COMPUTE_SHADER ? "' (compute)"
+                                                   : "' (fragment)") +
                       " does not compile:\n" + log);
     }
     return s;
@@ -65,6 +67,21 @@ Program::Program(const std::string& name, const std::string& vertex, const std::
     gl::LinkProgram(id_.get());
     gl::DeleteShader(vs);
     gl::DeleteShader(fs);
+    GLint ok = 0;
+    gl::GetProgramiv(id_.get(), GL_LINK_STATUS, &ok);
+    if (!ok) {
+        char log[4096];
+        gl::GetProgramInfoLog(id_.get(), sizeof log, nullptr, log);
+        throw GlError("program '" + name + "' does not link:\n" + log);
+    }
+}
+
+Program::Program(const std::string& name, const std::string& compute) {
+    const GLuint cs = compile(name, GL_COMPUTE_SHADER, compute);
+    id_ = Handle<detail::delete_program>(gl::CreateProgram());
+    gl::AttachShader(id_.get(), cs);
+    gl::LinkProgram(id_.get());
+    gl::DeleteShader(cs);
     GLint ok = 0;
     gl::GetProgramiv(id_.get(), GL_LINK_STATUS, &ok);
     if (!ok) {

@@ -74,12 +74,16 @@ class Program {
 public:
     Program() = default;
     Program(const std::string& name, const std::string& vertex, const std::string& fragment);
+    Program(const std::string& name, const std::string& compute);  // a compute program
     void use() const { gl::UseProgram(id_.get()); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
     void set(const char* u, int v) const { gl::Uniform1i(location(u), v); }
     void set(const char* u, float v) const { gl::Uniform1f(location(u), v); }
     void set(const char* u, const glm::vec2& v) const { gl::Uniform2f(location(u), v.x, v.y); }
     void set(const char* u, const glm::vec3& v) const { gl::Uniform3f(location(u), v.x, v.y, v.z); }
+    void set(const char* u, const glm::ivec3& v) const {
+        gl::Uniform3i(location(u), v.x, v.y, v.z);
+    }
     void set(const char* u, const glm::vec4& v) const {
         gl::Uniform4f(location(u), v.x, v.y, v.z, v.w);
     }
