@@ -9,11 +9,11 @@
 
 namespace ag::cpu {
 
-// The grid of `size` voxels over `bounds`: each voxel split into sub³ samples; a sample inside a
-// glass object (odd count of its surfaces crossed from outside) takes its index ior + ior_noise(p)
-// and its interior medium, a sample elsewhere n = 1 and the world medium whose box holds it.
-// Glass meshes must be closed.
+// The grid of `size` voxels over `bounds`: sub² rows of rays along +x per voxel row, each giving
+// the exact length inside each glass object (between odd and even crossings: ray parity); a voxel
+// mixes by that coverage the object (index ior + ior_noise, interior medium) and the outside (n =
+// 1, the world medium whose box holds the centre). Glass meshes must be closed.
 MediaGrid voxelize_media(const Scene& scene, const RayTracer& rays, const Bounds& bounds,
-                         const glm::ivec3& size, int sub = 2);
+                         const glm::ivec3& size, int sub = 8);
 
 }  // namespace ag::cpu
