@@ -16,7 +16,9 @@ struct Photon {
 layout(std430, binding = 0) buffer Photons { Photon photons[]; };
 layout(std430, binding = 1) readonly buffer IndexGrid { float n_grid[]; };
 layout(std430, binding = 2) readonly buffer Extinction { float sigma_t_grid[]; };
-layout(std430, binding = 3) buffer Fluence { uint fluence[]; };  // float bits, added by CAS
+// Per voxel: fluence and fluence × photon direction (his luminance-weighted mean direction),
+// float bits added by CAS.
+layout(std430, binding = 3) buffer Fluence { uint fluence[]; };
 uniform int photon_count;
 uniform ivec3 size;
 uniform vec3 grid_min;
@@ -54,13 +56,19 @@ vec3 gradient_n(vec3 g) {
     return d / voxel;
 }
 
-void add(int i, float v) {
+void add_float(int i, float v) {
     uint old = fluence[i];
     for (;;) {
         uint assumed = old;
         old = atomicCompSwap(fluence[i], assumed, floatBitsToUint(uintBitsToFloat(assumed) + v));
         if (old == assumed) break;
     }
+}
+void add(int cell, float v, vec3 dir) {
+    add_float(4 * cell, v);
+    add_float(4 * cell + 1, v * dir.x);
+    add_float(4 * cell + 2, v * dir.y);
+    add_float(4 * cell + 3, v * dir.z);
 }
 
 // Track length: power × chord length of a→b (voxel coordinates) in every voxel it crosses,
@@ -80,6 +88,7 @@ void deposit_track(vec3 a, vec3 b, float power) {
     }
     if (!(t0 < t1)) return;
     float world_length = length(d * voxel);
+    vec3 dir = d * voxel / world_length;
     float scale = power * world_length / (voxel.x * voxel.y * voxel.z);
     ivec3 cell = clamp(ivec3(floor(a + 0.5 * (t0 + min(t1, t0 + 1e-4)) * d)), ivec3(0), size - 1);
     ivec3 stepi = ivec3(sign(d));
@@ -97,7 +106,7 @@ void deposit_track(vec3 a, vec3 b, float power) {
     for (int guard = 0; guard < 4 * (size.x + size.y + size.z); ++guard) {
         float tn = min(min(tmax.x, tmax.y), tmax.z);
         float te = min(tn, t1);
-        if (te > t) add(cell_index(cell), scale * (te - t));
+        if (te > t) add(cell_index(cell), scale * (te - t), dir);
         if (tn >= t1) break;
         t = tn;
         if (tmax.x == tn) {
@@ -124,10 +133,11 @@ void deposit_walk(vec3 a, vec3 b, float power) {
     if (ad[m] == 0.0) return;
     float lo = min(a[m], b[m]), hi = max(a[m], b[m]);
     float scale = power * voxel[m] / (voxel.x * voxel.y * voxel.z);
+    vec3 dir = normalize(d * voxel);
     for (int k = int(ceil(lo - 0.5)); float(k) + 0.5 < hi; ++k) {
         vec3 p = a + ((float(k) + 0.5 - a[m]) / d[m]) * d;
         ivec3 c = ivec3(floor(p));
-        if (in_grid(c)) add(cell_index(c), scale);
+        if (in_grid(c)) add(cell_index(c), scale, dir);
     }
 }
 
@@ -162,8 +172,11 @@ void main() {
             float rest = n * n - dot(across, across);
             if (rest > 0.0) v = across + (along >= 0.0 ? 1.0 : -1.0) * sqrt(rest) * normal;
         }
-        if (walk != 0) deposit_walk(g, g1, power); else deposit_track(g, g1, power);
-        power *= exp(-nearest_sigma_t(0.5 * (g + g1)) * length(x1 - x));
+        // The segment's mean power under Beer–Lambert, σ_t taken constant over it.
+        float optical = nearest_sigma_t(0.5 * (g + g1)) * length(x1 - x);
+        float mean_power = optical > 1e-6 ? power * (1.0 - exp(-optical)) / optical : power;
+        if (walk != 0) deposit_walk(g, g1, mean_power); else deposit_track(g, g1, mean_power);
+        power *= exp(-optical);
         x = x1;
         g = g1;
         if (any(lessThan(g, vec3(0.0))) || any(greaterThanEqual(g, vec3(size)))) {
@@ -201,8 +214,8 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     const Buffer photon_buffer = upload(packed.data(), packed.size() * sizeof(glm::vec4), 0);
     const Buffer n_buffer = upload(grid.n.data(), voxels * sizeof(float), 1);
     const Buffer sigma_buffer = upload(grid.sigma_t.data(), voxels * sizeof(float), 2);
-    const std::vector<float> zeros(voxels, 0.0f);
-    const Buffer fluence_buffer = upload(zeros.data(), voxels * sizeof(float), 3);
+    const std::vector<glm::vec4> zeros(voxels, glm::vec4(0.0f));
+    const Buffer fluence_buffer = upload(zeros.data(), voxels * sizeof(glm::vec4), 3);
 
     const glm::vec3 voxel = grid.voxel_size();
     const float ds = settings.step * std::min({voxel.x, voxel.y, voxel.z});
@@ -226,10 +239,16 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    result.fluence.resize(voxels);
+    std::vector<glm::vec4> deposits(voxels);
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, fluence_buffer.get());
-    gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(voxels * sizeof(float)),
-                         result.fluence.data());
+    gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(voxels * sizeof(glm::vec4)),
+                         deposits.data());
+    result.fluence.resize(voxels);
+    result.flow.resize(voxels);
+    for (size_t i = 0; i < voxels; ++i) {
+        result.fluence[i] = deposits[i].x;
+        result.flow[i] = glm::vec3(deposits[i].y, deposits[i].z, deposits[i].w);
+    }
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, photon_buffer.get());
     gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(packed.size() * sizeof(glm::vec4)),
                          packed.data());

@@ -23,6 +23,7 @@ struct MediaMarchSettings {
 
 struct MediaMarchResult {
     std::vector<float> fluence;            // per voxel: Σ power × chord length / voxel volume
+    std::vector<glm::vec3> flow;           // per voxel: the same sums × each photon's direction
     std::vector<MediaPhoton> photons;      // where each photon left the grid (or stopped)
     double entered = 0.0;                  // Σ power of the photons marched
     double absorbed = 0.0, escaped = 0.0;  // extinguished in the grid; left it

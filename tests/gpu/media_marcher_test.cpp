@@ -102,7 +102,7 @@ LensFocus ball_lens_focus(const MediaMarcher& marcher, int resolution, float ior
     gaussian_smooth(grid.n, grid.size, 9, 1.5f);
     // A beam of radius 0.1 (0.2 R): Hammersley points on the disc, equal power.
     std::vector<MediaPhoton> beam;
-    constexpr int kPhotons = 20000;
+    constexpr int kPhotons = 4000;
     for (int i = 0; i < kPhotons; ++i) {
         const float r = 0.1f * std::sqrt((float(i) + 0.5f) / kPhotons);
         const float phi = 2.0f * kPi * float(radical_inverse(2, uint64_t(i)));
@@ -166,7 +166,7 @@ BeamFluence beam_fluence(const MediaMarcher& marcher, glm::vec3 d, MediaDeposit 
         glm::cross(d, std::abs(d.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
     const glm::vec3 v = glm::cross(d, u);
     const glm::vec3 origin = glm::vec3(0.5f) - 2.0f * d;
-    constexpr int kSide = 400;  // photons on a 2 × 2 square: 40,000 per unit area
+    constexpr int kSide = 256;  // on a 2 × 2 square: 8 per voxel edge along the axes
     const float cell = 2.0f / kSide;
     std::vector<MediaPhoton> photons;
     for (int j = 0; j < kSide; ++j)
