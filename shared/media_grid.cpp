@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include "shared/media.h"
@@ -84,6 +85,19 @@ std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, 
         if (!ray_box(grid, light, dir, 0.0f, 1e30f, enter, exit)) continue;
         // Solid angle of the cell: ΔA cosθ / r² with cosθ = 1/r at distance 1.
         photons.push_back({light + enter * dir, dir, float(intensity * cell / double(r * r * r))});
+    }
+    return photons;
+}
+
+std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity, int count) {
+    std::vector<MediaPhoton> photons;
+    photons.reserve(size_t(count));
+    const float power = float(4.0 * std::numbers::pi * intensity / count);
+    for (int i = 0; i < count; ++i) {
+        const float z = 1.0f - 2.0f * (float(i) + 0.5f) / float(count);
+        const float phi = float(2.0 * std::numbers::pi * radical_inverse(2, uint64_t(i)));
+        const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+        photons.push_back({light, {r * std::cos(phi), r * std::sin(phi), z}, power});
     }
     return photons;
 }

@@ -50,6 +50,10 @@ struct MediaPhoton {
 std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, const Bounds& grid,
                                        int count);
 
+// A point light inside the grid: `count` photons from its position in Hammersley directions over
+// the sphere, each carrying 4πI/count.
+std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity, int count);
+
 // Solid angle (sr) of box `b` seen from a point outside it: the sum over its faces turned to the
 // point of the rectangle formula.
 double box_solid_angle(const Bounds& b, const glm::vec3& from);
