@@ -4,7 +4,6 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
-#include <stdexcept>
 
 #include "gpu/gl_context.h"
 #include "shared/image.h"
@@ -53,12 +52,8 @@ int run_media(const Args& args) {
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
     auto context = gpu::make_gl_context(args.gl_backend());
-    MediaMethodResult result;
-    try {
-        result = render_media(scene, settings);
-    } catch (const std::invalid_argument& e) {
-        throw CliError(where + ": " + e.what());
-    }
+    // A scene without media or a point light is bad input: exit 1 with its message.
+    const MediaMethodResult result = render_media(scene, settings);
     std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
     write_image(result.volume, out);
     const std::string png = out.substr(0, out.size() - 4) + ".png";
