@@ -34,12 +34,12 @@ Camera looking_at(const glm::vec3& eye, const glm::vec3& target, float fov, int 
     return c;
 }
 
-ReferenceResult render_pt(const Scene& scene, int spp, int volume_bounces) {
+ReferenceResult render_pt(const Scene& scene, int spp, int volume_bounces, int threads = 2) {
     ReferenceSettings s;
     s.method = ReferenceMethod::path_tracing;
     s.spp = spp;
     s.volume_bounces = volume_bounces;
-    ThreadPool pool(2);
+    ThreadPool pool(threads);
     return render_reference(scene, s, pool);
 }
 
@@ -204,12 +204,16 @@ TEST(MediaPathTracer, ConservativeFogFurnace) {
     EXPECT_LT(volume, expected);
 }
 
-// The components still sum to the image with media, and a glass object's interior medium
-// scatters only inside it (the fog-sphere scene's parts).
-TEST(MediaPathTracer, ComponentsSumToTheImage) {
+// The components still sum to the image with media, and the image does not depend on the
+// thread count (the fog-sphere scene; the noise cube for a perturbed interior medium).
+TEST(MediaPathTracer, ComponentsSumToTheImageOnAnyThreadCount) {
+    Scene cube = load_scene(test::scene_path("media_noise_cube.json"));
+    cube.camera.width = cube.camera.height = 10;
+    EXPECT_EQ(render_pt(cube, 4, 256, 1).full.pixels, render_pt(cube, 4, 256, 3).full.pixels);
     Scene scene = load_scene(test::scene_path("fog_sphere.json"));
     scene.camera.width = scene.camera.height = 12;
     const ReferenceResult r = render_pt(scene, 8, 256);
+    EXPECT_EQ(r.full.pixels, render_pt(scene, 8, 256, 1).full.pixels);
     for (size_t i = 0; i < r.full.pixels.size(); ++i) {
         float sum = 0.0f;
         for (FrameTerm t : kFrameTerms) sum += r.components[size_t(t)].pixels[i];
