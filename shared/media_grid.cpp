@@ -102,6 +102,32 @@ std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity,
     return photons;
 }
 
+std::vector<MediaPhoton> quad_photons(const std::array<glm::vec3, 4>& corners, float radiance,
+                                      const Bounds& grid, int count) {
+    const glm::vec3 e1 = corners[1] - corners[0], e3 = corners[3] - corners[0];
+    const glm::vec3 cross = glm::cross(e1, e3);
+    const float area = glm::length(cross);
+    const glm::vec3 n = cross / area;
+    const glm::vec3 t = glm::normalize(e1), b = glm::cross(n, t);
+    const float power = float(std::numbers::pi * radiance * area / count);
+    std::vector<MediaPhoton> photons;
+    photons.reserve(size_t(count));
+    for (int i = 0; i < count; ++i) {
+        // Position: 2D Hammersley; direction: radical inverses in bases 3 and 5, cosine-weighted.
+        const float u = (float(i) + 0.5f) / float(count),
+                    v = float(radical_inverse(2, uint64_t(i)));
+        const float r2 = float(radical_inverse(3, uint64_t(i)));
+        const float phi = float(2.0 * std::numbers::pi * radical_inverse(5, uint64_t(i)));
+        const float s = std::sqrt(r2), c = std::sqrt(std::max(0.0f, 1.0f - r2));
+        const glm::vec3 dir = s * std::cos(phi) * t + s * std::sin(phi) * b + c * n;
+        const glm::vec3 origin = corners[0] + u * e1 + v * e3;
+        float enter = 0.0f, exit = 0.0f;
+        if (!ray_box(grid, origin, dir, 0.0f, 1e30f, enter, exit)) continue;
+        photons.push_back({origin + enter * dir, dir, power});
+    }
+    return photons;
+}
+
 double box_solid_angle(const Bounds& b, const glm::vec3& from) {
     // A rectangle [x1, x2] × [y1, y2] at distance z: Σ ± atan(xy / (z √(x² + y² + z²))).
     const auto rect = [](double x1, double x2, double y1, double y2, double z) {

@@ -3,6 +3,7 @@
 // photons of the photon plane (ch. 3.1.4). Plain data for the CPU voxeliser and the GPU marcher.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <vector>
@@ -53,6 +54,12 @@ std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, 
 // A point light inside the grid: `count` photons from its position in Hammersley directions over
 // the sphere, each carrying 4πI/count.
 std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity, int count);
+
+// A quad light (corners as Light::corners, front normal edge01 × edge03, radiance L): `count`
+// photons from Hammersley points on it in cosine-distributed directions, each carrying πLA/count,
+// moved to where they enter the grid's box (those that miss it are dropped).
+std::vector<MediaPhoton> quad_photons(const std::array<glm::vec3, 4>& corners, float radiance,
+                                      const Bounds& grid, int count);
 
 // Solid angle (sr) of box `b` seen from a point outside it: the sum over its faces turned to the
 // point of the rectangle formula.

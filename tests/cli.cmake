@@ -148,13 +148,13 @@ foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
               "--size: expects N or WxH with positive integers up to 16384, got '${size}'"
               bench soak --size ${size})
 endforeach()
-# Participating media (docs/media.md): pm refuses media; the media method needs media and a point
+# Participating media (docs/media.md): pm refuses media; the media method needs media and a
 # light, and renders a small grid in a second or two.
 ag_cli_test(reference_pm_media 2 "has participating media, which pm does not render"
             reference scenes/media_point_fog.json -m pm -o media_pm.exr)
 ag_cli_test(media_no_media 1 "the media method needs media or glass"
             media scenes/two_rooms.json -o media_none.exr --size 8x8)
-ag_cli_test(media_quad_light 1 "needs an enabled point or spot light"
+ag_cli_test(media_no_light 1 "needs an enabled point, spot or quad light"
             media scenes/media_slab.json -o media_quad.exr --size 8x8)
 ag_cli_test(media_point_fog 0 "photon marching [0-9.]+ ms"
             media scenes/media_point_fog.json -o ${CMAKE_CURRENT_BINARY_DIR}/media_fog.exr

@@ -32,16 +32,18 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
             for (const glm::vec3& p : o.mesh.positions) bounds.add(o.transform.apply_point(p));
     if (bounds.empty())
         throw std::invalid_argument(scene.path + ": the media method needs media or glass");
+    // The first enabled point or spot light (spot cones ignored), else the first quad light.
     const Light* light = nullptr;
     for (const Light& l : scene.lights)
         if (l.enabled && (l.type == LightType::point || l.type == LightType::spot)) {
             light = &l;
             break;
         }
+    for (const Light& l : scene.lights)
+        if (!light && l.enabled && l.type == LightType::quad) light = &l;
     if (!light)
-        throw std::invalid_argument(scene.path +
-                                    ": the media method needs an enabled point or spot light "
-                                    "(Pfeuti's photon plane starts at a point)");
+        throw std::invalid_argument(
+            scene.path + ": the media method needs an enabled point, spot or quad light");
     // Cubic voxels, `grid` along the longest side.
     const glm::vec3 extent = bounds.extent();
     const float voxel = std::max({extent.x, extent.y, extent.z}) / float(settings.grid);
@@ -58,14 +60,17 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     gaussian_smooth(grid.n, grid.size, 9, 1.5f);  // his 9³ Gaussian, σ = 9/6
     result.timing.smoothing = since(start);
     start = Clock::now();
-    // Luminance of the intensity: the method is grey (Medium is grey).
-    const float intensity = glm::dot(light->intensity, glm::vec3(1.0f / 3.0f));
-    // His photon plane for a light outside the grid; from the light itself where it is inside.
+    // The mean of the light's RGB value: the method is grey (Medium is grey).
+    const float intensity = glm::dot(light->value(), glm::vec3(1.0f / 3.0f));
+    // His photon plane for a point light outside the grid; from the light itself where it is
+    // inside; from its surface for a quad light.
     const bool inside = glm::all(glm::greaterThan(light->position, bounds.min)) &&
                         glm::all(glm::lessThan(light->position, bounds.max));
     const std::vector<MediaPhoton> photons =
-        inside ? sphere_photons(light->position, intensity, settings.photons)
-               : plane_photons(light->position, intensity, bounds, settings.photons);
+        light->type == LightType::quad
+            ? quad_photons(light->corners, intensity, bounds, settings.photons)
+        : inside ? sphere_photons(light->position, intensity, settings.photons)
+                 : plane_photons(light->position, intensity, bounds, settings.photons);
     result.photons_marched = photons.size();
     result.timing.photon_generation = since(start);
 
@@ -93,7 +98,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         gpu::MediaView().render(grid, marched.fluence, marched.flow, camera, view, max_distance);
     result.timing.viewing = since(start);
     // Grey to the light's colour.
-    const glm::vec3 tint = intensity > 0.0f ? light->intensity / intensity : glm::vec3(0.0f);
+    const glm::vec3 tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
     for (int y = 0; y < result.volume.height; ++y)
         for (int x = 0; x < result.volume.width; ++x)
             result.volume.set_rgb(x, y, result.volume.rgb(x, y) * tint);

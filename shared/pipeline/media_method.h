@@ -36,8 +36,9 @@ struct MediaMethodResult {
 };
 
 // The grid covers the scene's media boxes and glass objects; light comes from the first enabled
-// point or spot light (spot cones ignored). Needs a current GL context. Throws
-// std::invalid_argument naming scene.path where the scene has no media or no such light.
+// point or spot light (spot cones ignored), else the first quad light. Needs a current GL
+// context. Throws std::invalid_argument naming scene.path where the scene has no media or glass,
+// or no such light.
 MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings);
 
 }  // namespace ag

@@ -1,17 +1,19 @@
-// Pfeuti's method end to end against the path tracer (docs/media.md): photons of a point light's
-// photon plane marched into a voxelised fog box, the view march's single scattering, against
+// Pfeuti's method end to end against the path tracer (docs/media.md): photons marched into a
+// voxelised fog box (and through a glass sphere), the view march's single scattering, against
 // pt's `volume` component with --volume-bounces 1.
-#include "gpu/media_view.h"
+#include "shared/pipeline/media_method.h"
 
 #include <gtest/gtest.h>
 
 #include <cstdio>
 
+#include "../gpu/gl_fixture.h"
 #include "cpu/media_voxelizer.h"
 #include "cpu/reference/reference.h"
-#include "gl_fixture.h"
 #include "gpu/media_marcher.h"
+#include "gpu/media_view.h"
 #include "shared/metrics.h"
+#include "shared/scene_file.h"
 #include "shared/shapes.h"
 
 namespace ag::gpu {
@@ -82,6 +84,28 @@ TEST_F(MediaViewTest, SingleScatteringMatchesThePathTracer) {
                 mean_reference);
     EXPECT_LT(rel_mse, 0.05);
     EXPECT_NEAR(mean_method, mean_reference, 0.05 * mean_reference);
+}
+
+// A glass sphere in fog under a quad light (scenes/media_glass_fog.json, black floor: nothing but
+// single scattering lights the fog): the whole method (voxelisation, refraction of photons and
+// view rays, the volumetric caustic under the sphere) against pt's volume component with
+// --volume-bounces 1, whose caustic comes from paths that find the light through the glass.
+TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog.json");
+    scene.camera.width = scene.camera.height = 24;
+    cpu::ReferenceSettings settings;
+    settings.spp = 1024;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    const cpu::ReferenceResult pt = cpu::render_reference(scene, settings, pool);
+    MediaMethodSettings method;
+    method.grid = 32;
+    method.photons = 50000;
+    const MediaMethodResult result = render_media(scene, method);
+    const double rel_mse =
+        compare_images(result.volume, pt.components[size_t(FrameTerm::volume)]).rel_mse;
+    std::printf("glass sphere in fog: relMSE %.5f against pt\n", rel_mse);
+    EXPECT_LT(rel_mse, 0.05);
 }
 
 }  // namespace
