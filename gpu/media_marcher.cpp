@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <cstdint>
 
 namespace ag::gpu {
 
@@ -16,9 +18,10 @@ struct Photon {
 layout(std430, binding = 0) buffer Photons { Photon photons[]; };
 layout(std430, binding = 1) readonly buffer IndexGrid { float n_grid[]; };
 layout(std430, binding = 2) readonly buffer Extinction { float sigma_t_grid[]; };
-// Per voxel: fluence and fluence × photon direction (his luminance-weighted mean direction),
-// float bits added by CAS.
+// Per voxel: fluence and fluence × photon direction (his luminance-weighted mean direction), each
+// a 64-bit two's-complement fixed-point sum in two 32-bit words (low, high).
 layout(std430, binding = 3) buffer Fluence { uint fluence[]; };
+uniform float fixed_scale;  // fixed-point units per unit of deposit
 uniform int photon_count;
 uniform ivec3 size;
 uniform vec3 grid_min;
@@ -56,19 +59,22 @@ vec3 gradient_n(vec3 g) {
     return d / voxel;
 }
 
-void add_float(int i, float v) {
-    uint old = fluence[i];
-    for (;;) {
-        uint assumed = old;
-        old = atomicCompSwap(fluence[i], assumed, floatBitsToUint(uintBitsToFloat(assumed) + v));
-        if (old == assumed) break;
-    }
+// Integer sums do not depend on the order of the adds, so the grid is the same on every run
+// (float atomics or a float CAS loop would not be). llvmpipe has no 64-bit atomics: the low word
+// takes the sign-extended value, its carry and the sign go to the high word.
+void add_fixed(int slot, float v) {
+    int q = int(clamp(round(v * fixed_scale), -2147483647.0, 2147483647.0));
+    if (q == 0) return;
+    uint old = atomicAdd(fluence[2 * slot], uint(q));
+    uint sum = old + uint(q);
+    int high = (sum < old ? 1 : 0) + (q < 0 ? -1 : 0);
+    if (high != 0) atomicAdd(fluence[2 * slot + 1], uint(high));
 }
 void add(int cell, float v, vec3 dir) {
-    add_float(4 * cell, v);
-    add_float(4 * cell + 1, v * dir.x);
-    add_float(4 * cell + 2, v * dir.y);
-    add_float(4 * cell + 3, v * dir.z);
+    add_fixed(4 * cell, v);
+    add_fixed(4 * cell + 1, v * dir.x);
+    add_fixed(4 * cell + 2, v * dir.y);
+    add_fixed(4 * cell + 3, v * dir.z);
 }
 
 // Track length: power × chord length of a→b (voxel coordinates) in every voxel it crosses,
@@ -214,8 +220,8 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     const Buffer photon_buffer = upload(packed.data(), packed.size() * sizeof(glm::vec4), 0);
     const Buffer n_buffer = upload(grid.n.data(), voxels * sizeof(float), 1);
     const Buffer sigma_buffer = upload(grid.sigma_t.data(), voxels * sizeof(float), 2);
-    const std::vector<glm::vec4> zeros(voxels, glm::vec4(0.0f));
-    const Buffer fluence_buffer = upload(zeros.data(), voxels * sizeof(glm::vec4), 3);
+    const std::vector<uint32_t> zeros(8 * voxels, 0u);
+    const Buffer fluence_buffer = upload(zeros.data(), zeros.size() * sizeof(uint32_t), 3);
 
     const glm::vec3 voxel = grid.voxel_size();
     const float ds = settings.step * std::min({voxel.x, voxel.y, voxel.z});
@@ -231,6 +237,15 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     program_.set("step", ds);
     program_.set("max_steps", max_steps);
     program_.set("walk", settings.deposit == MediaDeposit::voxel_walk ? 1 : 0);
+    // The largest single deposit (the brightest photon over the longest piece of path one
+    // deposit covers) maps to 2^30 units, so no deposit overflows 32 bits.
+    float max_power = 0.0f;
+    for (const MediaPhoton& p : photons) max_power = std::max(max_power, p.power);
+    const float longest = std::max(ds, std::sqrt(3.0f) * std::max({voxel.x, voxel.y, voxel.z}));
+    const double max_deposit =
+        double(max_power) * double(longest) / (double(voxel.x) * double(voxel.y) * voxel.z);
+    const float fixed_scale = max_deposit > 0.0 ? float(1073741824.0 / max_deposit) : 1.0f;
+    program_.set("fixed_scale", fixed_scale);
     gl::Finish();
     const auto start = std::chrono::steady_clock::now();
     gl::DispatchCompute(GLuint((photons.size() + 63) / 64), 1, 1);
@@ -239,15 +254,19 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     result.seconds =
         std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
-    std::vector<glm::vec4> deposits(voxels);
+    std::vector<uint32_t> words(8 * voxels);
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, fluence_buffer.get());
-    gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(voxels * sizeof(glm::vec4)),
-                         deposits.data());
+    gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(words.size() * sizeof(uint32_t)),
+                         words.data());
+    const auto value = [&](size_t slot) {
+        const uint64_t bits = (uint64_t(words[2 * slot + 1]) << 32) | words[2 * slot];
+        return float(double(static_cast<int64_t>(bits)) / double(fixed_scale));
+    };
     result.fluence.resize(voxels);
     result.flow.resize(voxels);
     for (size_t i = 0; i < voxels; ++i) {
-        result.fluence[i] = deposits[i].x;
-        result.flow[i] = glm::vec3(deposits[i].y, deposits[i].z, deposits[i].w);
+        result.fluence[i] = value(4 * i);
+        result.flow[i] = glm::vec3(value(4 * i + 1), value(4 * i + 2), value(4 * i + 3));
     }
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, photon_buffer.get());
     gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(packed.size() * sizeof(glm::vec4)),

@@ -2,8 +2,8 @@
 // the ray equation d/ds(n dx/ds) = ∇n stepped by eqs. 2.10/2.11, Beer–Lambert attenuation per
 // step, and the photon's power deposited into a fluence grid either by his voxel walk (one deposit
 // per voxel crossed along the major axis) or by a track-length estimator (power × chord length in
-// each voxel the segment crosses, by a 3D DDA). Float deposits by a 32-bit compare-and-swap loop,
-// which every GL 4.3 implementation has (llvmpipe has no 64-bit atomics).
+// each voxel the segment crosses, by a 3D DDA). Deposits are 64-bit fixed-point sums built from
+// 32-bit atomic adds (llvmpipe has no 64-bit atomics), so the grid is the same on every run.
 #pragma once
 
 #include <vector>
