@@ -63,8 +63,12 @@ MediaGrid voxelize_media(const Scene& scene, const RayTracer& rays, const Bounds
                     }
                     // The exact inside length of each voxel along the row.
                     for (const Span& s : spans) {
-                        const int x0 = std::max(0, int((s.enter - bounds.min.x) / voxel.x));
-                        const int x1 = std::min(size.x - 1, int((s.exit - bounds.min.x) / voxel.x));
+                        // Clamped as floats first: a span far outside the grid overflows int.
+                        const float last = float(size.x - 1);
+                        const int x0 =
+                            int(std::clamp((s.enter - bounds.min.x) / voxel.x, 0.0f, last));
+                        const int x1 =
+                            int(std::clamp((s.exit - bounds.min.x) / voxel.x, 0.0f, last));
                         for (int x = x0; x <= x1; ++x) {
                             const float lo = bounds.min.x + float(x) * voxel.x;
                             const float inside =

@@ -21,7 +21,7 @@ float gradient(uint32_t h, float x, float y, float z) {
 
 float fade(float t) { return t * t * t * (t * (t * 6.0f - 15.0f) + 10.0f); }
 
-uint32_t lattice_hash(int x, int y, int z, uint32_t seed) {
+uint32_t lattice_hash(int64_t x, int64_t y, int64_t z, uint32_t seed) {
     return hash_u32(uint32_t(x) * 73856093u ^
                     hash_u32(uint32_t(y) * 19349663u ^ hash_u32(uint32_t(z) * 83492791u ^ seed)));
 }
@@ -30,12 +30,13 @@ uint32_t lattice_hash(int x, int y, int z, uint32_t seed) {
 
 float perlin_noise(const glm::vec3& p, uint32_t seed) {
     const glm::vec3 f = glm::floor(p);
-    const int x = int(f.x), y = int(f.y), z = int(f.z);
+    // 64-bit: frequency × position may pass 2^31 (|p| ≤ 10^7, frequency ≤ 10^6).
+    const int64_t x = int64_t(f.x), y = int64_t(f.y), z = int64_t(f.z);
     const glm::vec3 r = p - f;
     const float u = fade(r.x), v = fade(r.y), w = fade(r.z);
     float corner[8];
     for (int i = 0; i < 8; ++i) {
-        const int dx = i & 1, dy = (i >> 1) & 1, dz = (i >> 2) & 1;
+        const int64_t dx = i & 1, dy = (i >> 1) & 1, dz = (i >> 2) & 1;
         corner[i] = gradient(lattice_hash(x + dx, y + dy, z + dz, seed), r.x - float(dx),
                              r.y - float(dy), r.z - float(dz));
     }
