@@ -20,6 +20,20 @@ MediaGrid make_media_grid(const Bounds& bounds, const glm::ivec3& size) {
     return g;
 }
 
+Image grid_slice(const MediaGrid& grid, const std::vector<float>& values, int axis, int layer) {
+    const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+    Image image(grid.size[u_axis], grid.size[v_axis]);
+    for (int v = 0; v < image.height; ++v)
+        for (int u = 0; u < image.width; ++u) {
+            glm::ivec3 c(0);
+            c[axis] = layer;
+            c[u_axis] = u;
+            c[v_axis] = image.height - 1 - v;
+            image.set_rgb(u, v, glm::vec3(values[grid.index(c.x, c.y, c.z)]));
+        }
+    return image;
+}
+
 void gaussian_smooth(std::vector<float>& values, const glm::ivec3& size, int taps, float sigma) {
     const int half = taps / 2;
     std::vector<float> weights(static_cast<size_t>(taps));

@@ -8,6 +8,7 @@
 #include <glm/glm.hpp>
 #include <vector>
 
+#include "shared/image.h"
 #include "shared/mesh.h"
 
 namespace ag {
@@ -31,6 +32,11 @@ struct MediaGrid {
 
 // A grid of `size` voxels over `bounds`, n = 1 and no medium.
 MediaGrid make_media_grid(const Bounds& bounds, const glm::ivec3& size);
+
+// The slice of a per-voxel field (`values`, grid.voxel_count() of them) through voxel layer
+// `layer` across `axis` (0: a y–z image, 1: x–z, 2: x–y), grey, rows top down (first row = largest
+// second coordinate): what `afterglow media --slices` writes.
+Image grid_slice(const MediaGrid& grid, const std::vector<float>& values, int axis, int layer);
 
 // Smooths `values` (a grid of `size`) in place with a separable Gaussian of `taps` taps per axis
 // (odd) and standard deviation `sigma` voxels, clamping at the borders (Pfeuti: 9 taps, σ = 9/6).

@@ -158,4 +158,4 @@ ag_cli_test(media_no_light 1 "needs an enabled point, spot or quad light"
             media scenes/media_slab.json -o media_quad.exr --size 8x8)
 ag_cli_test(media_point_fog 0 "photon marching [0-9.]+ ms"
             media scenes/media_point_fog.json -o ${CMAKE_CURRENT_BINARY_DIR}/media_fog.exr
-            --size 16x16 --grid 16 --photons 4000)
+            --size 16x16 --grid 16 --photons 4000 --slices)

@@ -97,6 +97,8 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     result.volume =
         gpu::MediaView().render(grid, marched.fluence, marched.flow, camera, view, max_distance);
     result.timing.viewing = since(start);
+    result.grids = std::move(grid);
+    result.fluence = marched.fluence;
     // Grey to the light's colour.
     const glm::vec3 tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
     for (int y = 0; y < result.volume.height; ++y)

@@ -33,6 +33,8 @@ struct MediaMethodResult {
     MediaMethodTiming timing;
     glm::ivec3 grid{0};
     size_t photons_marched = 0;  // photons of the plane that meet the grid
+    MediaGrid grids;             // n (smoothed), σ_s, σ_t, for slice views
+    std::vector<float> fluence;  // per voxel, as deposited
 };
 
 // The grid covers the scene's media boxes and glass objects; light comes from the first enabled

@@ -7,6 +7,7 @@
 
 #include "gpu/gl_context.h"
 #include "shared/image.h"
+#include "shared/media_grid.h"
 #include "shared/pipeline/media_method.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
@@ -29,6 +30,8 @@ const Command kMediaCommand{
         choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
         number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
         size_option("image size (default: the scene camera's resolution)"),
+        flag("slices",
+             "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre"),
         number("exposure", "STOPS", "PNG exposure", -20.0, 20.0, 0.0),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
@@ -58,6 +61,14 @@ int run_media(const Args& args) {
     write_image(result.volume, out);
     const std::string png = out.substr(0, out.size() - 4) + ".png";
     write_image(result.volume, png, float(args.get_double("exposure")));
+    if (args.has("slices")) {
+        const int layer = result.grids.size.z / 2;
+        const std::string stem = out.substr(0, out.size() - 4);
+        write_image(grid_slice(result.grids, result.grids.n, 2, layer), stem + ".n.exr");
+        write_image(grid_slice(result.grids, result.grids.sigma_s, 2, layer),
+                    stem + ".sigma_s.exr");
+        write_image(grid_slice(result.grids, result.fluence, 2, layer), stem + ".fluence.exr");
+    }
     const MediaMethodTiming& t = result.timing;
     std::printf(
         "media: grid %dx%dx%d, %zu photons marched, %dx%d pixels on %s\n"
