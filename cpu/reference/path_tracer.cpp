@@ -77,7 +77,7 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
 
         if (!media_.empty()) {
             // Delta tracking up to the surface: a real collision makes this vertex a scattering
-            // event in the medium instead (Pfeuti eq. 2.4 sampled by free flight).
+            // event in the medium instead (the integral of Pfeuti eq. 2.5, sampled by free flight).
             HashedStream more(mix64(mix64(s.key() ^ mix64(s.index())) + uint64_t(depth)));
             const std::optional<MediumCollision> collision = media_.sample_collision(
                 ray, hit.hit ? hit.t : 1e30f, inside, s.get(medium_dim(depth)), more);
