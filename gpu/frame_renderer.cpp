@@ -151,7 +151,9 @@ layout(location = kFrameTermDirect) out vec4 out_direct;
 layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
+layout(location = kFrameTermVolume) out vec4 out_volume;  // no media in the GPU frame yet
 void main() {
+    out_volume = vec4(0.0, 0.0, 0.0, 1.0);
     out_direct = vec4(emission, 1.0);
     // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
     vec3 e = iim_in_screen != 0 ? texture(iim, gl_FragCoord.xy / screen).rgb : texture(iim, v_uv).rgb;
@@ -171,7 +173,9 @@ layout(location = kFrameTermDirect) out vec4 out_direct;
 layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
+layout(location = kFrameTermVolume) out vec4 out_volume;  // no media in the GPU frame yet
 void main() {
+    out_volume = vec4(0.0, 0.0, 0.0, 1.0);
     out_direct = vec4(0.0, 0.0, 0.0, 1.0);
     out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
     out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
@@ -235,12 +239,13 @@ void main() { color = vec4(normalize(v_normal), length(v_world - centre)); }
 
 // Eq. 13.2 on the GPU: the displayed frame is the sum of the four terms.
 const char* kComposeFragment = R"(
-uniform sampler2D direct, indirect, specular, caustics;
+uniform sampler2D direct, indirect, specular, caustics, volume;
 out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
     color = vec4(texelFetch(direct, p, 0).rgb + texelFetch(indirect, p, 0).rgb +
-                 texelFetch(specular, p, 0).rgb + texelFetch(caustics, p, 0).rgb, 1.0);
+                 texelFetch(specular, p, 0).rgb + texelFetch(caustics, p, 0).rgb +
+                 texelFetch(volume, p, 0).rgb, 1.0);
 }
 )";
 
@@ -543,9 +548,10 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
         glm::infinitePerspective(glm::radians(camera.fov_y), float(width_) / float(height_), near_);
     const glm::mat4 view_projection = projection * view_matrix(camera);
 
-    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
-                           GL_COLOR_ATTACHMENT3};
-    begin_scene_pass(fbo_.get(), 4, width_, height_, glm::vec4(0, 0, 0, 1));
+    const GLenum all[kFrameTermCount] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
+                                         GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3,
+                                         GL_COLOR_ATTACHMENT4};
+    begin_scene_pass(fbo_.get(), kFrameTermCount, width_, height_, glm::vec4(0, 0, 0, 1));
 
     // 1. G-buffer: depth, emission, indirect, specular, caustics.
     gbuffer_.use();
@@ -592,7 +598,7 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     // 2. Per light: shadow volumes into the stencil (depth-fail), then add its light where the
     //    count is zero (eq. 13.2).
     add_direct_light(lights, view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
-    gl::DrawBuffers(4, all);
+    gl::DrawBuffers(kFrameTermCount, all);
     compose();
     gl::BindVertexArray(0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);

@@ -1,6 +1,7 @@
 #include "gpu/gl_objects.h"
 
 #include <atomic>
+#include <cassert>
 
 #include "shared/host_device_shared.h"
 
@@ -127,6 +128,10 @@ void dispatch_compute(GLuint groups) {
                       GL_ATOMIC_COUNTER_BARRIER_BIT | GL_COMMAND_BARRIER_BIT);
 }
 
+Program::Program(const std::string& name, const std::string& compute) {
+    link(name, {compile(name, GL_COMPUTE_SHADER, compute)});
+}
+
 Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
     Texture t = make_texture();
     gl::BindTexture(GL_TEXTURE_2D, t.get());
@@ -151,8 +156,10 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
 void begin_scene_pass(GLuint framebuffer, int buffers, int width, int height,
                       const glm::vec4& clear) {
     gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-    const GLenum all[4] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
-                           GL_COLOR_ATTACHMENT3};
+    const GLenum all[8] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1, GL_COLOR_ATTACHMENT2,
+                           GL_COLOR_ATTACHMENT3, GL_COLOR_ATTACHMENT4, GL_COLOR_ATTACHMENT5,
+                           GL_COLOR_ATTACHMENT6, GL_COLOR_ATTACHMENT7};
+    assert(buffers >= 1 && buffers <= 8);
     gl::DrawBuffers(buffers, all);
     gl::Viewport(0, 0, width, height);
     gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);

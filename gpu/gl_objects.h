@@ -81,6 +81,7 @@ public:
     // With a geometry stage between them (layered rendering: gl_Layer); "" = none.
     Program(const std::string& name, const std::string& vertex, const std::string& geometry,
             const std::string& fragment);
+    Program(const std::string& name, const std::string& compute);  // a compute program
     void use() const { gl::UseProgram(id_.get()); }
     explicit operator bool() const { return bool(id_); }
     GLint location(const char* uniform) const { return gl::GetUniformLocation(id_.get(), uniform); }
@@ -89,6 +90,9 @@ public:
     void set(const char* u, float v) const { gl::Uniform1f(location(u), v); }
     void set(const char* u, const glm::vec2& v) const { gl::Uniform2f(location(u), v.x, v.y); }
     void set(const char* u, const glm::vec3& v) const { gl::Uniform3f(location(u), v.x, v.y, v.z); }
+    void set(const char* u, const glm::ivec3& v) const {
+        gl::Uniform3i(location(u), v.x, v.y, v.z);
+    }
     void set(const char* u, const glm::vec4& v) const {
         gl::Uniform4f(location(u), v.x, v.y, v.z, v.w);
     }

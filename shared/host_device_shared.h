@@ -18,7 +18,8 @@
     const int kFrameTermIndirect = 1;                                                      \
     const int kFrameTermCaustics = 2;                                                      \
     const int kFrameTermSpecular = 3;                                                      \
-    const int kFrameTermCount = 4;                                                         \
+    const int kFrameTermVolume = 4;                                                        \
+    const int kFrameTermCount = 5;                                                         \
     /* Width of the viewer's surface-id texture (one texel per triangle, row by row). */   \
     const int kIdTextureWidth = 4096;
 

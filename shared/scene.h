@@ -13,6 +13,7 @@
 
 #include "shared/host_device_shared.h"
 #include "shared/lightmap.h"
+#include "shared/media.h"
 #include "shared/mesh.h"
 #include "shared/settings.h"
 #include "shared/texture.h"
@@ -41,6 +42,11 @@ struct Material {
     // Diffuse only: the albedo is `albedo` × this texture at the surface point's texture
     // coordinates (meshes without them use the texture's mean). Shared, read-only.
     std::shared_ptr<const Texture> albedo_map;
+    // Glass only (Pfeuti 2009): the medium filling the object, and a Perlin perturbation of its
+    // index n(p) = ior + ior_noise(p) (docs/media.md).
+    bool has_interior = false;
+    Medium interior;
+    MediumNoise ior_noise;
 };
 
 // Rigid transform: world = rotation * object + translation. Scale is baked into the mesh at load.
@@ -195,6 +201,7 @@ struct Scene {
     Camera camera;
     std::vector<Object> objects;
     std::vector<Light> lights;
+    std::vector<Medium> media;  // participating media in world boxes (disjoint), docs/media.md
     Settings settings;
 
     // Derived by make_surfaces_and_atlas() (shared/charts.h); rebuilt only if meshes change.

@@ -28,6 +28,8 @@ namespace {
 using Json = nlohmann::json;
 namespace fs = std::filesystem;
 
+constexpr double kMaxSigma = 1e6;     // per scene unit
+constexpr double kMaxPhaseK = 0.999;  // Schlick k; |k| → 1 is a delta peak
 constexpr std::array kShapeNames = {"box", "sphere", "quad", "bumpy_plane"};
 enum class ShapeType { box, sphere, quad, bumpy_plane };
 
@@ -125,9 +127,9 @@ public:
     Scene parse(const Json& root) {
         const auto start = std::chrono::steady_clock::now();
         in_.object(root, "");
-        in_.check_keys(
-            root, "",
-            {"name", "units", "camera", "materials", "lights", "objects", "settings", "script"});
+        in_.check_keys(root, "",
+                       {"name", "units", "camera", "materials", "lights", "objects", "media",
+                        "settings", "script"});
         scene_.path = in_.file();
         scene_.name = fs::path(in_.file()).stem().string();
         if (const Json* v = JsonInput::find(root, "name")) scene_.name = in_.string(*v, "/name");
@@ -138,6 +140,7 @@ public:
         read_materials(in_.require(root, "", "materials", "an object of named materials"));
         read_lights(in_.require(root, "", "lights", "an array of lights (may be empty)"));
         read_objects(in_.require(root, "", "objects", "an array of objects"));
+        if (const Json* v = JsonInput::find(root, "media")) read_media(*v);
         // Without "camera" the first camera of a glTF object is used.
         if (JsonInput::find(root, "camera") || model_cameras_.empty()) {
             read_camera(in_.require(root, "", "camera", "a camera {eye, target, ...}"));
@@ -208,7 +211,9 @@ private:
             const std::string mpath = JsonInput::child(path, item.key());
             const Json& m = in_.object(item.value(), mpath);
             if (item.key().empty()) in_.fail(mpath, "expected a non-empty material name");
-            in_.check_keys(m, mpath, {"type", "albedo", "albedo_map", "ior", "emission", "light"});
+            in_.check_keys(m, mpath,
+                           {"type", "albedo", "albedo_map", "ior", "emission", "light", "interior",
+                            "ior_noise"});
             Material mat;
             mat.name = item.key();
             if (const Json* v = JsonInput::find(m, "type"))
@@ -241,6 +246,19 @@ private:
                 }
                 // Without "albedo" the texture alone is the albedo.
                 if (!JsonInput::find(m, "albedo")) mat.albedo = glm::vec3(1.0f);
+            }
+            for (const char* key : {"interior", "ior_noise"})
+                if (JsonInput::find(m, key) && mat.type != MaterialType::glass)
+                    in_.fail(mpath + "/" + key,
+                             std::string(key) + " applies to glass only; expected no " + key +
+                                 " for a " + kMaterialTypeNames[size_t(mat.type)] + " material");
+            if (const Json* v = JsonInput::find(m, "interior")) {
+                mat.has_interior = true;
+                mat.interior = read_medium(*v, mpath + "/interior", false);
+            }
+            if (const Json* v = JsonInput::find(m, "ior_noise")) {
+                // n(p) = ior + noise(p) must stay ≥ 1 everywhere.
+                mat.ior_noise = read_noise(*v, mpath + "/ior_noise", mat.ior - 1.0);
             }
             materials_[mat.name] = mat;
         }
@@ -314,6 +332,75 @@ private:
                               lpath + "/radiance", 0, kMaxLightValue);
             }
             scene_.lights.push_back(light);
+        }
+    }
+
+    // A medium {bounds, sigma_s, sigma_a, phase_k, noise}; `bounds` only for a scene medium.
+    Medium read_medium(const Json& json, const std::string& path, bool with_bounds) {
+        in_.object(json, path);
+        if (with_bounds)
+            in_.check_keys(json, path, {"bounds", "sigma_s", "sigma_a", "phase_k", "noise"});
+        else
+            in_.check_keys(json, path, {"sigma_s", "sigma_a", "phase_k", "noise"});
+        Medium m;
+        if (with_bounds) {
+            const std::string bpath = path + "/bounds";
+            const Json& b = in_.object(
+                in_.require(json, path, "bounds", "{\"min\": [x, y, z], \"max\": [x, y, z]}"),
+                bpath);
+            in_.check_keys(b, bpath, {"min", "max"});
+            m.bounds.min =
+                in_.vec3(in_.require(b, bpath, "min", "[x, y, z]"), bpath + "/min", kMaxCoordinate);
+            m.bounds.max =
+                in_.vec3(in_.require(b, bpath, "max", "[x, y, z]"), bpath + "/max", kMaxCoordinate);
+            for (int a = 0; a < 3; ++a)
+                if (!(m.bounds.min[a] < m.bounds.max[a]))
+                    in_.fail(bpath + "/max", "expected max > min on every axis, got min " +
+                                                 format_vec(m.bounds.min) + " and max " +
+                                                 format_vec(m.bounds.max));
+        }
+        m.sigma_s = float(in_.number(in_.require(json, path, "sigma_s", "a number >= 0 per unit"),
+                                     path + "/sigma_s", 0, kMaxSigma));
+        m.sigma_a = float(in_.number(in_.require(json, path, "sigma_a", "a number >= 0 per unit"),
+                                     path + "/sigma_a", 0, kMaxSigma));
+        if (const Json* v = JsonInput::find(json, "phase_k"))
+            m.phase_k = float(in_.number(*v, path + "/phase_k", -kMaxPhaseK, kMaxPhaseK));
+        if (const Json* v = JsonInput::find(json, "noise"))
+            m.noise = read_noise(*v, path + "/noise", 1.0);
+        return m;
+    }
+
+    // {amplitude, frequency, seed}: amplitude in [0, max_amplitude].
+    MediumNoise read_noise(const Json& json, const std::string& path, double max_amplitude) {
+        in_.object(json, path);
+        in_.check_keys(json, path, {"amplitude", "frequency", "seed"});
+        MediumNoise n;
+        n.amplitude = float(in_.number(in_.require(json, path, "amplitude", "a number >= 0"),
+                                       path + "/amplitude", 0, max_amplitude));
+        n.frequency = float(in_.number(in_.require(json, path, "frequency", "a number > 0"),
+                                       path + "/frequency", 0, 1e6, true));
+        if (const Json* v = JsonInput::find(json, "seed"))
+            n.seed = uint32_t(in_.integer(*v, path + "/seed", 0, 4294967295ll));
+        return n;
+    }
+
+    void read_media(const Json& json) {
+        const std::string path = "/media";
+        in_.array(json, path);
+        for (size_t i = 0; i < json.size(); ++i) {
+            const std::string mpath = JsonInput::child(path, i);
+            const Medium m = read_medium(json[i], mpath, true);
+            // Disjoint boxes: every point lies in at most one medium (docs/media.md).
+            for (size_t j = 0; j < scene_.media.size(); ++j) {
+                const Bounds& o = scene_.media[j].bounds;
+                if (glm::all(glm::lessThan(m.bounds.min, o.max)) &&
+                    glm::all(glm::lessThan(o.min, m.bounds.max)))
+                    in_.fail(mpath + "/bounds",
+                             "expected media boxes that do not overlap; this "
+                             "one overlaps /media/" +
+                                 std::to_string(j));
+            }
+            scene_.media.push_back(m);
         }
     }
 

@@ -59,7 +59,7 @@ set_tests_properties(cli.render_bright PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 
 # Bad flags are exit 2 with a message naming the flag and what it expects, checked while parsing
 # (before the scene loads or a window opens), the same for every command (tools/afterglow/cli.h).
-foreach(cmd info export photons render view converge reference compare glinfo bench)
+foreach(cmd info export photons render view converge reference compare glinfo bench media)
   ag_cli_test(${cmd}_help 0 "usage: afterglow ${cmd} .*" ${cmd} --help)
   ag_cli_test(${cmd}_help_short 0 "  -h, --help +show this help" ${cmd} -h)
 endforeach()
@@ -167,3 +167,14 @@ add_test(NAME cli.bench_irradiance_cache
 set_tests_properties(cli.bench_irradiance_cache PROPERTIES LABELS gl)
 ag_cli_test(rc_bad_source 2 "rc/source: expected one of aim, direct" render scenes/cornell.json -o x.exr
             --set rc.source=glossy)
+# Participating media (docs/media.md): pm refuses media; the media method needs media and a
+# light, and renders a small grid in a second or two.
+ag_cli_test(reference_pm_media 2 "has participating media, which pm does not render"
+            reference scenes/media_point_fog.json -m pm -o media_pm.exr)
+ag_cli_test(media_no_media 1 "the media method needs media or glass"
+            media scenes/two_rooms.json -o media_none.exr --size 8x8)
+ag_cli_test(media_no_light 1 "needs an enabled point, spot or quad light"
+            media scenes/media_slab.json -o media_quad.exr --size 8x8)
+ag_cli_test(media_point_fog 0 "photon marching [0-9.]+ ms"
+            media scenes/media_point_fog.json -o ${CMAKE_CURRENT_BINARY_DIR}/media_fog.exr
+            --size 16x16 --grid 16 --photons 4000 --slices)

@@ -12,6 +12,7 @@
 
 #include "cpu/reference/path_tracer.h"
 #include "cpu/reference/photon_mapper.h"
+#include "shared/media.h"
 
 namespace ag::cpu {
 
@@ -21,29 +22,41 @@ constexpr int kTileSize = 16;
 
 }  // namespace
 
-glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
-                            const glm::vec3& n, int quad_samples, float u1, float u2) {
-    const glm::vec3 origin = p + rays.epsilon() * n;
+namespace {
+
+// Σ over the enabled lights of their radiance arriving at `origin` times weight(to, d) (to: the
+// vector towards the light sample, d its length; weight ≤ 0 skips the sample), shadowed, and
+// attenuated by the media when `media` is given. Serves surfaces (weight = cos) and media
+// (weight = phase): one place for every light type.
+template <class Weight>
+glm::vec3 direct_light(const Scene& scene, const RayTracer& rays, const glm::vec3& origin,
+                       const Weight& weight, int quad_samples, float u1, float u2,
+                       const MediaTracker* media, HashedStream* more) {
+    const auto attenuation = [&](const glm::vec3& dir, float d) {
+        return media ? media->transmittance({origin, dir, 0.0f, d}, d, -1, *more) : 1.0f;
+    };
     glm::vec3 e(0.0f);
     for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& light = scene.lights[l];
         if (!light.enabled) continue;
         if (light.type == LightType::sun) {  // E cos, unless something lies sunwards
-            const float cos_x = -glm::dot(n, light.direction);
+            const float cos_x = weight(-light.direction, 1.0f);
             if (!(cos_x > 0.0f)) continue;
             if (rays.occluded({origin, -light.direction, 0.0f, 1e30f})) continue;
-            e += light.irradiance * cos_x;
+            e += media ? light.irradiance * cos_x * attenuation(-light.direction, 1e30f)
+                       : light.irradiance * cos_x;
             continue;
         }
         if (light.type == LightType::point || light.type == LightType::spot) {
             const glm::vec3 to = light.position - origin;
             const float d2 = glm::dot(to, to), d = std::sqrt(d2);
-            const float cos_x = glm::dot(n, to) / d;
+            const float cos_x = weight(to, d);
             if (!(cos_x > 0.0f)) continue;
             const float falloff = light.spot_factor(-glm::dot(to, light.direction) / d);
             if (!(falloff > 0.0f)) continue;
             if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
-            e += light.intensity * (falloff * cos_x / d2);
+            const glm::vec3 arriving = light.intensity * (falloff * cos_x / d2);
+            e += media ? arriving * attenuation(to / d, d) : arriving;
             continue;
         }
         // Quad or mesh light: E = L ∫ cos_x cos_l / d² dA, estimated by a rotated rank-1
@@ -59,14 +72,37 @@ glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm
             const glm::vec3 to = at.position - origin;
             const float d2 = glm::dot(to, to), d = std::sqrt(d2);
             if (!(d2 > 0.0f)) continue;
-            const float cos_x = glm::dot(n, to) / d, cos_l = -glm::dot(at.normal, to) / d;
+            const float cos_x = weight(to, d), cos_l = -glm::dot(at.normal, to) / d;
             if (!(cos_x > 0.0f) || !(cos_l > 0.0f)) continue;
             if (rays.occluded({origin, to / d, 0.0f, d * (1.0f - 1e-5f)})) continue;
-            sum += glm::vec3(cos_x * cos_l / d2);
+            const glm::vec3 arriving(cos_x * cos_l / d2);
+            sum += media ? arriving * attenuation(to / d, d) : arriving;
         }
         e += light.radiance * sum * (area / float(quad_samples));
     }
     return e;
+}
+
+}  // namespace
+
+glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
+                            const glm::vec3& n, int quad_samples, float u1, float u2,
+                            const MediaTracker* media, HashedStream* more) {
+    return direct_light(
+        scene, rays, p + rays.epsilon() * n,
+        [&](const glm::vec3& to, float d) { return glm::dot(n, to) / d; }, quad_samples, u1, u2,
+        media, more);
+}
+
+glm::vec3 direct_inscattering(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
+                              const glm::vec3& forward, float phase_k, int quad_samples, float u1,
+                              float u2, const MediaTracker& media, HashedStream& more) {
+    return direct_light(
+        scene, rays, p,
+        [&](const glm::vec3& to, float d) {
+            return schlick_phase(glm::dot(forward, to) / d, phase_k);
+        },
+        quad_samples, u1, u2, &media, &more);
 }
 
 glm::vec3 quad_light_radiance(const Scene& scene, const Ray& ray, float tmax) {

@@ -9,6 +9,7 @@
 #include <glm/glm.hpp>
 #include <string>
 
+#include "cpu/media_tracking.h"
 #include "cpu/ray_tracer.h"
 #include "cpu/sampling.h"
 #include "shared/frame_terms.h"
@@ -29,7 +30,11 @@ struct ComponentRadiance {
 
     glm::vec3& operator[](FrameTerm c) { return value[size_t(c)]; }
     const glm::vec3& operator[](FrameTerm c) const { return value[size_t(c)]; }
-    glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
+    glm::vec3 full() const {
+        glm::vec3 sum = value[0];
+        for (size_t c = 1; c < value.size(); ++c) sum += value[c];
+        return sum;
+    }
 };
 
 // A rectangle of the camera's pixels (a tile of a distributed reference render); width 0 = all.
@@ -52,6 +57,7 @@ struct ReferenceSettings {
     // Only these pixels are rendered and the result is this size; each pixel's samples depend on
     // its place in the whole image only, so tiles merge into exactly the whole image.
     PixelRegion region;
+    int volume_bounces = 256;  // pt: scattering events in media per path (1: single scattering)
 
     // Photon mapping only.
     int photons = 1000000;          // global map: photons emitted from all lights together
@@ -92,8 +98,18 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
 // Irradiance E at the front side (p, n) straight from the scene's enabled lights: point lights
 // with a hard shadow (I cos / d²), quad lights by `quad_samples` shadow rays on a rotated 2D
 // lattice (rotation u1, u2). The reflected radiance is albedo/π · E.
+// With `media` (and its number stream `more`), each light's share is attenuated by the
+// transmittance of the world's media between p and the light.
 glm::vec3 direct_irradiance(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
-                            const glm::vec3& n, int quad_samples, float u1, float u2);
+                            const glm::vec3& n, int quad_samples, float u1, float u2,
+                            const MediaTracker* media = nullptr, HashedStream* more = nullptr);
+
+// The same lights' radiance scattered at p inside a medium towards the direction of travel
+// `forward` reversed: Σ ∫ p_Schlick(forward · ω) L(ω) T dω (single scattering's integrand,
+// Pfeuti eq. 2.5), attenuated by the world's media on the way to each light.
+glm::vec3 direct_inscattering(const Scene& scene, const RayTracer& rays, const glm::vec3& p,
+                              const glm::vec3& forward, float phase_k, int quad_samples, float u1,
+                              float u2, const MediaTracker& media, HashedStream& more);
 
 // Radiance of the nearest quad light whose front the ray meets before `tmax`, or zero. Lights are
 // not geometry: only the path tracer asks, for rays that left a specular vertex (caustics).

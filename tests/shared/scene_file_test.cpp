@@ -533,6 +533,63 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
          },
          "/settings/gather/border_correction",
          "expected one of none, renormalize, stretch, got \"clamp\""},
+        // Participating media (docs/media.md).
+        {"media_not_array", [](Json& j) { j["media"] = Json::object(); }, "/media",
+         "expected an array"},
+        {"medium_no_bounds",
+         [](Json& j) { j["media"] = Json::parse(R"([{"sigma_s": 1, "sigma_a": 0}])"); }, "/media/0",
+         "missing key \"bounds\""},
+        {"medium_inverted_bounds",
+         [](Json& j) {
+             j["media"] = Json::parse(
+                 R"([{"bounds": {"min": [0, 0, 0], "max": [1, -1, 1]}, "sigma_s": 1, "sigma_a": 0}])");
+         },
+         "/media/0/bounds/max", "expected max > min on every axis"},
+        {"medium_negative_sigma",
+         [](Json& j) {
+             j["media"] = Json::parse(
+                 R"([{"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}, "sigma_s": -1, "sigma_a": 0}])");
+         },
+         "/media/0/sigma_s", "expected a number in [0, 1000000], got -1"},
+        {"medium_phase_k",
+         [](Json& j) {
+             j["media"] = Json::parse(
+                 R"([{"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}, "sigma_s": 1, "sigma_a": 0,
+                      "phase_k": 1}])");
+         },
+         "/media/0/phase_k", "expected a number in [-0.999, 0.999], got 1"},
+        {"medium_noise_amplitude",
+         [](Json& j) {
+             j["media"] = Json::parse(
+                 R"([{"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}, "sigma_s": 1, "sigma_a": 0,
+                      "noise": {"amplitude": 2, "frequency": 1}}])");
+         },
+         "/media/0/noise/amplitude", "expected a number in [0, 1], got 2"},
+        {"media_overlap",
+         [](Json& j) {
+             j["media"] = Json::parse(
+                 R"([{"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}, "sigma_s": 1, "sigma_a": 0},
+                     {"bounds": {"min": [0.5, 0.5, 0.5], "max": [2, 2, 2]}, "sigma_s": 1,
+                      "sigma_a": 0}])");
+         },
+         "/media/1/bounds", "expected media boxes that do not overlap; this one overlaps /media/0"},
+        {"interior_on_diffuse",
+         [](Json& j) {
+             j["materials"]["white"]["interior"] = Json::parse(R"({"sigma_s": 1, "sigma_a": 0})");
+         },
+         "/materials/white/interior", "interior applies to glass only"},
+        {"interior_with_bounds",
+         [](Json& j) {
+             j["materials"]["glass"]["interior"] = Json::parse(
+                 R"({"bounds": {"min": [0, 0, 0], "max": [1, 1, 1]}, "sigma_s": 1, "sigma_a": 0})");
+         },
+         "/materials/glass/interior/bounds", "unknown key"},
+        {"ior_noise_below_one",
+         [](Json& j) {
+             j["materials"]["glass"]["ior_noise"] =
+                 Json::parse(R"({"amplitude": 0.6, "frequency": 2})");
+         },
+         "/materials/glass/ior_noise/amplitude", "expected a number in [0, 0.5], got 0.6"},
     };
     std::set<std::string> messages;
     for (const Case& c : cases) {
@@ -554,6 +611,30 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
 // Vectors whose squared length over- or underflows in float still give their direction: a huge
 // rotation axis rotates (it used to lose the rotation), a tiny or huge up vector is accepted (it
 // used to be "parallel to the view direction").
+TEST_F(SceneFile, ReadsMediaAndGlassInteriors) {
+    Json j = base_scene();
+    j["media"] = Json::parse(R"([{"bounds": {"min": [-2, 0, -2], "max": [2, 2, 2]},
+        "sigma_s": 0.1, "sigma_a": 0.02, "phase_k": 0.3,
+        "noise": {"amplitude": 0.5, "frequency": 3, "seed": 9}}])");
+    j["materials"]["glass"]["interior"] =
+        Json::parse(R"({"sigma_s": 2, "sigma_a": 0.5, "phase_k": -0.2})");
+    j["materials"]["glass"]["ior_noise"] = Json::parse(R"({"amplitude": 0.1, "frequency": 4})");
+    const Scene s = load_scene(write("media.json", j.dump()));
+    ASSERT_EQ(s.media.size(), 1u);
+    EXPECT_EQ(s.media[0].bounds.max, glm::vec3(2.0f));
+    EXPECT_FLOAT_EQ(s.media[0].sigma_s, 0.1f);
+    EXPECT_FLOAT_EQ(s.media[0].sigma_a, 0.02f);
+    EXPECT_FLOAT_EQ(s.media[0].phase_k, 0.3f);
+    EXPECT_FLOAT_EQ(s.media[0].noise.amplitude, 0.5f);
+    EXPECT_EQ(s.media[0].noise.seed, 9u);
+    const Material& glass = s.objects[size_t(s.find_object("ball"))].material;
+    EXPECT_TRUE(glass.has_interior);
+    EXPECT_FLOAT_EQ(glass.interior.sigma_s, 2.0f);
+    EXPECT_FLOAT_EQ(glass.interior.phase_k, -0.2f);
+    EXPECT_FLOAT_EQ(glass.ior_noise.amplitude, 0.1f);
+    EXPECT_FALSE(s.objects[size_t(s.find_object("floor"))].material.has_interior);
+}
+
 TEST_F(SceneFile, HugeAndTinyDirectionsNormaliseExactly) {
     Json j = base_scene();
     j["objects"][1]["transform"]["rotate"] = {{"axis", {0, 1e20, 0}}, {"degrees", 90}};

@@ -10,6 +10,7 @@
 #include <iostream>
 #include <string>
 
+#include "cpu/media_tracking.h"
 #include "shared/image.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
@@ -21,7 +22,8 @@ const Command kReferenceCommand{
     "SCENE --method pt|pm -o OUT.exr [options]",
     "Render a reference image of the scene's camera by path tracing (pt) or photon mapping with "
     "final gathering (pm). Writes OUT.exr (full), OUT.direct.exr, OUT.indirect.exr, "
-    "OUT.caustics.exr, OUT.specular.exr (they sum to the full image) and OUT.png; passes of one "
+    "OUT.caustics.exr, OUT.specular.exr, OUT.volume.exr (they sum to the full image) and OUT.png; "
+    "participating media (pt only) by delta tracking; passes of one "
     "sample per pixel until --spp or --time is reached.",
     {
         choice("method,m", "pt|pm", "path tracing or photon mapping (required)", {"pt", "pm"}),
@@ -54,6 +56,10 @@ const Command kReferenceCommand{
                 "diffuse bounces the indirect term keeps (1 = single bounce, 0 = none; default "
                 "all)",
                 0, 1 << 16),
+        integer("volume-bounces", "N",
+                "pt: scattering events in media per path (0: media only attenuate; 1: single "
+                "scattering)",
+                0, 1 << 20, cpu::ReferenceSettings{}.volume_bounces),
         flag("quiet,q", "no progress bar (there is none unless stderr is a terminal)"),
     },
     1,
@@ -105,6 +111,9 @@ int run_reference(const Args& args) {
     settings.seed = uint32_t(args.get_int("seed", int(scene.settings.seed & 0x7fffffffu)));
     settings.time_limit = args.get_double("time", 0.0);
     const bool pm = settings.method == cpu::ReferenceMethod::photon_mapping;
+    if (pm && cpu::has_media(scene))
+        throw CliError(where + ": " + scene.path +
+                       " has participating media, which pm does not render; use --method pt");
     settings.spp = args.get_int("spp", settings.time_limit > 0.0 ? 0 : (pm ? 16 : 64));
     settings.photons = args.get_int("photons");
     settings.caustic_photons = args.get_int("caustic-photons");
@@ -114,6 +123,7 @@ int run_reference(const Args& args) {
     settings.gather_rays = args.get_int("gather-rays");
     settings.area_light_samples = args.get_int("area-samples");
     settings.indirect_bounces = args.get_int("indirect-bounces", -1);
+    settings.volume_bounces = args.get_int("volume-bounces");
     ThreadPool pool(args.get_int("threads", scene.settings.threads));
 
     // The bar only where someone watches: a terminal, as `afterglow render` does.
@@ -137,7 +147,7 @@ int run_reference(const Args& args) {
                   << " caustic photons; " << settings.gather_rays << " gather rays per sample)";
     std::cout << "\n";
     std::cerr << where << ": wrote " << out << ", " << stem
-              << ".{direct,indirect,caustics,specular}.exr and " << stem << ".png\n";
+              << ".{direct,indirect,caustics,specular,volume}.exr and " << stem << ".png\n";
     return 0;
 }
 

@@ -834,6 +834,9 @@ int Viewer::run() {
             case ViewMode::specular:
                 source = pipeline_->renderer().aov_texture(FrameTerm::specular);
                 break;
+            case ViewMode::volume:
+                source = pipeline_->renderer().aov_texture(FrameTerm::volume);
+                break;
             case ViewMode::aim:
                 source = pipeline_->aim_texture();
                 break;

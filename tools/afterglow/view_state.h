@@ -22,14 +22,22 @@ enum class ViewMode {
     indirect = 1 + kFrameTermIndirect,
     caustics = 1 + kFrameTermCaustics,
     specular = 1 + kFrameTermSpecular,
+    volume = 1 + kFrameTermVolume,
     aim = 1 + kFrameTermCount,
     iim,
     surfaces,
     records  // irradiance cache records and their zones (docs/irradiance_cache.md)
 };
-inline constexpr std::array kViewModeNames = {
-    "frame", kFrameTermNames[0], kFrameTermNames[1], kFrameTermNames[2], kFrameTermNames[3], "aim",
-    "iim",   "surfaces",         "records"};
+inline constexpr std::array kViewModeNames = {"frame",
+                                              kFrameTermNames[0],
+                                              kFrameTermNames[1],
+                                              kFrameTermNames[2],
+                                              kFrameTermNames[3],
+                                              kFrameTermNames[4],
+                                              "aim",
+                                              "iim",
+                                              "surfaces",
+                                              "records"};
 static_assert(kViewModeNames.size() == size_t(ViewMode::records) + 1);
 
 struct Selection {

@@ -1,0 +1,113 @@
+// Pfeuti's method end to end against the path tracer (docs/media.md): photons marched into a
+// voxelised fog box (and through a glass sphere), the view march's single scattering, against
+// pt's `volume` component with --volume-bounces 1.
+#include "shared/pipeline/media_method.h"
+
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "../gpu/gl_fixture.h"
+#include "cpu/media_voxelizer.h"
+#include "cpu/reference/reference.h"
+#include "gpu/media_marcher.h"
+#include "gpu/media_view.h"
+#include "shared/metrics.h"
+#include "shared/scene_file.h"
+#include "shared/shapes.h"
+
+namespace ag::gpu {
+
+namespace {
+
+using test::GlTest;
+
+class MediaViewTest : public GlTest {};
+
+// A fog box [-1, 1]³ lit by a point light above it, seen from the front.
+Scene lit_fog() {
+    Scene s;
+    s.path = "lit_fog";
+    Object sink;  // the scene needs an object: a black quad far out of view
+    sink.name = "sink";
+    sink.mesh = make_quad(1.0f, 1.0f);
+    sink.material.albedo = glm::vec3(0.0f);
+    sink.transform.translation = {0.0f, -100.0f, 0.0f};
+    s.objects.push_back(sink);
+    Light light;
+    light.name = "lamp";
+    light.position = {0.3f, 1.6f, -0.2f};
+    light.intensity = glm::vec3(20.0f);
+    s.lights.push_back(light);
+    Medium fog;
+    fog.bounds.min = glm::vec3(-1.0f);
+    fog.bounds.max = glm::vec3(1.0f);
+    fog.sigma_s = 0.5f;
+    fog.sigma_a = 0.2f;
+    fog.phase_k = 0.3f;
+    s.media.push_back(fog);
+    s.camera.eye = {0.0f, 0.2f, -4.0f};
+    s.camera.target = {0.0f, 0.0f, 0.0f};
+    s.camera.fov_y = 36.0f;
+    s.camera.width = s.camera.height = 32;
+    return s;
+}
+
+TEST_F(MediaViewTest, SingleScatteringMatchesThePathTracer) {
+    const Scene scene = lit_fog();
+    cpu::ReferenceSettings settings;
+    settings.spp = 128;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    const cpu::ReferenceResult pt = cpu::render_reference(scene, settings, pool);
+    const Image& reference = pt.components[size_t(FrameTerm::volume)];
+
+    const cpu::RayTracer rays(scene);
+    const MediaGrid grid = cpu::voxelize_media(scene, rays, scene.media[0].bounds, glm::ivec3(32));
+    const std::vector<MediaPhoton> photons = plane_photons(
+        scene.lights[0].position, scene.lights[0].intensity.x, scene.media[0].bounds, 50000);
+    MediaMarchSettings march;
+    march.step = 1.0f;  // n = 1 everywhere: straight photons, any step
+    const MediaMarchResult marched = MediaMarcher().march(grid, photons, march);
+    MediaViewSettings view;
+    view.phase_k = scene.media[0].phase_k;
+    const Image method =
+        MediaView().render(grid, marched.fluence, marched.flow, scene.camera, view);
+
+    const double rel_mse = compare_images(method, reference).rel_mse;
+    double mean_method = 0.0, mean_reference = 0.0;
+    for (size_t i = 0; i < method.pixels.size(); ++i) {
+        mean_method += method.pixels[i];
+        mean_reference += reference.pixels[i];
+    }
+    std::printf("media view: relMSE %.5f, mean %.5f against pt %.5f\n", rel_mse, mean_method,
+                mean_reference);
+    EXPECT_LT(rel_mse, 0.05);
+    EXPECT_NEAR(mean_method, mean_reference, 0.05 * mean_reference);
+}
+
+// A glass sphere in fog under a quad light (scenes/media_glass_fog.json, black floor: nothing but
+// single scattering lights the fog): the whole method (voxelisation, refraction of photons and
+// view rays, the volumetric caustic under the sphere) against pt's volume component with
+// --volume-bounces 1, whose caustic comes from paths that find the light through the glass.
+TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog.json");
+    scene.camera.width = scene.camera.height = 24;
+    cpu::ReferenceSettings settings;
+    settings.spp = 1024;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    const cpu::ReferenceResult pt = cpu::render_reference(scene, settings, pool);
+    MediaMethodSettings method;
+    method.grid = 32;
+    method.photons = 50000;
+    const MediaMethodResult result = render_media(scene, method);
+    const double rel_mse =
+        compare_images(result.volume, pt.components[size_t(FrameTerm::volume)]).rel_mse;
+    std::printf("glass sphere in fog: relMSE %.5f against pt\n", rel_mse);
+    EXPECT_LT(rel_mse, 0.05);
+}
+
+}  // namespace
+
+}  // namespace ag::gpu

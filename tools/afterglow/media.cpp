@@ -1,0 +1,86 @@
+// afterglow media SCENE -o OUT.exr: Pfeuti's method (2009) on the scene's media and glass: the
+// volume term by voxelisation, curved photon marching and the view march on the GPU, with the
+// time of each pass (docs/media.md).
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "gpu/gl_context.h"
+#include "shared/image.h"
+#include "shared/media_grid.h"
+#include "shared/pipeline/media_method.h"
+#include "shared/scene_file.h"
+#include "tools/afterglow/commands.h"
+
+namespace ag::cli {
+
+const Command kMediaCommand{
+    "media",
+    "SCENE -o OUT.exr [options]",
+    "Render the volume term of the scene's participating media by Pfeuti's method: voxel grids "
+    "of n, sigma_s and sigma_t through the ray tracer, n smoothed by a 9^3 Gaussian, photons of "
+    "the first point light's photon plane marched along curved paths on the GPU, single "
+    "scattering by a view march. Writes OUT.exr and OUT.png and prints the time of each pass.",
+    {
+        text("output,o", "OUT.exr", "the volume term"),
+        integer("grid", "N", "voxels along the grid's longest side", 4, 512,
+                MediaMethodSettings{}.grid),
+        integer("photons", "N", "photons on the photon plane", 1, 1 << 26,
+                MediaMethodSettings{}.photons),
+        choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
+        number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
+        size_option("image size (default: the scene camera's resolution)"),
+        flag("slices",
+             "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre"),
+        number("exposure", "STOPS", "PNG exposure", -20.0, 20.0, 0.0),
+        gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
+                  gpu::GlBackend::osmesa),
+    },
+    1,
+    1,
+};
+
+int run_media(const Args& args) {
+    const std::string where = "afterglow media";
+    if (!args.has("output")) throw CliError(where + ": missing -o OUT.exr");
+    const std::string out = args.get("output");
+    if (std::filesystem::path(out).extension() != ".exr")
+        throw CliError(where + ": -o expects a file name ending in .exr, got '" + out + "'");
+    Scene scene = load_scene(args.positionals()[0]);
+    args.get_size("size", scene.camera.width, scene.camera.height);
+    MediaMethodSettings settings;
+    settings.grid = args.get_int("grid");
+    settings.photons = args.get_int("photons");
+    settings.march_step = float(args.get_double("step"));
+    settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
+                                                     : gpu::MediaDeposit::track_length;
+    auto context = gpu::make_gl_context(args.gl_backend());
+    // A scene without media or a point light is bad input: exit 1 with its message.
+    const MediaMethodResult result = render_media(scene, settings);
+    std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
+    write_image(result.volume, out);
+    const std::string png = out.substr(0, out.size() - 4) + ".png";
+    write_image(result.volume, png, float(args.get_double("exposure")));
+    if (args.has("slices")) {
+        const int layer = result.grids.size.z / 2;
+        const std::string stem = out.substr(0, out.size() - 4);
+        write_image(grid_slice(result.grids, result.grids.n, 2, layer), stem + ".n.exr");
+        write_image(grid_slice(result.grids, result.grids.sigma_s, 2, layer),
+                    stem + ".sigma_s.exr");
+        write_image(grid_slice(result.grids, result.fluence, 2, layer), stem + ".fluence.exr");
+    }
+    const MediaMethodTiming& t = result.timing;
+    std::printf(
+        "media: grid %dx%dx%d, %zu photons marched, %dx%d pixels on %s\n"
+        "  voxelisation %.1f ms, smoothing %.1f ms, photon generation %.1f ms, photon marching "
+        "%.1f ms, viewing %.1f ms, total %.1f ms\n",
+        result.grid.x, result.grid.y, result.grid.z, result.photons_marched, scene.camera.width,
+        scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation, 1e3 * t.smoothing,
+        1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing, 1e3 * t.total());
+    std::cerr << where << ": wrote " << out << " and " << png << "\n";
+    return 0;
+}
+
+static const Registration kRegistration(kMediaCommand, run_media, 52);
+
+}  // namespace ag::cli
