@@ -9,7 +9,39 @@
 
 namespace ag::cpu {
 
-namespace {}
+namespace {
+
+constexpr int kTextureSubsamples = 4;  // per texel side, for its mean albedo
+
+// The mean of the object's albedo texture over texel `t`: n × n points of the texel square in
+// atlas space, each mapped onto the record's triangle by its atlas-space barycentrics (clamped
+// onto the triangle, so points beyond it read its nearest edge).
+glm::vec3 texel_texture_mean(const Scene& scene, const TexelRecord& t) {
+    const Object& object = scene.objects[size_t(t.object)];
+    const Material& m = object.material;
+    if (!m.albedo_map || m.type != MaterialType::diffuse) return glm::vec3(1.0f);
+    if (!object.mesh.has_texcoords() || t.triangle < 0) return m.albedo_map->mean;
+    const glm::vec2* c = &scene.atlas.corner_uvs[size_t(t.object)][3 * size_t(t.triangle)];
+    const glm::vec2 e1 = c[1] - c[0], e2 = c[2] - c[0];
+    const float det = e1.x * e2.y - e1.y * e2.x;
+    glm::vec3 sum(0.0f);
+    for (int j = 0; j < kTextureSubsamples; ++j)
+        for (int i = 0; i < kTextureSubsamples; ++i) {
+            const glm::vec2 p = glm::vec2(float(t.x), float(t.y)) +
+                                (glm::vec2(float(i), float(j)) + 0.5f) / float(kTextureSubsamples);
+            glm::vec2 b(1.0f / 3.0f);
+            if (std::abs(det) > 1e-12f) {
+                const glm::vec2 d = p - c[0];
+                b = {(d.x * e2.y - d.y * e2.x) / det, (e1.x * d.y - e1.y * d.x) / det};
+                b = glm::max(b, 0.0f);
+                if (b.x + b.y > 1.0f) b /= b.x + b.y;
+            }
+            sum += m.albedo_map->sample(object.mesh.texcoord(t.triangle, b));
+        }
+    return sum / float(kTextureSubsamples * kTextureSubsamples);
+}
+
+}  // namespace
 
 Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     surface_texels_.resize(scene_.surfaces.size());
@@ -19,6 +51,11 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     radiance_.assign(n, glm::vec3(0.0f));
     irradiance_.assign(n, glm::vec3(0.0f));
     dirty_flag_.assign(n, 0);
+    texture_mean_.resize(scene_.atlas.texels.size());
+    pool_.parallel_for(
+        texture_mean_.size(),
+        [&](size_t i) { texture_mean_[i] = texel_texture_mean(scene_, scene_.atlas.texels[i]); },
+        256);
 }
 
 int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
@@ -69,7 +106,7 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
         const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
         irradiance_[a] = e[i];
-        radiance_[a] = albedo / float(std::numbers::pi) * e[i];
+        radiance_[a] = albedo * texture_mean_[size_t(texels[i])] / float(std::numbers::pi) * e[i];
         if (!dirty_flag_[a]) {
             dirty_flag_[a] = 1;
             dirty_.push_back(int(a));

@@ -43,6 +43,9 @@ private:
     ThreadPool& pool_;
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
+    // Per atlas texel record: the mean of its object's albedo texture over the texel (1 without
+    // one), so that the AIM's radiance is the texel's mean exitant radiance.
+    std::vector<glm::vec3> texture_mean_;
     std::vector<int> dirty_;
     size_t round_robin_ = 0;  // next surface for rebuild_round_robin
     std::vector<char> dirty_flag_;

@@ -43,11 +43,25 @@ std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) con
     return out;
 }
 
+std::vector<CausticTracer::Cone> CausticTracer::discs() const {
+    std::vector<Cone> out;
+    for (int o = 0; o < int(scene_.objects.size()); ++o) {
+        const Object& obj = scene_.objects[size_t(o)];
+        if (obj.material.type == MaterialType::diffuse) continue;
+        const glm::vec3 c_local = mesh_bounds(obj.mesh).center();
+        float r = 0.0f;
+        for (const glm::vec3& p : obj.mesh.positions) r = std::max(r, glm::length(p - c_local));
+        out.push_back(
+            {o, obj.transform.apply_point(c_local), double(r), std::numbers::pi_v<float> * r * r});
+    }
+    return out;
+}
+
 CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vector<Cone>& cone_cache,
                                           bool& hit_specular) const {
     hit_specular = false;
     const Light& l = scene_.lights[size_t(light)];
-    if (!l.enabled || l.type == LightType::sun) return {};  // a sun has no centre to aim from
+    if (!l.enabled) return {};
     const glm::vec3 centre = l.center();
     if (cone_cache.empty()) return {};
     const Halton& halton = halton_[size_t(light)];
@@ -70,29 +84,50 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
     glm::vec3 power;
     const int n = scene_.settings.caustics.photons;
     glm::vec3 light_normal(0.0f);
-    if (l.is_area()) {
-        const LightPoint at =
-            sample_area_light(scene_, l, float(halton.sample(k, 3)), float(halton.sample(k, 4)));
-        light_normal = at.normal;
-        ray.origin = at.position + rays_->epsilon() * at.normal;
-    }
-    const glm::vec3 axis = glm::normalize(cone->centre - ray.origin);
-    // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without
-    // cancellation.
-    const double x = halton.sample(k, 1) * cone->one_minus_cos;
-    const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
-    const float phi = 2.0f * std::numbers::pi_v<float> * float(halton.sample(k, 2));
-    glm::vec3 u, v;
-    orthonormal_basis(axis, u, v);
-    ray.direction = glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));
-    if (l.type == LightType::point || l.type == LightType::spot) {
-        // The flux into all cones, shared by n photons (a spot's by its falloff).
-        power =
-            l.intensity * l.spot_factor(glm::dot(ray.direction, l.direction)) * total / float(n);
+    if (l.type == LightType::sun) {
+        // Parallel light: a point uniform on the chosen disc across the sun's direction, started
+        // outside the scene. Discs that overlap there share the photon (density / their count).
+        glm::vec3 u, v;
+        orthonormal_basis(l.direction, u, v);
+        const float radius = float(std::sqrt(halton.sample(k, 1))) * float(cone->one_minus_cos);
+        const float phi = 2.0f * std::numbers::pi_v<float> * float(halton.sample(k, 2));
+        const glm::vec3 p = cone->centre + radius * (std::cos(phi) * u + std::sin(phi) * v);
+        int containing = 0;
+        for (const Cone& c : cone_cache) {
+            const glm::vec3 d = p - c.centre;
+            const glm::vec3 across = d - glm::dot(d, l.direction) * l.direction;
+            containing += glm::dot(across, across) <= float(c.one_minus_cos * c.one_minus_cos);
+        }
+        ray.origin =
+            p - (glm::dot(p - l.sun_center, l.direction) + 1.01f * l.sun_radius) * l.direction;
+        ray.direction = l.direction;
+        power = l.irradiance * total / float(std::max(containing, 1)) / float(n);
     } else {
-        const float cos_l = glm::dot(light_normal, ray.direction);
-        if (cos_l <= 0.0f) return {};
-        power = l.radiance * l.area() * cos_l * total / float(n);
+        if (l.is_area()) {
+            const LightPoint at = sample_area_light(scene_, l, float(halton.sample(k, 3)),
+                                                    float(halton.sample(k, 4)));
+            light_normal = at.normal;
+            ray.origin = at.position + rays_->epsilon() * at.normal;
+        }
+        const glm::vec3 axis = glm::normalize(cone->centre - ray.origin);
+        // Uniform in the cone's solid angle: 1 − cosθ = u (1 − cos α); sinθ from it without
+        // cancellation.
+        const double x = halton.sample(k, 1) * cone->one_minus_cos;
+        const float cos_t = float(1.0 - x), sin_t = float(std::sqrt(std::max(0.0, x * (2.0 - x))));
+        const float phi = 2.0f * std::numbers::pi_v<float> * float(halton.sample(k, 2));
+        glm::vec3 u, v;
+        orthonormal_basis(axis, u, v);
+        ray.direction =
+            glm::normalize(cos_t * axis + sin_t * (std::cos(phi) * u + std::sin(phi) * v));
+        if (l.type == LightType::point || l.type == LightType::spot) {
+            // The flux into all cones, shared by n photons (a spot's by its falloff).
+            power = l.intensity * l.spot_factor(glm::dot(ray.direction, l.direction)) * total /
+                    float(n);
+        } else {
+            const float cos_l = glm::dot(light_normal, ray.direction);
+            if (cos_l <= 0.0f) return {};
+            power = l.radiance * l.area() * cos_l * total / float(n);
+        }
     }
 
     const float eps = rays_->epsilon();
@@ -127,7 +162,8 @@ CausticStats CausticTracer::trace_slice(int slice, int slices) {
     for (int l = 0; l < int(scene_.lights.size()); ++l)
         for (int i = slice; i < n; i += slices) jobs.push_back(l * n + i);
     std::vector<std::vector<Cone>> light_cones;  // the specular objects as seen from each light now
-    for (const Light& l : scene_.lights) light_cones.push_back(cones(l.center()));
+    for (const Light& l : scene_.lights)
+        light_cones.push_back(l.type == LightType::sun ? discs() : cones(l.center()));
     std::vector<char> specular(jobs.size(), 0);
     pool_.parallel_for(
         jobs.size(),

@@ -51,6 +51,9 @@ private:
         float solid_angle;
     };
     std::vector<Cone> cones(const glm::vec3& from) const;
+    // For a sun: the specular objects' bounding spheres as discs across its direction (centre,
+    // and the disc's area in solid_angle; one_minus_cos holds the radius).
+    std::vector<Cone> discs() const;
     CausticStats trace_slice(int slice, int slices);
     CausticPhoton trace_photon(int light, int index, const std::vector<Cone>& cones,
                                bool& hit_specular) const;

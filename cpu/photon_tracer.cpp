@@ -144,9 +144,10 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
             out.push_back(v);
             if (!front) return ends;
             // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
-            const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
+            const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
+            const float p = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
             if (p <= 0.0f || sample(light, k, dim) >= p) return ends;
-            power *= m.albedo / p;
+            power *= albedo / p;
             ray.origin = hit.position + eps * facing;
             ray.direction =
                 cosine_direction(facing, sample(light, k, dim + 1), sample(light, k, dim + 2));

@@ -136,7 +136,7 @@ vec3 specular_radiance(vec3 p, vec3 n) {
 // G-buffer pass, diffuse objects: emission → direct, ρ·IIM → indirect, caustics. Mirrors and
 // glass have their own program (below): llvmpipe runs the code of an untaken branch with an
 // empty mask, so the cube-map searches in this shader cost every diffuse pixel 5× the frame.
-const char* kGbufferFragment = R"(
+const std::string kGbufferFragment = std::string(kAlbedoGlsl) + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -155,7 +155,7 @@ void main() {
     out_direct = vec4(emission, 1.0);
     // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
     vec3 e = iim_in_screen != 0 ? texture(iim, gl_FragCoord.xy / screen).rgb : texture(iim, v_uv).rgb;
-    out_indirect = vec4(albedo * e, 1.0);
+    out_indirect = vec4(surface_albedo(albedo) * e, 1.0);
     out_specular = vec4(0.0, 0.0, 0.0, 1.0);
     out_caustics = vec4(0.0, 0.0, 0.0, 1.0);
     if (has_caustics != 0) out_caustics.rgb = texture(caustics, gl_FragCoord.xy / screen).rgb;
@@ -180,7 +180,7 @@ void main() {
 )";
 
 // One light sample, added where the stencil says the pixel is outside its shadow volumes.
-const std::string kLightingFragment = std::string(kLightsGlsl) + R"(
+const std::string kLightingFragment = std::string(kLightsGlsl) + kAlbedoGlsl + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -188,7 +188,8 @@ uniform vec3 albedo;
 uniform int light_index;
 layout(location = 0) out vec4 out_direct;  // drawn with the direct term's image as the only buffer
 void main() {
-    out_direct = vec4(direct_from(light_index, v_world, normalize(v_normal), albedo), 0.0);
+    out_direct =
+        vec4(direct_from(light_index, v_world, normalize(v_normal), surface_albedo(albedo)), 0.0);
 }
 )";
 
@@ -205,7 +206,7 @@ void main() { color = vec4(0.0); }
 // What a mirror or glass object sees: the diffuse scene with emission and indirect light, and in
 // alpha the distance from the cube map's centre (the lights' shadowed direct light is added by
 // the same passes as in the frame).
-const char* kEnvironmentFragment = R"(
+const std::string kEnvironmentFragment = std::string(kAlbedoGlsl) + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -218,7 +219,7 @@ out vec4 color;
 void main() {
     float distance = length(v_world - centre);
     if (diffuse == 0) { color = vec4(0.0, 0.0, 0.0, distance); return; }
-    color = vec4(emission + albedo * texture(iim, v_uv).rgb, distance);
+    color = vec4(emission + surface_albedo(albedo) * texture(iim, v_uv).rgb, distance);
 }
 )";
 
@@ -435,7 +436,8 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
                 if (o == s) continue;  // an object does not see itself in its own cube map
                 const Object& obj = scene_.objects[o];
                 environment_.set("model", model_matrix(obj));
-                environment_.set("albedo", obj.material.albedo);
+                environment_.set("albedo", base_albedo(obj));
+                meshes_.bind_albedo(environment_, o, kAlbedoUnit);
                 environment_.set("emission", obj.material.emission);
                 environment_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
                 meshes_.draw(o);
@@ -494,7 +496,8 @@ void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
             const Object& obj = scene_.objects[o];
             if (obj.material.type != MaterialType::diffuse) continue;
             lighting_.set("model", model_matrix(obj));
-            lighting_.set("albedo", obj.material.albedo);
+            lighting_.set("albedo", base_albedo(obj));
+            meshes_.bind_albedo(lighting_, o, kAlbedoUnit);
             meshes_.draw(o);
         }
         gl::Disable(GL_BLEND);
@@ -560,7 +563,8 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
         const Object& obj = scene_.objects[o];
         if (obj.material.type != MaterialType::diffuse) continue;
         gbuffer_.set("model", model_matrix(obj));
-        gbuffer_.set("albedo", obj.material.albedo);
+        gbuffer_.set("albedo", base_albedo(obj));
+        meshes_.bind_albedo(gbuffer_, o, kAlbedoUnit);
         gbuffer_.set("emission", obj.material.emission);
         meshes_.draw(o);
     }

@@ -1,6 +1,7 @@
 #include "gpu/g_buffer.h"
 
 #include <cmath>
+#include <string>
 
 namespace ag::gpu {
 
@@ -9,7 +10,7 @@ namespace {
 // Position, surface (albedo and the world area the pixel covers there: eq. 12.2, with the pixel's
 // footprint growing as 1/cos of the angle between the surface normal and the view direction),
 // normal with view depth, ids.
-const char* kGBufferFragment = R"(
+const std::string kGBufferFragment = std::string(kAlbedoGlsl) + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
@@ -30,7 +31,7 @@ void main() {
     float cos_n = abs(dot(n, to_eye / d));
     float side = d * pixel_at_unit_distance;
     out_position = vec4(v_world, 1.0);
-    out_surface = vec4(albedo, diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
+    out_surface = vec4(surface_albedo(albedo), diffuse != 0 ? side * side / max(cos_n, 0.05) : 0.0);
     out_normal = vec4(dot(n, to_eye) < 0.0 ? -n : n, dot(v_world - eye, view_axis));
     out_ids = vec4(vec3(ids), 1.0);
 }
@@ -116,7 +117,8 @@ void GBuffer::render() {
         const Object& obj = scene_.objects[o];
         const bool diffuse = obj.material.type == MaterialType::diffuse;
         program_.set("model", model_matrix(obj));
-        program_.set("albedo", diffuse ? obj.material.albedo : glm::vec3(0.0f));
+        program_.set("albedo", diffuse ? base_albedo(obj) : glm::vec3(0.0f));
+        meshes_.bind_albedo(program_, o, kAlbedoUnit);
         program_.set("diffuse", diffuse ? 1 : 0);
         gl::Uniform3i(program_.location("ids"), int(o), materials[o], int(obj.material.type));
         meshes_.draw(o);

@@ -20,7 +20,8 @@
 namespace ag {
 namespace {
 
-// Images are not decoded: textures are not rendered (a warning says so), and a missing image
+// tinygltf does not decode images: a baseColorTexture whose image is a file beside the glTF is
+// read through OpenImageIO (shared/texture.h); embedded images get a warning, and a missing image
 // must not stop the load.
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
                 const unsigned char*, int, void*) {
@@ -184,8 +185,10 @@ private:
             base = glm::vec3(float(pbr.baseColorFactor[0]), float(pbr.baseColorFactor[1]),
                              float(pbr.baseColorFactor[2]));
         base = glm::clamp(base, 0.0f, 1.0f);
-        if (pbr.baseColorTexture.index >= 0)
-            unsupported("baseColorTexture (the baseColorFactor is used)");
+        if (pbr.baseColorTexture.index >= 0) {
+            mat.albedo_map = base_color_texture(pbr.baseColorTexture.index, mat.name);
+            texcoord_set_[index] = pbr.baseColorTexture.texCoord;
+        }
         if (pbr.metallicRoughnessTexture.index >= 0) unsupported("metallicRoughnessTexture");
         if (m.normalTexture.index >= 0) unsupported("normalTexture");
         if (m.occlusionTexture.index >= 0) unsupported("occlusionTexture");
@@ -211,6 +214,11 @@ private:
                                    float(m.emissiveFactor[2])) *
                              std::max(strength, 0.0f),
                          0.0f);
+        if (mat.albedo_map &&
+            (transmission >= 0.5f || (pbr.metallicFactor >= 0.99 && pbr.roughnessFactor <= 0.1))) {
+            unsupported("baseColorTexture on glass or mirrors (the baseColorFactor is used)");
+            mat.albedo_map = nullptr;
+        }
         if (transmission >= 0.5f) {
             mat.type = MaterialType::glass;
             mat.albedo = base;
@@ -219,12 +227,38 @@ private:
             mat.type = MaterialType::mirror;
             mat.albedo = base;
         } else {
-            mat.albedo = base;
+            mat.albedo = base;  // multiplies the texture, as glTF says
             if (transmission > 0.0f) unsupported("partial transmission (below 0.5: diffuse)");
             if (pbr.metallicFactor > 0.0)
                 unsupported("metallic surfaces that are not mirrors (rendered diffuse)");
         }
         return mat;
+    }
+
+    // The albedo texture of texture `index`: its image must be a file (a URI relative to the glTF)
+    // OpenImageIO reads; otherwise a warning and none.
+    std::shared_ptr<const Texture> base_color_texture(int index, const std::string& material) {
+        if (size_t(index) >= g_.textures.size())
+            fail("material \"" + material + "\"",
+                 "expected a texture index below " + std::to_string(g_.textures.size()));
+        const int source = g_.textures[size_t(index)].source;
+        if (source < 0 || size_t(source) >= g_.images.size()) {
+            unsupported("textures without an image source (the baseColorFactor is used)");
+            return nullptr;
+        }
+        const tinygltf::Image& image = g_.images[size_t(source)];
+        if (image.uri.empty() || image.uri.rfind("data:", 0) == 0) {
+            unsupported("embedded texture images (the baseColorFactor is used)");
+            return nullptr;
+        }
+        const std::string file = (std::filesystem::path(path_).parent_path() / image.uri).string();
+        try {
+            return textures_.get(file);
+        } catch (const InputError& e) {
+            warn(path_ + ": material \"" + material + "\": baseColorTexture " + image.uri +
+                 " cannot be used (" + e.what() + "); the baseColorFactor is used");
+            return nullptr;
+        }
     }
 
     void add_mesh(int index, const glm::dmat4& m, const std::string& node_name) {
@@ -242,20 +276,48 @@ private:
                 continue;
             }
             if (!prim.targets.empty()) unsupported("morph targets");
+            ModelPart part;
+            part.material = material(prim.material);
+            const auto set = texcoord_set_.find(prim.material);
+            const std::string texcoord_name = part.material.albedo_map && set != texcoord_set_.end()
+                                                  ? "TEXCOORD_" + std::to_string(set->second)
+                                                  : "";
             for (const auto& [attribute, unused] : prim.attributes)
                 if (attribute == "NORMAL")
                     unsupported("NORMAL attribute (faces are shaded flat)");
-                else if (attribute.rfind("TEXCOORD", 0) == 0)
-                    unsupported("texture coordinates");
-                else if (attribute != "POSITION")
+                else if (attribute.rfind("TEXCOORD", 0) == 0) {
+                    if (attribute != texcoord_name)
+                        unsupported(attribute + " without a texture that uses it");
+                } else if (attribute != "POSITION")
                     unsupported(attribute + " attribute");
             const auto pos = prim.attributes.find("POSITION");
             if (pos == prim.attributes.end())
                 fail("mesh " + std::to_string(index), "expected a POSITION attribute");
-            ModelPart part;
             part.name =
                 mesh.primitives.size() > 1 ? node_name + "/" + std::to_string(k) : node_name;
-            part.material = material(prim.material);
+            // Texture coordinates per vertex, v flipped (glTF's origin is the image's top left).
+            std::vector<glm::vec2> vertex_uv;
+            if (!texcoord_name.empty()) {
+                const auto tc = prim.attributes.find(texcoord_name);
+                if (tc == prim.attributes.end()) {
+                    warn(path_ + ": " + part.name + ": material \"" + part.material.name +
+                         "\" has a baseColorTexture but the primitive has no " + texcoord_name +
+                         "; the texture's mean is used");
+                } else {
+                    const tinygltf::Accessor& a = g_.accessors[size_t(tc->second)];
+                    const double scale =
+                        !a.normalized                                               ? 1.0
+                        : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE  ? 1.0 / 255.0
+                        : a.componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT ? 1.0 / 65535.0
+                                                                                    : 1.0;
+                    read_accessor(tc->second, texcoord_name, [&](size_t, const double* c, int n) {
+                        if (n != 2)
+                            fail("mesh " + std::to_string(index), "expected VEC2 " + texcoord_name);
+                        vertex_uv.push_back(
+                            glm::vec2(float(c[0] * scale), float(1.0 - c[1] * scale)));
+                    });
+                }
+            }
             read_accessor(pos->second, "POSITION", [&](size_t, const double* c, int n) {
                 if (n != 3) fail("mesh " + std::to_string(index), "expected VEC3 positions");
                 const glm::dvec4 w = m * glm::dvec4(c[0], c[1], c[2], 1.0);
@@ -276,8 +338,16 @@ private:
                     fail("mesh " + std::to_string(index),
                          "expected indices below " + std::to_string(part.mesh.positions.size()) +
                              ", got " + std::to_string(i));
+            if (!vertex_uv.empty() && vertex_uv.size() != part.mesh.positions.size())
+                fail("mesh " + std::to_string(index),
+                     "expected as many " + texcoord_name + " as positions (" +
+                         std::to_string(part.mesh.positions.size()) + "), got " +
+                         std::to_string(vertex_uv.size()));
             auto add = [&](uint32_t a, uint32_t b, uint32_t c) {
-                part.mesh.triangles.push_back(flip ? glm::uvec3(a, c, b) : glm::uvec3(a, b, c));
+                const glm::uvec3 t = flip ? glm::uvec3(a, c, b) : glm::uvec3(a, b, c);
+                part.mesh.triangles.push_back(t);
+                if (!vertex_uv.empty())
+                    for (int k = 0; k < 3; ++k) part.mesh.texcoords.push_back(vertex_uv[t[k]]);
             };
             if (mode == TINYGLTF_MODE_TRIANGLES)
                 for (size_t i = 0; i + 2 < indices.size(); i += 3)
@@ -365,6 +435,8 @@ private:
     const tinygltf::Model& g_;
     Model model_;
     std::set<std::string> warned_, used_names_;
+    TextureCache textures_;
+    std::map<int, int> texcoord_set_;  // material → the TEXCOORD_n its baseColorTexture reads
 };
 
 }  // namespace

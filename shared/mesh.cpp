@@ -45,11 +45,12 @@ bool is_degenerate_triangle(const Mesh& mesh, int triangle) {
 }
 
 int remove_degenerate_triangles(Mesh& mesh) {
-    std::vector<glm::uvec3> kept;
-    kept.reserve(mesh.triangles.size());
-    for (int i = 0; i < int(mesh.triangles.size()); ++i)
-        if (!is_degenerate_triangle(mesh, i)) kept.push_back(mesh.triangles[size_t(i)]);
-    const int dropped = int(mesh.triangles.size() - kept.size());
+    const size_t before = mesh.triangles.size();
+    std::vector<char> degenerate(before);
+    for (size_t i = 0; i < before; ++i) degenerate[i] = is_degenerate_triangle(mesh, int(i));
+    filter_triangles(mesh, [&](int i) { return !degenerate[size_t(i)]; });
+    std::vector<glm::uvec3> kept = std::move(mesh.triangles);
+    const int dropped = int(before - kept.size());
     // Compact vertices so no unused position remains.
     std::vector<int> remap(mesh.positions.size(), -1);
     std::vector<glm::vec3> positions;
@@ -70,8 +71,11 @@ int remove_degenerate_triangles(Mesh& mesh) {
 void scale_mesh(Mesh& mesh, const glm::vec3& scale) {
     for (glm::vec3& p : mesh.positions) p *= scale;
     // A mirroring scale flips the winding; restore counter-clockwise fronts.
-    if (scale.x * scale.y * scale.z < 0.0f)
+    if (scale.x * scale.y * scale.z < 0.0f) {
         for (glm::uvec3& t : mesh.triangles) std::swap(t.y, t.z);
+        for (size_t i = 0; i + 2 < mesh.texcoords.size(); i += 3)
+            std::swap(mesh.texcoords[i + 1], mesh.texcoords[i + 2]);
+    }
 }
 
 }  // namespace ag

@@ -2,6 +2,7 @@
 // OpenMesh is used only for preprocessing (files, connectivity), in mesh_io.cpp and charts.cpp.
 #pragma once
 
+#include <cstddef>
 #include <glm/glm.hpp>
 #include <string>
 #include <vector>
@@ -11,7 +12,34 @@ namespace ag {
 struct Mesh {
     std::vector<glm::vec3> positions;
     std::vector<glm::uvec3> triangles;  // counter-clockwise seen from the front
+    // Texture coordinates per triangle corner (3 per triangle, in the triangles' order), or empty
+    // for a mesh without them. Per corner, so UV seams never split the vertices charts join.
+    std::vector<glm::vec2> texcoords;
+
+    bool has_texcoords() const { return !texcoords.empty(); }
+    // Texture coordinates at Embree's barycentrics (u, v) on `triangle`: (1-u-v)·t0 + u·t1 + v·t2.
+    glm::vec2 texcoord(int triangle, glm::vec2 barycentric) const {
+        const glm::vec2* t = &texcoords[3 * size_t(triangle)];
+        return (1.0f - barycentric.x - barycentric.y) * t[0] + barycentric.x * t[1] +
+               barycentric.y * t[2];
+    }
 };
+
+// Keeps the triangles (and their texture coordinates) for which keep(index) is true.
+template <class Keep>
+void filter_triangles(Mesh& mesh, Keep keep) {
+    std::vector<glm::uvec3> triangles;
+    std::vector<glm::vec2> texcoords;
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        if (!keep(int(i))) continue;
+        triangles.push_back(mesh.triangles[i]);
+        if (mesh.has_texcoords())
+            texcoords.insert(texcoords.end(), mesh.texcoords.begin() + std::ptrdiff_t(3 * i),
+                             mesh.texcoords.begin() + std::ptrdiff_t(3 * i + 3));
+    }
+    mesh.triangles = std::move(triangles);
+    mesh.texcoords = std::move(texcoords);
+}
 
 struct Bounds {
     glm::vec3 min{1e30f};

@@ -94,6 +94,10 @@ Model load_obj(const std::string& path) {
     std::vector<std::unordered_map<int, uint32_t>> remap;
     Model model;
     size_t faces = 0;
+    // Per part: texture coordinates per corner ((0, 0) where a face has none) and the number of
+    // faces that have them.
+    std::vector<std::vector<glm::vec2>> corner_uvs;
+    std::vector<size_t> uv_faces;
     for (const tinyobj::shape_t& shape : reader.GetShapes()) {
         const tinyobj::mesh_t& m = shape.mesh;
         for (size_t f = 0; f < m.num_face_vertices.size(); ++f, ++faces) {
@@ -116,7 +120,10 @@ Model load_obj(const std::string& path) {
                 remap.emplace_back();
             }
             ModelPart& part = model.parts[it->second];
+            const size_t part_index = it->second;
             glm::uvec3 tri;
+            glm::vec2 uv[3];
+            bool has_uv = true;
             for (int k = 0; k < 3; ++k) {
                 const int v = m.indices[3 * f + size_t(k)].vertex_index;
                 if (v < 0 || size_t(v) >= vertex_count)
@@ -131,23 +138,66 @@ Model load_obj(const std::string& path) {
                                                    attrib.vertices[3 * size_t(v) + 1],
                                                    attrib.vertices[3 * size_t(v) + 2]});
                 tri[k] = slot->second;
+                const int t = m.indices[3 * f + size_t(k)].texcoord_index;
+                if (t >= 0 && size_t(2 * t + 1) < attrib.texcoords.size())
+                    uv[k] = {attrib.texcoords[2 * size_t(t)], attrib.texcoords[2 * size_t(t) + 1]};
+                else
+                    has_uv = false;
             }
             part.mesh.triangles.push_back(tri);
+            corner_uvs.resize(model.parts.size());
+            uv_faces.resize(model.parts.size());
+            for (int k = 0; k < 3; ++k)
+                corner_uvs[part_index].push_back(has_uv ? uv[k] : glm::vec2(0.0f));
+            if (has_uv) ++uv_faces[part_index];
         }
     }
     if (faces == 0) throw_input_error(path, "", "expected at least one face, got none");
-    // What MTL says that is not rendered gets named: textures (the Kd colour is used), partly
-    // transparent dissolve.
+    // Albedo textures: map_Kd on a diffuse material replaces Kd (relative to the OBJ's folder). A
+    // texture that cannot be read is a warning, and the Kd colour is used. What MTL says that is
+    // not rendered gets named: other maps, partly transparent dissolve.
+    TextureCache textures;
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    for (size_t i = 0; i < model.parts.size(); ++i) {
+        ModelPart& part = model.parts[i];
+        if (uv_faces[i] > 0) part.mesh.texcoords = std::move(corner_uvs[i]);
+        const auto found = std::find_if(
+            materials.begin(), materials.end(),
+            [&](const tinyobj::material_t& m) { return m.name == part.material.name; });
+        if (found == materials.end() || found->diffuse_texname.empty() ||
+            part.material.type != MaterialType::diffuse)
+            continue;
+        std::string file = found->diffuse_texname;
+        std::replace(file.begin(), file.end(), '\\', '/');
+        const std::string texture_path = (folder / file).string();
+        try {
+            part.material.albedo_map = textures.get(texture_path);
+            part.material.albedo = glm::vec3(1.0f);
+        } catch (const InputError& e) {
+            warn(path + ": material \"" + part.material.name + "\": map_Kd " +
+                 found->diffuse_texname + " cannot be used (" + e.what() +
+                 "); its Kd colour is used");
+            continue;
+        }
+        const size_t faces_here = part.mesh.triangles.size();
+        if (uv_faces[i] < faces_here)
+            warn(path + ": material \"" + part.material.name + "\": " +
+                 std::to_string(faces_here - uv_faces[i]) + " of " + std::to_string(faces_here) +
+                 " faces have no texture coordinates (vt); they read the texture at (0, 0)" +
+                 (uv_faces[i] == 0 ? " — the texture's mean is used" : ""));
+    }
     std::string textured, transparent;
     for (const tinyobj::material_t& m : materials) {
-        if (!m.diffuse_texname.empty() || !m.bump_texname.empty() || !m.alpha_texname.empty() ||
-            !m.specular_texname.empty() || !m.normal_texname.empty())
+        if (!m.bump_texname.empty() || !m.alpha_texname.empty() || !m.specular_texname.empty() ||
+            !m.normal_texname.empty() || !m.displacement_texname.empty())
             textured += (textured.empty() ? "" : ", ") + m.name;
         if (m.dissolve < 1.0) transparent += (transparent.empty() ? "" : ", ") + m.name;
     }
     if (!textured.empty())
-        warn(path + ": texture maps (map_Kd, bump, map_d, ...) are not supported; materials " +
-             textured + " use their Kd colour");
+        warn(path +
+             ": texture maps other than map_Kd (bump, map_d, map_Ks, ...) are not "
+             "supported; materials " +
+             textured + " ignore them");
     if (!transparent.empty())
         warn(path + ": dissolve d < 1 is not supported; materials " + transparent +
              " are rendered opaque");

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,7 @@
 #include "shared/lightmap.h"
 #include "shared/mesh.h"
 #include "shared/settings.h"
+#include "shared/texture.h"
 
 namespace ag {
 
@@ -36,6 +38,9 @@ struct Material {
     // Emission makes the object a mesh light (Scene::lights gets one for it on load) rather than
     // only a visible lamp; scene files say "light": false for a lamp lit by a separate light.
     bool emits_light = true;
+    // Diffuse only: the albedo is `albedo` × this texture at the surface point's texture
+    // coordinates (meshes without them use the texture's mean). Shared, read-only.
+    std::shared_ptr<const Texture> albedo_map;
 };
 
 // Rigid transform: world = rotation * object + translation. Scale is baked into the mesh at load.
@@ -56,6 +61,24 @@ struct Object {
     bool dynamic = false;
     std::string source;  // mesh file or built-in shape name, for info/export
 };
+
+// The albedo that multiplies an object's texture lookups: the material's, times the texture's
+// mean for a textured mesh without texture coordinates (which then has no lookups).
+inline glm::vec3 base_albedo(const Object& object) {
+    const Material& m = object.material;
+    if (!m.albedo_map || m.type != MaterialType::diffuse || object.mesh.has_texcoords())
+        return m.albedo;
+    return m.albedo * m.albedo_map->mean;
+}
+
+// The diffuse albedo at a point of `triangle` (Embree's barycentrics): the material's albedo,
+// times its texture there when it has one. Mirrors and glass return their tint.
+inline glm::vec3 albedo_at(const Object& object, int triangle, glm::vec2 barycentric) {
+    const Material& m = object.material;
+    if (!m.albedo_map || m.type != MaterialType::diffuse) return m.albedo;
+    if (!object.mesh.has_texcoords() || triangle < 0) return m.albedo * m.albedo_map->mean;
+    return m.albedo * m.albedo_map->sample(object.mesh.texcoord(triangle, barycentric));
+}
 
 enum class LightType { point, quad, mesh, sun, spot };
 inline constexpr std::array kLightTypeNames = {"point", "quad", "mesh", "sun", "spot"};

@@ -208,7 +208,7 @@ private:
             const std::string mpath = JsonInput::child(path, item.key());
             const Json& m = in_.object(item.value(), mpath);
             if (item.key().empty()) in_.fail(mpath, "expected a non-empty material name");
-            in_.check_keys(m, mpath, {"type", "albedo", "ior", "emission", "light"});
+            in_.check_keys(m, mpath, {"type", "albedo", "albedo_map", "ior", "emission", "light"});
             Material mat;
             mat.name = item.key();
             if (const Json* v = JsonInput::find(m, "type"))
@@ -228,6 +228,20 @@ private:
                 mat.emission = in_.color(*v, mpath + "/emission", 0, kMaxLightValue);
             if (const Json* v = JsonInput::find(m, "light"))
                 mat.emits_light = in_.boolean(*v, mpath + "/light");
+            if (const Json* v = JsonInput::find(m, "albedo_map")) {
+                if (mat.type != MaterialType::diffuse)
+                    in_.fail(mpath + "/albedo_map",
+                             "an albedo map applies to diffuse materials only");
+                const std::string file = existing_file(*v, mpath + "/albedo_map", "image");
+                try {
+                    mat.albedo_map = textures_.get(file);
+                } catch (const InputError& e) {
+                    in_.fail(mpath + "/albedo_map",
+                             std::string("expected a readable image: ") + e.what());
+                }
+                // Without "albedo" the texture alone is the albedo.
+                if (!JsonInput::find(m, "albedo")) mat.albedo = glm::vec3(1.0f);
+            }
             materials_[mat.name] = mat;
         }
     }
@@ -610,10 +624,10 @@ private:
     // An open box (five faces) stands on a floor without a hidden bottom surface, as the blocks
     // of the Cornell box do.
     static void remove_bottom(Mesh& mesh) {
-        std::vector<glm::uvec3> kept;
+        std::vector<char> keep(mesh.triangles.size());
         for (int t = 0; t < int(mesh.triangles.size()); ++t)
-            if (triangle_normal(mesh, t).y > -0.5f) kept.push_back(mesh.triangles[size_t(t)]);
-        mesh.triangles = std::move(kept);
+            keep[size_t(t)] = triangle_normal(mesh, t).y > -0.5f;
+        filter_triangles(mesh, [&](int t) { return keep[size_t(t)] != 0; });
     }
 
     glm::quat read_rotation(const Json& json, const std::string& path) {
@@ -665,6 +679,7 @@ private:
     fs::path base_;
     Scene scene_;
     std::map<std::string, Material> materials_;
+    TextureCache textures_;                   // albedo maps, each file read once
     std::vector<ModelCamera> model_cameras_;  // cameras of glTF files, placed
 };
 
@@ -672,6 +687,28 @@ private:
 
 Scene parse_scene(const std::string& json_text, const std::string& path) {
     return SceneParser(path).parse(parse_json(json_text, path));
+}
+
+void settings_changed(Scene& scene, const LightmapSettings& before) {
+    check_light_samples(scene);
+    check_photon_budget(scene);
+    const LightmapSettings& after = scene.settings.lightmap;
+    if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
+        after.chart_cone != before.chart_cone || after.gutter != before.gutter)
+        make_surfaces_and_atlas(scene);
+}
+
+void apply_settings_json(Scene& scene, const std::string& json_text, const std::string& source) {
+    Settings settings = scene.settings;
+    read_settings(parse_json(json_text, source), settings, source, "");
+    const Settings before = scene.settings;
+    scene.settings = settings;
+    try {
+        settings_changed(scene, before.lightmap);
+    } catch (...) {
+        scene.settings = before;
+        throw;
+    }
 }
 
 Scene load_scene(const std::string& path) {

@@ -36,6 +36,32 @@ struct SplitMix {
     }
 };
 
+// Texture coordinates for flat-faced shapes: each triangle projected along its dominant normal
+// axis and normalised by the mesh's bounds there, so every face of a box (and a quad) shows the
+// whole image once, upright when seen from outside (v up the wall; on floors and ceilings v runs
+// towards −z and +z).
+void planar_texcoords(Mesh& mesh) {
+    const Bounds b = mesh_bounds(mesh);
+    const glm::vec3 size = glm::max(b.extent(), glm::vec3(1e-20f));
+    mesh.texcoords.clear();
+    mesh.texcoords.reserve(3 * mesh.triangles.size());
+    for (size_t t = 0; t < mesh.triangles.size(); ++t) {
+        const glm::vec3 n = triangle_cross(mesh, int(t));
+        const glm::vec3 a = glm::abs(n);
+        for (int k = 0; k < 3; ++k) {
+            const glm::vec3 q = (mesh.positions[mesh.triangles[t][k]] - b.min) / size;  // [0,1]³
+            glm::vec2 uv;
+            if (a.y >= a.x && a.y >= a.z)
+                uv = n.y > 0.0f ? glm::vec2(q.x, 1.0f - q.z) : glm::vec2(q.x, q.z);
+            else if (a.x >= a.z)
+                uv = n.x > 0.0f ? glm::vec2(1.0f - q.z, q.y) : glm::vec2(q.z, q.y);
+            else
+                uv = n.z > 0.0f ? glm::vec2(q.x, q.y) : glm::vec2(1.0f - q.x, q.y);
+            mesh.texcoords.push_back(uv);
+        }
+    }
+}
+
 }  // namespace
 
 Mesh make_box(const glm::vec3& size) {
@@ -53,6 +79,7 @@ Mesh make_box(const glm::vec3& size) {
         mesh.triangles.push_back({f[0], f[2], f[3]});
     }
     orient_outward(mesh);
+    planar_texcoords(mesh);
     return mesh;
 }
 
@@ -100,6 +127,7 @@ Mesh make_quad(float width, float depth) {
     Mesh mesh;
     mesh.positions = {{-x, 0, -z}, {-x, 0, z}, {x, 0, z}, {x, 0, -z}};
     mesh.triangles = {{0, 1, 2}, {0, 2, 3}};  // (−x,−z) → (−x,+z) → (+x,+z) turns about +Y
+    planar_texcoords(mesh);
     return mesh;
 }
 

@@ -78,7 +78,9 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
             // Lightmaps cover front faces only; light reaching a back face is absorbed (as in the
             // photon tracer), so it is black.
             if (!front || specular_only) break;
-            out[here] += throughput * m.albedo / std::numbers::pi_v<float> *
+            const glm::vec3 albedo =
+                albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+            out[here] += throughput * albedo / std::numbers::pi_v<float> *
                          direct_irradiance(scene_, rays_, hit.position, hit.normal, 1,
                                            s.get(dim + 4), s.get(dim + 5));
             if (depth > 0) diffuse_after_x = true;
@@ -90,7 +92,7 @@ ComponentRadiance PathTracer::sample(int x, int y, uint64_t index) const {
                 specular_only = true;
             after_specular = false;
             // Cosine sampling makes BRDF · cos / pdf = ρ.
-            throughput *= m.albedo;
+            throughput *= albedo;
             ray = {hit.position + eps * hit.normal,
                    cosine_direction(hit.normal, s.get(dim), s.get(dim + 1))};
         } else {

@@ -158,9 +158,11 @@ void PhotonMapper::trace(Ray ray, glm::vec3 power, const Sampler& s, int dim, bo
         diffuse_seen = true;
         if (limit >= 0 && ++diffuse_hits >= limit) return;
         // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
-        const float p = std::min(1.0f, std::max({m.albedo.x, m.albedo.y, m.albedo.z}));
+        const glm::vec3 albedo =
+            albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+        const float p = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
         if (!(p > 0.0f) || s.get(dim) >= p) return;
-        power *= m.albedo / p;
+        power *= albedo / p;
         ray = {hit.position + eps * hit.normal,
                cosine_direction(hit.normal, s.get(dim + 1), s.get(dim + 2))};
     }
@@ -190,8 +192,40 @@ void PhotonMapper::emit_caustic(int light, int count, int first, int n,
     std::vector<glm::vec3> axis(specular_bounds_.size());
     std::vector<float> cos_max(specular_bounds_.size()), cumulative(specular_bounds_.size());
     for (int i = first; i < first + n; ++i) {
-        if (l.type == LightType::sun) break;  // no caustic photons from a sun (cones need a point)
         const Sampler s(photon_halton_, key, uint64_t(i));
+        if (l.type == LightType::sun) {
+            // Parallel light: the union of the bounding spheres' discs across the sun's
+            // direction; a point uniform on a disc picked by area, the density divided by the
+            // discs containing it (overlaps count once), started outside the scene.
+            glm::vec3 u, v;
+            orthonormal_basis(l.direction, u, v);
+            float area = 0.0f;
+            for (size_t k = 0; k < specular_bounds_.size(); ++k) {
+                area += std::numbers::pi_v<float> * specular_bounds_[k].radius *
+                        specular_bounds_[k].radius;
+                cumulative[k] = area;
+            }
+            if (!(area > 0.0f)) return;
+            const float pick = s.get(0) * area;
+            size_t chosen = 0;
+            while (chosen + 1 < cumulative.size() && pick >= cumulative[chosen]) ++chosen;
+            const Sphere& b = specular_bounds_[chosen];
+            const float r = b.radius * std::sqrt(s.get(1));
+            const float phi = 2.0f * std::numbers::pi_v<float> * s.get(2);
+            const glm::vec3 p = b.center + r * (std::cos(phi) * u + std::sin(phi) * v);
+            int containing = 0;
+            for (const Sphere& c : specular_bounds_) {
+                const glm::vec3 d = p - c.center;
+                const glm::vec3 across = d - glm::dot(d, l.direction) * l.direction;
+                containing += glm::dot(across, across) <= c.radius * c.radius ? 1 : 0;
+            }
+            const glm::vec3 origin =
+                p - (glm::dot(p - l.sun_center, l.direction) + 1.01f * l.sun_radius) * l.direction;
+            const glm::vec3 power =
+                l.irradiance * area / float(std::max(containing, 1)) / float(count);
+            trace({origin, l.direction}, power, s, kCausticEmitDims, true, out);
+            continue;
+        }
         glm::vec3 origin = l.position, nl(0.0f);
         if (l.is_area()) {
             const LightPoint at = sample_area_light(scene_, l, s.get(3), s.get(4));
@@ -290,8 +324,9 @@ glm::vec3 PhotonMapper::gather_ray(Ray ray, uint64_t key) const {
         if (front && object_lights_[size_t(hit.object)] < 0) radiance += m.emission;
         if (m.type == MaterialType::diffuse) {
             if (front)
-                radiance += m.albedo / std::numbers::pi_v<float> *
-                            cached_irradiance(hit.position, hit.normal);
+                radiance +=
+                    albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric) /
+                    std::numbers::pi_v<float> * cached_irradiance(hit.position, hit.normal);
             break;
         }
         ray = specular_bounce(m, hit, ray.direction, hashed_uniform(key, uint64_t(depth)),
@@ -386,7 +421,9 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
             continue;
         }
         if (!front) break;
-        const glm::vec3 brdf = m.albedo / std::numbers::pi_v<float>;
+        const glm::vec3 albedo =
+            albedo_at(scene_.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+        const glm::vec3 brdf = albedo / std::numbers::pi_v<float>;
         const glm::vec3 direct =
             brdf * direct_irradiance(scene_, rays_, hit.position, hit.normal,
                                      settings_.area_light_samples, s.get(2), s.get(3));
@@ -394,7 +431,7 @@ ComponentRadiance PhotonMapper::sample(int x, int y, uint64_t index) const {
         // Cosine-weighted gather: ρ/π · E = ρ/π · π · mean(L) = ρ · mean(L).
         const glm::vec3 indirect = settings_.indirect_bounces == 0
                                        ? glm::vec3(0.0f)
-                                       : m.albedo * gather(hit.position, hit.normal, key, index);
+                                       : albedo * gather(hit.position, hit.normal, key, index);
         if (depth == 0) {
             out[FrameTerm::direct] += direct;
             out[FrameTerm::caustics] += caustics;

@@ -33,9 +33,11 @@ glm::vec3 incoming_radiance(const Scene& scene, const RayTracer& rays, Ray ray, 
         if (m.type == MaterialType::diffuse) {
             if (!front) break;  // back faces absorb
             const float v0 = next(), v1 = next();
-            sum += throughput * m.albedo / std::numbers::pi_v<float> *
+            const glm::vec3 albedo =
+                albedo_at(scene.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
+            sum += throughput * albedo / std::numbers::pi_v<float> *
                    direct_irradiance(scene, rays, hit.position, hit.normal, 1, v0, v1);
-            throughput *= m.albedo;
+            throughput *= albedo;
             ray = {hit.position + eps * hit.normal, cosine_direction(hit.normal, u0, u1)};
             after_specular = false;
         } else {

@@ -8,6 +8,7 @@
 #include <memory>
 #include <mutex>
 #include <stdexcept>
+#include <string>
 
 #include "cpu/reference/path_tracer.h"
 #include "cpu/reference/photon_mapper.h"
@@ -105,9 +106,19 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     const auto elapsed = [&] {
         return std::chrono::duration<double>(Clock::now() - start).count();
     };
-    const int width = scene.camera.width, height = scene.camera.height;
-    if (width <= 0 || height <= 0)
+    if (scene.camera.width <= 0 || scene.camera.height <= 0)
         throw std::invalid_argument("reference: camera resolution must be positive");
+    PixelRegion region = settings.region;
+    if (region.width == 0) region = {0, 0, scene.camera.width, scene.camera.height};
+    if (region.x < 0 || region.y < 0 || region.width <= 0 || region.height <= 0 ||
+        region.x + region.width > scene.camera.width ||
+        region.y + region.height > scene.camera.height)
+        throw std::invalid_argument("reference: region " + std::to_string(region.width) + "x" +
+                                    std::to_string(region.height) + " at (" +
+                                    std::to_string(region.x) + ", " + std::to_string(region.y) +
+                                    ") is not inside the " + std::to_string(scene.camera.width) +
+                                    "x" + std::to_string(scene.camera.height) + " image");
+    const int width = region.width, height = region.height;
 
     // Progress goes out from whichever worker passes by, at most five times a second.
     std::mutex progress_mutex;
@@ -160,7 +171,8 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
             const int y0 = int(tile / size_t(tiles_x)) * kTileSize;
             for (int y = y0; y < std::min(height, y0 + kTileSize); ++y)
                 for (int x = x0; x < std::min(width, x0 + kTileSize); ++x)
-                    pass[size_t(y) * size_t(width) + size_t(x)] = sample(x, y, uint64_t(done));
+                    pass[size_t(y) * size_t(width) + size_t(x)] =
+                        sample(region.x + x, region.y + y, uint64_t(done));
             const double now = elapsed();
             if (done > 0 && time_limit > 0.0 && now >= time_limit) interrupted = true;
             const double passes = done + double(++tiles_done) / double(tiles);

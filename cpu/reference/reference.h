@@ -32,6 +32,11 @@ struct ComponentRadiance {
     glm::vec3 full() const { return value[0] + value[1] + value[2] + value[3]; }
 };
 
+// A rectangle of the camera's pixels (a tile of a distributed reference render); width 0 = all.
+struct PixelRegion {
+    int x = 0, y = 0, width = 0, height = 0;
+};
+
 struct ReferenceSettings {
     ReferenceMethod method = ReferenceMethod::path_tracing;
     int spp = 0;              // stop after this many samples per pixel; 0 = no sample limit
@@ -44,6 +49,9 @@ struct ReferenceSettings {
     // 0 = no indirect light, < 0 = all. Direct light, caustics (L S+ D x) and what mirrors show
     // keep their definitions; bounces are counted at diffuse vertices after x (docs/reference.md).
     int indirect_bounces = -1;
+    // Only these pixels are rendered and the result is this size; each pixel's samples depend on
+    // its place in the whole image only, so tiles merge into exactly the whole image.
+    PixelRegion region;
 
     // Photon mapping only.
     int photons = 1000000;          // global map: photons emitted from all lights together
@@ -74,7 +82,8 @@ struct ReferenceResult {
     size_t global_photons = 0, caustic_photons = 0;  // stored photons (pm)
 };
 
-// Renders scene.camera at its resolution. Samples are QMC points seeded per pixel and sample
+// Renders scene.camera at its resolution (or settings.region of it; std::invalid_argument if the
+// region is not inside the image). Samples are QMC points seeded per pixel and sample
 // index, so the image does not depend on the thread count; a time limit only decides how many
 // whole passes are kept (an interrupted pass is dropped).
 ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& settings,

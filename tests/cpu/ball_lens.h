@@ -149,4 +149,29 @@ inline RadialPower exact_caustic(const BallLens& lens, int rings) {
     return out;
 }
 
+// The same for parallel light straight down (a sun of irradiance E): `rings` annuli of equal area
+// across the sphere's disc, one ray each carrying E·π R²/rings.
+inline RadialPower exact_sun_caustic(const BallLens& lens, double irradiance, int rings) {
+    RadialPower out;
+    const double start = lens.centre_height + 2.0 * lens.radius;
+    for (int i = 0; i < rings; ++i) {
+        const double h = lens.radius * std::sqrt((i + 0.5) / rings);
+        const double weight = irradiance * std::numbers::pi * lens.radius * lens.radius / rings;
+        detail::trace(lens, {h, start}, {0.0, -1.0}, weight, false, 0, out);
+    }
+    return out;
+}
+
+// ball_lens_scene with the point light replaced by a sun of irradiance E shining straight down.
+inline Scene sun_ball_lens_scene(const BallLens& lens, int subdivisions, double irradiance) {
+    Scene s = ball_lens_scene(lens, subdivisions);
+    Light& l = s.lights[0];
+    l.name = "sun";
+    l.type = LightType::sun;
+    l.direction = {0.0f, -1.0f, 0.0f};
+    l.irradiance = glm::vec3(float(irradiance));
+    update_sun_discs(s);
+    return s;
+}
+
 }  // namespace ag::test

@@ -125,6 +125,32 @@ TEST(CausticTracer, BallLensPowerAndSpotMatchTheExactSphere) {
     EXPECT_NEAR(got.r90 / exact.r90, 1.0, 0.10);
 }
 
+// A sun's caustic photons leave a disc across its direction over each specular object: a ball lens
+// under a vertical sun, the plane at the focus f = nR / 2(n − 1), against the exact sphere.
+TEST(CausticTracer, SunBallLensPowerAndSpotMatchTheExactSphere) {
+    test::BallLens lens;
+    const double irradiance = 50.0;
+    lens.centre_height = lens.ior * lens.radius / (2.0 * (lens.ior - 1.0));
+    const test::CausticSpot exact =
+        test::spot_of(test::exact_sun_caustic(lens, irradiance, 200000));
+    Scene scene = test::sun_ball_lens_scene(lens, 5, irradiance);
+    scene.settings.caustics.photons = 100000;
+    ThreadPool pool(2);
+    CausticTracer tracer(scene, pool);
+    tracer.trace_all();
+    test::RadialPower photons;
+    for (const CausticPhoton& p : tracer.photons())
+        if (p.power != glm::vec3(0.0f))
+            photons.emplace_back(std::hypot(double(p.position.x), double(p.position.z)),
+                                 double(p.power.x));
+    const test::CausticSpot got = test::spot_of(photons);
+    std::printf("sun: power %.4f (exact %.4f), r50 %.4f (%.4f), r90 %.4f (%.4f)\n", got.power,
+                exact.power, got.r50, exact.r50, got.r90, exact.r90);
+    EXPECT_NEAR(got.power / exact.power, 1.0, 0.02);
+    EXPECT_NEAR(got.r50 / exact.r50, 1.0, 0.10);
+    EXPECT_NEAR(got.r90 / exact.r90, 1.0, 0.10);
+}
+
 TEST(CausticTracer, OnlySpecularPathsAreStoredAndPowerIsConserved) {
     const Scene scene = ball_lens(1.5f);
     ThreadPool pool(2);

@@ -343,6 +343,32 @@ TEST(Reference, ComponentsSumToFullAndResultIgnoresThreadCount) {
     }
 }
 
+// A region holds exactly the pixels it has in the whole image (tiles of a distributed reference
+// merge bit for bit), for both methods; regions outside the image are refused.
+TEST(Reference, RegionsAreExactlyTheirPixelsOfTheWholeImage) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.camera.width = 13;
+    scene.camera.height = 9;
+    for (ReferenceSettings settings : {pt(2), pm(1, 20000, 8)}) {
+        const ReferenceResult whole = render(scene, settings, 2);
+        for (const PixelRegion region : {PixelRegion{0, 0, 5, 4}, PixelRegion{5, 4, 8, 5}}) {
+            settings.region = region;
+            const ReferenceResult part = render(scene, settings, 1);
+            ASSERT_EQ(part.full.width, region.width);
+            ASSERT_EQ(part.full.height, region.height);
+            for (int y = 0; y < region.height; ++y)
+                for (int x = 0; x < region.width; ++x) {
+                    EXPECT_EQ(part.full.rgb(x, y), whole.full.rgb(region.x + x, region.y + y));
+                    for (FrameTerm t : kFrameTerms)
+                        EXPECT_EQ(part.components[size_t(t)].rgb(x, y),
+                                  whole.components[size_t(t)].rgb(region.x + x, region.y + y));
+                }
+        }
+        settings.region = {10, 0, 4, 9};  // one column past the right edge
+        EXPECT_THROW(render(scene, settings, 1), std::invalid_argument);
+    }
+}
+
 TEST(Reference, TimeLimitKeepsWholePasses) {
     Scene scene = load_scene(test::scene_path("cornell.json"));
     scene.camera.width = scene.camera.height = 8;
@@ -440,6 +466,41 @@ TEST(Reference, IndirectBouncesAgreeBetweenPathTracingAndPhotonMapping) {
         }
         previous = ma;
     }
+}
+
+}  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// A sun's caustic photons: parallel light at 45° onto a mirror floor is reflected onto a ceiling
+// panel beside the beam that the sun itself cannot light (it faces down). The panel's irradiance
+// is E cos 45°, so photon mapping's caustic term is ρ/π · E/√2 there; direct light is zero.
+TEST(Reference, SunCausticsFromAMirrorMatchTheReflectedIrradiance) {
+    const float irradiance = 4.0f, albedo = 0.5f;
+    Scene scene;
+    scene.path = "sun_mirror";
+    scene.objects.push_back(quad_object("mirror", 2.0f, 0.0f, false, MaterialType::mirror, 1.0f));
+    Object panel = quad_object("panel", 2.0f, 2.0f, true, MaterialType::diffuse, albedo);
+    panel.transform.translation.x = 2.0f;
+    scene.objects.push_back(panel);
+    Light sun;
+    sun.name = "sun";
+    sun.type = LightType::sun;
+    sun.direction = glm::normalize(glm::vec3(1.0f, -1.0f, 0.0f));
+    sun.irradiance = glm::vec3(irradiance);
+    scene.lights.push_back(sun);
+    update_sun_discs(scene);
+    scene.camera =
+        looking_at({2.0f, 0.5f, 0.0f}, {2.0f, 2.0f, 0.0f}, {0.0f, 0.0f, 1.0f}, 40.0f, 16);
+
+    ReferenceSettings settings = pm(2, 1000, 1);
+    settings.caustic_photons = 400000;
+    settings.caustic_knn = 100;
+    const ReferenceResult photons = render(scene, settings);
+    const float expected = albedo / std::numbers::pi_v<float> * irradiance / std::sqrt(2.0f);
+    EXPECT_NEAR(image_mean(photons.components[size_t(FrameTerm::caustics)]).r, expected,
+                0.03f * expected);
+    EXPECT_EQ(image_mean(photons.components[size_t(FrameTerm::direct)]), glm::vec3(0.0f));
 }
 
 }  // namespace ag::cpu

@@ -10,7 +10,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "shared/image.h"
 #include "shared/input_error.h"
+#include "shared/scene.h"
 #include "shared/scene_file.h"
 #include "tests/shared/external_scenes.h"
 #include "tests/shared/temp_dir.h"
@@ -255,6 +257,53 @@ TEST_F(GltfTest, BinaryGlbLoadsLikeGltf) {
     ASSERT_EQ(m.parts.size(), 1u);
     EXPECT_EQ(m.parts[0].mesh.triangles.size(), 2u);
     EXPECT_NEAR(m.parts[0].material.albedo.z, 0.6f, 1e-6f);
+}
+
+// baseColorTexture with TEXCOORD_0: the image file beside the glTF is the albedo map (times the
+// baseColorFactor), coordinates are per corner with v flipped to the bottom-left origin; an
+// embedded image is named in a warning.
+TEST_F(GltfTest, BaseColorTextureReadsTheImageAndTexcoords) {
+    GltfDoc doc;
+    const float uv[8] = {0, 0, 0, 1, 1, 1, 1, 0.25f};
+    const size_t offset = doc.bin.size();
+    doc.bin.resize(offset + sizeof uv);
+    std::memcpy(doc.bin.data() + offset, uv, sizeof uv);
+    doc.j["bufferViews"].push_back(
+        {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", sizeof uv}});
+    doc.j["accessors"].push_back(
+        {{"bufferView", 2}, {"componentType", 5126}, {"count", 4}, {"type", "VEC2"}});
+    const int mat = doc.material(
+        {{"pbrMetallicRoughness",
+          {{"baseColorFactor", {0.5, 1, 1, 1}}, {"baseColorTexture", {{"index", 0}}}}}});
+    doc.j["textures"] = {{{"source", 0}}};
+    Image image(2, 2);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 2; ++x) image.set_rgb(x, y, glm::vec3(0.2f + 0.2f * float(x + 2 * y)));
+    write_image(image, path("tiles.exr"));
+    doc.j["images"] = {{{"uri", "tiles.exr"}}};
+    const int mesh = doc.mesh(mat);
+    doc.j["meshes"][size_t(mesh)]["primitives"][0]["attributes"]["TEXCOORD_0"] = 2;
+    doc.node({{"mesh", mesh}});
+    std::string warnings;
+    const Model m = load(doc, &warnings);
+    ASSERT_EQ(m.parts.size(), 1u);
+    const ModelPart& part = m.parts[0];
+    ASSERT_TRUE(part.material.albedo_map) << warnings;
+    EXPECT_EQ(part.material.albedo, glm::vec3(0.5f, 1.0f, 1.0f));
+    ASSERT_EQ(part.mesh.texcoords.size(), 6u);
+    // Triangle 0 is vertices 0, 1, 2: glTF (0, 0) is the image's top left, ours (0, 1).
+    EXPECT_EQ(part.mesh.texcoords[0], glm::vec2(0, 1));
+    EXPECT_EQ(part.mesh.texcoords[1], glm::vec2(0, 0));
+    EXPECT_EQ(part.mesh.texcoords[5], glm::vec2(1, 0.75f));  // vertex 3 of triangle 1
+    EXPECT_EQ(warnings.find("TEXCOORD"), std::string::npos) << warnings;
+    // The image's top-left pixel (0.2) sits at glTF (¼, ¼).
+    EXPECT_NEAR(part.material.albedo_map->sample({0.25f, 0.75f}).x, 0.2f, 1e-3f);
+
+    doc.j["images"] = {{{"uri", "data:image/png;base64,AAAA"}}};
+    std::string embedded;
+    const Model e = load(doc, &embedded);
+    EXPECT_FALSE(e.parts[0].material.albedo_map);
+    EXPECT_NE(embedded.find("embedded texture images"), std::string::npos) << embedded;
 }
 
 TEST_F(GltfTest, EachUnsupportedFeatureIsNamedInAWarning) {

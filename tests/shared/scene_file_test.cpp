@@ -93,6 +93,40 @@ protected:
     }
 };
 
+// Settings changed on a loaded scene (the Python bindings): applied through the scene file's
+// reader, checked against the scene, the atlas rebuilt when the lightmap settings change, and the
+// scene left as it was on an error.
+TEST_F(SceneFile, SettingsAppliedToALoadedScene) {
+    Scene scene = load_scene((kScenes / "cornell.json").string());
+    const int atlas_width = scene.atlas.width;
+    apply_settings_json(scene, R"({"photons": {"groups": 16}, "seed": 9})", "settings");
+    EXPECT_EQ(scene.settings.photons.groups, 16);
+    EXPECT_EQ(scene.settings.seed, 9u);
+    EXPECT_EQ(scene.atlas.width, atlas_width);
+
+    apply_settings_json(scene, R"({"lightmap": {"texel_size": 20}})", "settings");
+    EXPECT_EQ(scene.atlas.texel_size, 20.0f);
+    EXPECT_NE(scene.atlas.width, atlas_width);
+
+    try {
+        apply_settings_json(scene, R"({"photons": {"groups": "many", "retrace_budget": 5}})",
+                            "settings");
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("settings: /photons/groups"), std::string::npos)
+            << e.what();
+    }
+    EXPECT_EQ(scene.settings.photons.groups, 16);  // unchanged, and nothing else applied
+    EXPECT_EQ(scene.settings.photons.retrace_budget, Settings{}.photons.retrace_budget);
+    // What depends on the scene: 1e6 groups x 1000 photons x 1 light is over the photon budget.
+    EXPECT_THROW(
+        apply_settings_json(scene, R"({"photons": {"groups": 1000000, "photons_per_group": 1000}})",
+                            "settings"),
+        InputError);
+    EXPECT_EQ(scene.settings.photons.groups, 16);
+    EXPECT_THROW(apply_settings_json(scene, "{", "settings"), InputError);
+}
+
 TEST_F(SceneFile, EverySceneInTheRepositoryLoads) {
     const std::vector<fs::path> files = scene_files();
     ASSERT_GE(files.size(), 4u);

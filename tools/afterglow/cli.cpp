@@ -10,9 +10,9 @@
 #include <sstream>
 
 #include "gpu/gl_context.h"
-#include "shared/charts.h"
 #include "shared/input_error.h"
 #include "shared/scene.h"
+#include "shared/scene_file.h"
 #include "shared/settings_json.h"
 
 namespace ag::cli {
@@ -373,12 +373,7 @@ void Args::apply_settings(Scene& scene) const {
     // Each value was checked alone while parsing; what depends on the scene (its lights, its
     // size) is checked again, as loading checked it, before anything is allocated.
     try {
-        check_light_samples(scene);
-        check_photon_budget(scene);
-        const LightmapSettings& after = scene.settings.lightmap;
-        if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
-            after.chart_cone != before.chart_cone || after.gutter != before.gutter)
-            make_surfaces_and_atlas(scene);
+        settings_changed(scene, before);
     } catch (const InputError& e) {
         throw CliError("afterglow " + command_.name + ": --set: " + e.what());
     }
