@@ -1,6 +1,7 @@
 #include "gpu/g_buffer.h"
 
 #include <cmath>
+#include <string>
 
 namespace ag::gpu {
 

@@ -439,7 +439,7 @@ void GpuPhotonMapper::reset() {
                                     emitters.empty() ? nullptr : emitters.data());
     std::vector<glm::vec4> materials;
     for (const Object& o : scene_.objects)
-        materials.emplace_back(o.material.albedo, float(int(o.material.type)));
+        materials.emplace_back(base_albedo(o), float(int(o.material.type)));  // no albedo maps
     if (materials.empty()) materials.emplace_back(0.0f);
     materials_ = make_storage_buffer(materials.size() * sizeof(glm::vec4), materials.data());
     radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
