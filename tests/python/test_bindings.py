@@ -47,7 +47,7 @@ def test_pipeline_images_and_counters(cornell):
     assert counters["frame"] == p.counters["frame"]
     assert counters["photons_verified"] > 0 and counters["frame_ms"] > 0
     images = p.images()
-    assert set(images) == {"full", "direct", "indirect", "caustics", "specular"}
+    assert set(images) == {"full", "direct", "indirect", "caustics", "specular", "volume"}
     for image in images.values():
         assert image.dtype == np.float32 and image.shape == (30, 40, 3)
     # The terms add up to the frame (eq. 13.2).
