@@ -181,7 +181,7 @@ std::optional<FrameTerm> parse_component(const std::string& name) {
     if (name == "full") return std::nullopt;
     if (auto t = parse_frame_term(name)) return t;
     throw py::value_error("unknown component '" + name +
-                          "' (expected full, direct, indirect, caustics or specular)");
+                          "' (expected full, direct, indirect, caustics, specular or volume)");
 }
 
 void apply_settings(Scene& scene, const py::object& settings) {
@@ -759,7 +759,8 @@ PYBIND11_MODULE(_afterglow, m) {
         .def("prime", &PyPipeline::prime, py::arg("max_frames") = 64,
              "Brings everything to the converged state of the current scene at once (untimed).")
         .def("image", &PyPipeline::image, py::arg("component") = "full",
-             "The last frame (or one term: direct, indirect, caustics, specular) as a float32 "
+             "The last frame (or one term: direct, indirect, caustics, specular, volume) as a "
+             "float32 "
              "array (H, W, 3) of linear radiance.")
         .def("images", &PyPipeline::images,
              "The frame and its four terms, a dict of float32 (H, W, 3) arrays.")
@@ -791,7 +792,8 @@ PYBIND11_MODULE(_afterglow, m) {
           "tracing) or pm (photon mapping); spp (default 64 pt, 16 pm); seed (default the "
           "scene's); size (width, height); region (x, y, width, height): only those pixels, "
           "exactly as they are in the whole image (tiles merge bit-exactly). Returns a dict: "
-          "full, direct, indirect, caustics, specular (float32 (H, W, 3)), spp, seconds, ...");
+          "full, direct, indirect, caustics, specular, volume (float32 (H, W, 3)), spp, seconds, "
+          "...");
 
     m.def("converge", &converge, py::arg("scene"), py::kw_only(), py::arg("script") = py::none(),
           py::arg("frames") = 120, py::arg("size") = std::array<int, 2>{96, 96},
