@@ -23,16 +23,27 @@ CausticTracer::CausticTracer(const Scene& scene, ThreadPool& pool) : scene_(scen
                              hash_u32(scene_.settings.seed * 31337u + uint32_t(l)) | 1u);
 }
 
+namespace {
+
+// An object's bounding sphere in world space (rigid transforms keep the radius).
+void bounding_sphere(const Object& obj, glm::vec3& centre, float& radius) {
+    const glm::vec3 c_local = mesh_bounds(obj.mesh).center();
+    radius = 0.0f;
+    for (const glm::vec3& p : obj.mesh.positions)
+        radius = std::max(radius, glm::length(p - c_local));
+    centre = obj.transform.apply_point(c_local);
+}
+
+}  // namespace
+
 std::vector<CausticTracer::Cone> CausticTracer::cones(const glm::vec3& from) const {
     std::vector<Cone> out;
     for (int o = 0; o < int(scene_.objects.size()); ++o) {
         const Object& obj = scene_.objects[size_t(o)];
         if (obj.material.type == MaterialType::diffuse) continue;
-        // Bounding sphere in world space (rigid transforms keep the radius).
-        const glm::vec3 c_local = mesh_bounds(obj.mesh).center();
+        glm::vec3 c;
         float r = 0.0f;
-        for (const glm::vec3& p : obj.mesh.positions) r = std::max(r, glm::length(p - c_local));
-        const glm::vec3 c = obj.transform.apply_point(c_local);
+        bounding_sphere(obj, c, r);
         const float d = glm::length(c - from);
         if (d <= r * 1.0001f) continue;  // the light is inside the bound: no cone (documented)
         const double sin_a = double(r) / double(d),
@@ -48,11 +59,10 @@ std::vector<CausticTracer::Cone> CausticTracer::discs() const {
     for (int o = 0; o < int(scene_.objects.size()); ++o) {
         const Object& obj = scene_.objects[size_t(o)];
         if (obj.material.type == MaterialType::diffuse) continue;
-        const glm::vec3 c_local = mesh_bounds(obj.mesh).center();
+        glm::vec3 c;
         float r = 0.0f;
-        for (const glm::vec3& p : obj.mesh.positions) r = std::max(r, glm::length(p - c_local));
-        out.push_back(
-            {o, obj.transform.apply_point(c_local), double(r), std::numbers::pi_v<float> * r * r});
+        bounding_sphere(obj, c, r);
+        out.push_back({o, c, double(r), std::numbers::pi_v<float> * r * r});
     }
     return out;
 }

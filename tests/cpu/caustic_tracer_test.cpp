@@ -99,15 +99,9 @@ TEST(CausticTracer, BallLensFocusesNearTheParaxialFocus) {
     EXPECT_GT(spots[1].peak, spots[2].peak);
 }
 
-// Against the exact ball lens (tests/cpu/ball_lens.h): the photons' total power on the plane
-// (transmission with Fresnel losses at both interfaces, internal and external reflections) and
-// the spot's radii at the paraxial focus. The tracer sees an icosphere of 20,480 flat facets.
-TEST(CausticTracer, BallLensPowerAndSpotMatchTheExactSphere) {
-    test::BallLens lens;
-    const double focus = lens.paraxial_image_distance();
-    lens.centre_height = focus;  // the plane at the paraxial focus
-    const test::CausticSpot exact = test::spot_of(test::exact_caustic(lens, 200000));
-    Scene scene = test::ball_lens_scene(lens, 5);
+// Traces 100,000 caustic photons in `scene` (a ball lens over the plane y = 0) and holds their
+// power on the plane and the spot's radii around the axis to the exact sphere's.
+void expect_spot_matches(Scene scene, const test::CausticSpot& exact, const char* light) {
     scene.settings.caustics.photons = 100000;
     ThreadPool pool(2);
     CausticTracer tracer(scene, pool);
@@ -118,11 +112,22 @@ TEST(CausticTracer, BallLensPowerAndSpotMatchTheExactSphere) {
             photons.emplace_back(std::hypot(double(p.position.x), double(p.position.z)),
                                  double(p.power.x));
     const test::CausticSpot got = test::spot_of(photons);
-    std::printf("power %.4f (exact %.4f), r50 %.4f (%.4f), r90 %.4f (%.4f)\n", got.power,
+    std::printf("%s: power %.4f (exact %.4f), r50 %.4f (%.4f), r90 %.4f (%.4f)\n", light, got.power,
                 exact.power, got.r50, exact.r50, got.r90, exact.r90);
     EXPECT_NEAR(got.power / exact.power, 1.0, 0.02);
     EXPECT_NEAR(got.r50 / exact.r50, 1.0, 0.10);
     EXPECT_NEAR(got.r90 / exact.r90, 1.0, 0.10);
+}
+
+// Against the exact ball lens (tests/cpu/ball_lens.h): the photons' total power on the plane
+// (transmission with Fresnel losses at both interfaces, internal and external reflections) and
+// the spot's radii at the paraxial focus. The tracer sees an icosphere of 20,480 flat facets.
+TEST(CausticTracer, BallLensPowerAndSpotMatchTheExactSphere) {
+    test::BallLens lens;
+    const double focus = lens.paraxial_image_distance();
+    lens.centre_height = focus;  // the plane at the paraxial focus
+    const test::CausticSpot exact = test::spot_of(test::exact_caustic(lens, 200000));
+    expect_spot_matches(test::ball_lens_scene(lens, 5), exact, "point");
 }
 
 // A sun's caustic photons leave a disc across its direction over each specular object: a ball lens
@@ -133,22 +138,7 @@ TEST(CausticTracer, SunBallLensPowerAndSpotMatchTheExactSphere) {
     lens.centre_height = lens.ior * lens.radius / (2.0 * (lens.ior - 1.0));
     const test::CausticSpot exact =
         test::spot_of(test::exact_sun_caustic(lens, irradiance, 200000));
-    Scene scene = test::sun_ball_lens_scene(lens, 5, irradiance);
-    scene.settings.caustics.photons = 100000;
-    ThreadPool pool(2);
-    CausticTracer tracer(scene, pool);
-    tracer.trace_all();
-    test::RadialPower photons;
-    for (const CausticPhoton& p : tracer.photons())
-        if (p.power != glm::vec3(0.0f))
-            photons.emplace_back(std::hypot(double(p.position.x), double(p.position.z)),
-                                 double(p.power.x));
-    const test::CausticSpot got = test::spot_of(photons);
-    std::printf("sun: power %.4f (exact %.4f), r50 %.4f (%.4f), r90 %.4f (%.4f)\n", got.power,
-                exact.power, got.r50, exact.r50, got.r90, exact.r90);
-    EXPECT_NEAR(got.power / exact.power, 1.0, 0.02);
-    EXPECT_NEAR(got.r50 / exact.r50, 1.0, 0.10);
-    EXPECT_NEAR(got.r90 / exact.r90, 1.0, 0.10);
+    expect_spot_matches(test::sun_ball_lens_scene(lens, 5, irradiance), exact, "sun");
 }
 
 TEST(CausticTracer, OnlySpecularPathsAreStoredAndPowerIsConserved) {
