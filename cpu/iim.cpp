@@ -43,11 +43,18 @@ void Iim::schedule(PhotonMaps& maps) {
         return maps.surface(a).delta_i > maps.surface(b).delta_i;
     });
     if (surfaces.empty()) return;
-    // The photons say where the light changed: those texels go before everything queued by
+    // The photons say where the light changed: those texels go before everything else queued by
     // proximity to a moved object or by a sweep, largest Δi first (a texel already queued moves
     // up to its surface's place).
+    // Texels never gathered show no indirect light at all, the largest error there is: they keep
+    // their place ahead of everything, or an object edited every frame would starve them.
     std::deque<int> first;
     std::vector<char> moved(is_pending_.size(), 0);
+    for (int t : pending_)
+        if (texel_generation_[size_t(t)] < 0) {
+            moved[size_t(t)] = 1;
+            first.push_back(t);
+        }
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
         if (size_t(s) >= surface_texels_.size()) continue;

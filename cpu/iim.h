@@ -34,8 +34,8 @@ public:
     // A new AIM reached the gatherers: every texel gathered before is stale.
     void aim_changed() { ++aim_generation_; }
     // Queues the texels of surfaces whose indirect hits changed (Δi above aim.delta_threshold of
-    // the surface's flux), largest Δi first and ahead of everything else queued, and resets those
-    // surfaces' Δi.
+    // the surface's flux), largest Δi first and ahead of everything else queued but texels never
+    // gathered, and resets those surfaces' Δi.
     void schedule(PhotonMaps& maps);
     // Queues every texel (brute force).
     void invalidate_all();

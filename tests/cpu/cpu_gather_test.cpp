@@ -550,3 +550,38 @@ TEST(CpuGather, SameResultForAnyThreadCount) {
 }
 
 }  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// An object edited every frame keeps its surfaces' Δi high; the texels it queues must not starve
+// the ones never gathered (they show no indirect light at all), so with a budget of B texels a
+// frame every texel is gathered once within ⌈texels / B⌉ frames.
+TEST(IimSchedule, TexelsNeverGatheredAreNotStarvedByRepeatedEdits) {
+    Simulated s("cornell.json");
+    s.scene.settings.gather.cpu_rays = 16;
+    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
+    Iim map(s.scene);
+    PhotonMaps& maps = s.sim->maps();
+    // The surface with the most texels plays the edited one.
+    std::vector<int> per_surface(maps.surface_count(), 0);
+    for (const TexelRecord& t : s.scene.atlas.texels)
+        if (t.surface >= 0 && size_t(t.surface) < per_surface.size())
+            ++per_surface[size_t(t.surface)];
+    const int edited =
+        int(std::max_element(per_surface.begin(), per_surface.end()) - per_surface.begin());
+    const int texels = int(s.scene.atlas.texels.size());
+    const int budget = std::max(1, per_surface[size_t(edited)]);
+    ASSERT_LT(budget, texels);
+    std::vector<char> seen(size_t(texels), 0);
+    const int frames = (texels + budget - 1) / budget;
+    for (int frame = 0; frame < frames; ++frame) {
+        maps.surface(edited).delta_i = 1e9;
+        map.schedule(maps);
+        map.gather(gather, budget, uint64_t(frame));
+        for (int r : map.last_gathered()) seen[size_t(r)] = 1;
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), texels)
+        << "after " << frames << " frames of " << budget << " texels";
+}
+
+}  // namespace ag::cpu
