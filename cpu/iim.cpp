@@ -47,13 +47,18 @@ void Iim::schedule(PhotonMaps& maps) {
     // proximity to a moved object or by a sweep, largest Δi first (a texel already queued moves
     // up to its surface's place).
     // Texels never gathered show no indirect light at all, the largest error there is: they keep
-    // their place ahead of everything, or an object edited every frame would starve them.
-    std::deque<int> first;
+    // their place ahead of everything, or an object edited every frame would starve them. Then
+    // the photons say where the light changed: those texels go before everything else queued by
+    // proximity to a moved object or by a sweep, largest Δi first (a texel already queued moves
+    // up to its surface's place). With screen coverage known, each class is split: the texels
+    // the camera sees go first, then the rest in the same order.
+    std::vector<int> order;
+    order.reserve(pending_.size());
     std::vector<char> moved(is_pending_.size(), 0);
     for (int t : pending_)
         if (texel_generation_[size_t(t)] < 0) {
             moved[size_t(t)] = 1;
-            first.push_back(t);
+            order.push_back(t);
         }
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
@@ -62,12 +67,25 @@ void Iim::schedule(PhotonMaps& maps) {
             if (moved[size_t(t)]) continue;
             moved[size_t(t)] = 1;
             is_pending_[size_t(t)] = 1;
-            first.push_back(t);
+            order.push_back(t);
         }
     }
     for (int t : pending_)
-        if (!moved[size_t(t)]) first.push_back(t);
-    pending_.swap(first);
+        if (!moved[size_t(t)]) order.push_back(t);
+    std::stable_partition(order.begin(), order.end(), [&](int t) { return seen(t); });
+    pending_.assign(order.begin(), order.end());
+}
+
+void Iim::set_coverage(const std::vector<float>& per_record) {
+    if (per_record.size() != texel_generation_.size()) {
+        coverage_.clear();
+        return;
+    }
+    coverage_ = per_record;
+    // What was queued before the camera moved keeps its classes, seen texels first.
+    std::vector<int> order(pending_.begin(), pending_.end());
+    std::stable_partition(order.begin(), order.end(), [&](int t) { return seen(t); });
+    pending_.assign(order.begin(), order.end());
 }
 
 void Iim::invalidate_all() {
@@ -110,8 +128,18 @@ IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
         pending_.pop_front();
     }
     // The rest of the budget refreshes texels gathered with older AIMs, round robin, so the IIM
-    // settles on the final AIMs once edits stop.
+    // settles on the final AIMs once edits stop: those the camera sees first, then all.
     const size_t n = texel_generation_.size();
+    if (!coverage_.empty())
+        for (size_t visited = 0; visited < n && int(batch.size()) < budget; ++visited) {
+            const size_t t = sweep_seen_;
+            sweep_seen_ = (sweep_seen_ + 1) % n;
+            if (coverage_[t] > 0.0f && !is_pending_[t] && texel_generation_[t] < aim_generation_ &&
+                !in_batch[t]) {
+                in_batch[t] = 1;
+                batch.push_back(int(t));
+            }
+        }
     for (size_t visited = 0; visited < n && int(batch.size()) < budget; ++visited) {
         const size_t t = sweep_;
         sweep_ = (sweep_ + 1) % n;

@@ -1,9 +1,10 @@
 // The indirect illumination map, IIM (Larsen ch. 11): per lightmap texel the indirect irradiance
 // E/π gathered from the AIMs. Texels of surfaces whose indirect photon hits changed most (Δi) are
 // re-gathered first; texels gathered with older AIMs are refreshed round robin with what is left
-// of the budget; a gather that saw too many back faces is invalid and repaired from its chart's
-// neighbours (unless part of its footprint can gather, see relocate); new values fade in over
-// blend_frames so the picture never pops.
+// of the budget; with screen coverage known, the texels the camera sees go first in each class.
+// A gather that saw too many back faces is invalid and repaired from its chart's neighbours
+// (unless part of its footprint can gather, see relocate); new values fade in over blend_frames
+// so the picture never pops.
 #pragma once
 
 #include <cstdint>
@@ -37,6 +38,9 @@ public:
     // the surface's flux), largest Δi first and ahead of everything else queued but texels never
     // gathered, and resets those surfaces' Δi.
     void schedule(PhotonMaps& maps);
+    // Per texel record, the fraction of the screen it covers (gpu::TexelCoverage); empty = not
+    // known. Texels the camera sees are queued and refreshed before the others of their class.
+    void set_coverage(const std::vector<float>& per_record);
     // Queues every texel (brute force).
     void invalidate_all();
     // Queues the texels whose centres lie inside `regions` (world space), nearest to a region's
@@ -71,8 +75,11 @@ private:
     // those become valid, `invalid` keeps the rest (to repair from neighbours). Returns how many.
     int relocate(Gatherer& gatherer, std::vector<int>& invalid);
 
+    bool seen(int t) const { return coverage_.empty() || coverage_[size_t(t)] > 0.0f; }
+
     const Scene& scene_;
-    std::deque<int> pending_;  // texel records, FIFO, each at most once
+    std::vector<float> coverage_;  // per record; empty = not known
+    std::deque<int> pending_;      // texel records, FIFO, each at most once
     std::vector<char> is_pending_;
     std::vector<int> last_gathered_;
     std::vector<char> valid_;                         // per record: last gather saw few back faces
@@ -85,6 +92,7 @@ private:
     std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
     std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;
+    size_t sweep_seen_ = 0;  // the sweep over texels the camera sees
 };
 
 }  // namespace ag::cpu

@@ -87,13 +87,15 @@ GBuffer::GBuffer(const Scene& scene, const SceneMeshes& meshes, int width, int h
     check_gl("GBuffer");
 }
 
-GBuffer::View GBuffer::view() const {
+GBuffer::View GBuffer::view() const { return view_of(scene_, width_, height_); }
+
+GBuffer::View GBuffer::view_of(const Scene& scene, int width, int height) {
     View v;
-    v.camera = scene_.camera;
-    v.camera.width = width_;
-    v.camera.height = height_;
-    const Bounds bounds = scene_.world_bounds();
-    const float diagonal = scene_.diagonal();
+    v.camera = scene.camera;
+    v.camera.width = width;
+    v.camera.height = height;
+    const Bounds bounds = scene.world_bounds();
+    const float diagonal = scene.diagonal();
     v.near_plane = 1e-3f * diagonal;
     v.far_plane = glm::length(v.camera.eye - bounds.center()) + 2.0f * diagonal;
     v.view = view_matrix(v.camera);

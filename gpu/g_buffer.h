@@ -40,6 +40,8 @@ public:
         glm::mat4 view{1.0f}, projection{1.0f}, view_projection{1.0f};
     };
     View view() const;
+    // The same for any scene and buffer size.
+    static View view_of(const Scene& scene, int width, int height);
 
     // Clears colour, depth (1) and stencil (0) and draws every object of the scene as it stands.
     void render();

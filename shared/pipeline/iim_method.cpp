@@ -1,5 +1,6 @@
 #include "shared/pipeline/iim_method.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "gpu/gl.h"
@@ -7,14 +8,22 @@
 
 namespace ag {
 
+namespace {
+bool same_view(const Camera& a, const Camera& b) {
+    return a.eye == b.eye && a.target == b.target && a.up == b.up && a.fov_y == b.fov_y &&
+           a.width * b.height == b.width * a.height;
+}
+}  // namespace
+
 IimMethod::IimMethod(const Scene& scene, const gpu::SceneMeshes& meshes,
                      const gpu::LightmapTexture& aim_texture,
-                     const std::vector<glm::vec3>& aim_values)
+                     const std::vector<glm::vec3>& aim_values, int width, int height)
     : scene_(scene),
       iim_(scene),
       texture_(scene.atlas),
       gl_gather_(scene, meshes, 256, &aim_texture),
-      cpu_gather_(scene, cpu_pool_, &aim_values) {
+      cpu_gather_(scene, cpu_pool_, &aim_values),
+      coverage_(scene, meshes, width, height) {
     backend_ = scene_.settings.gather.backend;
     if (backend_ == GatherBackend::automatic) choose_backend();
     if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
@@ -83,11 +92,24 @@ void IimMethod::choose_backend() {
     backend_ = cpu_us_ < gl_us_ ? GatherBackend::cpu : GatherBackend::gl;
 }
 
+void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
+    moved_since_coverage_ = moved_since_coverage_ || objects_moved;
+    const bool camera_moved = covered_frame_ == 0 || !same_view(covered_camera_, scene_.camera);
+    if (!camera_moved && !(moved_since_coverage_ && frame >= covered_frame_ + kCoverageFrames))
+        return;
+    iim_.set_coverage(coverage_.update());
+    covered_camera_ = scene_.camera;
+    covered_frame_ = std::max<uint64_t>(frame, 1);
+    moved_since_coverage_ = false;
+}
+
 void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     mode_ = in.mode;
     if (in.aim_changed) iim_.aim_changed();
     const bool timed = scene_.settings.schedule.frame_ms > 0.0f;
     const std::vector<Bounds> moved = moved_regions();
+    // The round-robin baselines know nothing of the screen.
+    if (in.mode == PipelineMode::selective) update_coverage(!moved.empty(), in.frame);
     if (timed && in.mode == PipelineMode::selective && !moved.empty()) iim_.queue_inside(moved);
     int budget = in.budget;
     if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());

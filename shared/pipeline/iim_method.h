@@ -11,6 +11,7 @@
 #include "gpu/hemi_plane_gather.h"
 #include "gpu/lightmap_texture.h"
 #include "gpu/scene_meshes.h"
+#include "gpu/texel_coverage.h"
 #include "shared/parallel.h"
 #include "shared/pipeline/indirect_method.h"
 
@@ -21,8 +22,11 @@ public:
     // `aim_texture` and `aim_values` (atlas-sized) are the AIMs as handed over to the GL thread;
     // the GL gather reads the first, the CPU gather the second. The backend comes from
     // settings.gather.backend; `automatic` measures both on a few texels and keeps the faster.
+    // `width` × `height` is the frame's size: the selective schedule gathers first the texels
+    // the camera sees (measured at a reduced size by gpu::TexelCoverage).
     IimMethod(const Scene& scene, const gpu::SceneMeshes& meshes,
-              const gpu::LightmapTexture& aim_texture, const std::vector<glm::vec3>& aim_values);
+              const gpu::LightmapTexture& aim_texture, const std::vector<glm::vec3>& aim_values,
+              int width, int height);
 
     IndirectMethodKind kind() const override { return IndirectMethodKind::iim; }
     void update(const IndirectInputs& in, PipelineStats& stats) override;
@@ -48,6 +52,10 @@ private:
     // With a frame-time target: the regions where moved objects change what gathers see.
     std::vector<Bounds> moved_regions();
     static Bounds world_bounds(const Object& o);
+    // Measures the texels' screen coverage again when the camera changed, or when objects moved
+    // and the last measurement is `kCoverageFrames` frames old; hands it to the IIM.
+    void update_coverage(bool objects_moved, uint64_t frame);
+    static constexpr uint64_t kCoverageFrames = 8;
 
     const Scene& scene_;
     cpu::Iim iim_;
@@ -62,6 +70,10 @@ private:
     PipelineMode mode_ = PipelineMode::selective;  // of the last update()
     uint64_t seen_sequence_ = 0;                   // scene changes looked at
     std::vector<Bounds> placed_;                   // per object: world bounds when last seen
+    gpu::TexelCoverage coverage_;
+    Camera covered_camera_;       // the camera coverage_ was measured with
+    uint64_t covered_frame_ = 0;  // the frame it was measured in; 0 = never
+    bool moved_since_coverage_ = false;
 };
 
 }  // namespace ag

@@ -25,7 +25,8 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      int width, int height) {
     switch (scene.settings.indirect.method) {
         case IndirectMethodKind::iim:
-            return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values);
+            return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values, width,
+                                               height);
         case IndirectMethodKind::gpu_pm:
             return std::make_unique<GpuPmMethod>(scene, meshes, width, height);
         case IndirectMethodKind::vpl:

@@ -585,3 +585,32 @@ TEST(IimSchedule, TexelsNeverGatheredAreNotStarvedByRepeatedEdits) {
 }
 
 }  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// With screen coverage known, the texels the camera sees are gathered before the others of their
+// class: first when never gathered, then again when a new AIM makes every texel stale.
+TEST(IimSchedule, TexelsTheCameraSeesGoFirst) {
+    Simulated s("cornell.json");
+    s.scene.settings.gather.cpu_rays = 16;
+    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
+    Iim map(s.scene);
+    const int texels = int(s.scene.atlas.texels.size());
+    std::vector<float> coverage(size_t(texels), 0.0f);
+    int seen = 0;
+    for (int r = 0; r < texels; r += 3, ++seen) coverage[size_t(r)] = 1e-3f;
+    map.set_coverage(coverage);
+    map.schedule(s.sim->maps());
+    map.gather(gather, seen, 0);
+    ASSERT_EQ(int(map.last_gathered().size()), seen);
+    for (int r : map.last_gathered()) EXPECT_GT(coverage[size_t(r)], 0.0f) << "record " << r;
+    map.gather(gather, texels, 1);  // the rest
+    EXPECT_TRUE(map.complete());
+    // A new AIM: the stale sweep refreshes the seen texels first.
+    map.aim_changed();
+    map.gather(gather, seen, 2);
+    ASSERT_EQ(int(map.last_gathered().size()), seen);
+    for (int r : map.last_gathered()) EXPECT_GT(coverage[size_t(r)], 0.0f) << "record " << r;
+}
+
+}  // namespace ag::cpu
