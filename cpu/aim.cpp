@@ -51,6 +51,8 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     radiance_.assign(n, glm::vec3(0.0f));
     irradiance_.assign(n, glm::vec3(0.0f));
     dirty_flag_.assign(n, 0);
+    indirect_.assign(scene_.atlas.texels.size(), 0.0f);
+    indirect_change_.assign(scene_.atlas.texels.size(), -1.0f);
     texture_mean_.resize(scene_.atlas.texels.size());
     pool_.parallel_for(
         texture_mean_.size(),
@@ -72,7 +74,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     const int k = scene_.settings.aim.knn;
     const float texel = scene_.atlas.texel_size;
 
-    std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f));
+    std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
+        indirect(texels.size(), glm::vec3(0.0f));
     pool_.parallel_for(
         texels.size(),
         [&](size_t i) {
@@ -84,9 +87,14 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
             // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
             double r2 = double(d2[size_t(n - 1)]);
             if (r2 <= 0.0) r2 = double(texel) * texel / std::numbers::pi;
-            glm::dvec3 sum(0.0);
-            for (int j = 0; j < n; ++j) sum += glm::dvec3(s.hits[size_t(idx[size_t(j)])].power);
+            glm::dvec3 sum(0.0), bounced(0.0);
+            for (int j = 0; j < n; ++j) {
+                const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];
+                sum += glm::dvec3(hit.power);
+                if (hit.bounce >= 1) bounced += glm::dvec3(hit.power);
+            }
             e[i] = glm::vec3(sum / (std::numbers::pi * r2));
+            indirect[i] = glm::vec3(bounced / (std::numbers::pi * r2));
         },
         16);
 
@@ -100,13 +108,24 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     for (int c = 0; c < 3; ++c) {
         const double scale = estimated[c] > 0.0 ? s.flux[c] / estimated[c] : 0.0;
         for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
+        for (glm::vec3& v : indirect) v[c] = float(double(v[c]) * scale);
     }
+    double mean_indirect = 0.0;
+    for (const glm::vec3& v : indirect) mean_indirect += double(energy(v));
+    const float floor_indirect =
+        texels.empty() ? 0.0f : float(0.05 * mean_indirect / double(texels.size()));
 
     for (size_t i = 0; i < texels.size(); ++i) {
         const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
         const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
         irradiance_[a] = e[i];
         radiance_[a] = albedo * texture_mean_[size_t(texels[i])] / float(std::numbers::pi) * e[i];
+        const float before = indirect_[size_t(texels[i])], now = float(energy(indirect[i]));
+        const float denominator = before + now + floor_indirect;
+        const float change = denominator > 0.0f ? std::abs(now - before) / denominator : 0.0f;
+        float& noted = indirect_change_[size_t(texels[i])];
+        noted = std::max(noted, change);
+        indirect_[size_t(texels[i])] = now;
         if (!dirty_flag_[a]) {
             dirty_flag_[a] = 1;
             dirty_.push_back(int(a));
@@ -164,6 +183,12 @@ int Aim::rebuild_all(PhotonMaps& maps) {
     int texels = 0;
     for (int s = 0; s < int(maps.surface_count()); ++s) texels += rebuild_surface(maps, s);
     return texels;
+}
+
+std::vector<float> Aim::take_indirect_changes() {
+    std::vector<float> changes(indirect_change_.size(), -1.0f);
+    changes.swap(indirect_change_);
+    return changes;
 }
 
 std::vector<int> Aim::take_dirty_texels() {

@@ -37,12 +37,19 @@ public:
     const std::vector<glm::vec3>& irradiance() const { return irradiance_; }
     // Atlas texel indices (y·width + x) changed since the last call, for uploads.
     std::vector<int> take_dirty_texels();
+    // Per texel record: how much its indirect irradiance estimate (the hits that made at least
+    // one bounce, the light a final gather there collects) changed over the rebuilds since the
+    // last call, relative, |ΔE| / (E_old + E_new + 5% of the surface's mean); −1 where the texel
+    // was not rebuilt. The IIM gathers the most changed texels first.
+    std::vector<float> take_indirect_changes();
 
 private:
     const Scene& scene_;
     ThreadPool& pool_;
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
+    std::vector<float> indirect_;         // per record: indirect irradiance (energy) as last built
+    std::vector<float> indirect_change_;  // per record, since take_indirect_changes; −1 = none
     // Per atlas texel record: the mean of its object's albedo texture over the texel (1 without
     // one), so that the AIM's radiance is the texel's mean exitant radiance.
     std::vector<glm::vec3> texture_mean_;

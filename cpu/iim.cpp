@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "shared/charts.h"
 #include "shared/lightmap_sample.h"
@@ -60,6 +61,7 @@ void Iim::schedule(PhotonMaps& maps) {
             moved[size_t(t)] = 1;
             order.push_back(t);
         }
+    std::vector<int> changed;
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
         if (size_t(s) >= surface_texels_.size()) continue;
@@ -67,13 +69,31 @@ void Iim::schedule(PhotonMaps& maps) {
             if (moved[size_t(t)]) continue;
             moved[size_t(t)] = 1;
             is_pending_[size_t(t)] = 1;
-            order.push_back(t);
+            changed.push_back(t);
         }
     }
+    // Within them, the texels whose own indirect estimate changed most go first (a texel whose
+    // AIM was not rebuilt yet is not known to be unchanged: it keeps its surface's place).
+    if (!change_.empty()) {
+        auto key = [&](int t) {
+            const float c = change_[size_t(t)];
+            return c < 0.0f ? std::numeric_limits<float>::infinity() : c;
+        };
+        std::stable_sort(changed.begin(), changed.end(),
+                         [&](int a, int b) { return key(a) > key(b); });
+        for (int t : changed) change_[size_t(t)] = -1.0f;
+    }
+    order.insert(order.end(), changed.begin(), changed.end());
     for (int t : pending_)
         if (!moved[size_t(t)]) order.push_back(t);
     std::stable_partition(order.begin(), order.end(), [&](int t) { return seen(t); });
     pending_.assign(order.begin(), order.end());
+}
+
+void Iim::note_indirect_changes(const std::vector<float>& per_record) {
+    if (per_record.size() != texel_generation_.size()) return;
+    if (change_.empty()) change_.assign(per_record.size(), -1.0f);
+    for (size_t r = 0; r < per_record.size(); ++r) change_[r] = std::max(change_[r], per_record[r]);
 }
 
 void Iim::set_coverage(const std::vector<float>& per_record) {

@@ -38,6 +38,10 @@ public:
     // the surface's flux), largest Δi first and ahead of everything else queued but texels never
     // gathered, and resets those surfaces' Δi.
     void schedule(PhotonMaps& maps);
+    // Per texel record, how much its indirect estimate changed in the AIM rebuilds since the last
+    // call (Aim::take_indirect_changes; −1 = not rebuilt): the next schedule() orders the texels
+    // of changed surfaces by it, largest first.
+    void note_indirect_changes(const std::vector<float>& per_record);
     // Per texel record, the fraction of the screen it covers (gpu::TexelCoverage); empty = not
     // known. Texels the camera sees are queued and refreshed before the others of their class.
     void set_coverage(const std::vector<float>& per_record);
@@ -79,6 +83,7 @@ private:
 
     const Scene& scene_;
     std::vector<float> coverage_;  // per record; empty = not known
+    std::vector<float> change_;    // per record: noted indirect change, −1 = none; empty = never
     std::deque<int> pending_;      // texel records, FIFO, each at most once
     std::vector<char> is_pending_;
     std::vector<int> last_gathered_;

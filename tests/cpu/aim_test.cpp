@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <numbers>
 
 #include "cpu/photon_simulation.h"
@@ -62,6 +63,58 @@ TEST(Aim, UpdateFollowsDeltaAndBudget) {
     EXPECT_EQ(rebuilt, 0);
     for (int s = 0; s < int(sim.maps().surface_count()); ++s)
         EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
+}
+
+}  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// Per-texel indirect change: zero for a rebuild from the same hits, −1 where nothing was rebuilt,
+// positive where the bounced light (and only the bounced light) changed.
+TEST(Aim, IndirectChangePerTexel) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());
+    for (float c : aim.take_indirect_changes()) ASSERT_GE(c, 0.0f);  // every texel rebuilt
+
+    // The surface with the most indirect hits.
+    PhotonMaps& maps = sim.maps();
+    int surface = 0;
+    size_t most = 0;
+    for (int s = 0; s < int(maps.surface_count()); ++s) {
+        size_t bounced = 0;
+        for (const PhotonHit& h : maps.surface(s).hits) bounced += h.bounce >= 1 ? 1 : 0;
+        if (bounced > most) most = bounced, surface = s;
+    }
+    ASSERT_GT(most, 0u);
+    aim.rebuild_surface(maps, surface);
+    std::vector<float> c = aim.take_indirect_changes();
+    for (size_t r = 0; r < c.size(); ++r) {
+        if (scene.atlas.texels[r].surface == surface)
+            EXPECT_EQ(c[r], 0.0f) << "record " << r;
+        else
+            EXPECT_EQ(c[r], -1.0f) << "record " << r;
+    }
+    // Bounced hits three times as strong (the surface's flux kept equal to its hits'): the
+    // indirect estimate changes across the surface.
+    SurfaceHits& hits = maps.surface(surface);
+    hits.flux = glm::dvec3(0.0);
+    for (PhotonHit& h : hits.hits) {
+        if (h.bounce >= 1) h.power *= 3.0f;
+        hits.flux += glm::dvec3(h.power);
+    }
+    aim.rebuild_surface(maps, surface);
+    c = aim.take_indirect_changes();
+    int changed = 0, texels = 0;
+    for (size_t r = 0; r < c.size(); ++r)
+        if (scene.atlas.texels[r].surface == surface) {
+            ++texels;
+            changed += c[r] > 0.1f ? 1 : 0;
+        }
+    EXPECT_GT(changed, texels / 2);
 }
 
 }  // namespace ag::cpu

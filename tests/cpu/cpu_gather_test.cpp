@@ -614,3 +614,41 @@ TEST(IimSchedule, TexelsTheCameraSeesGoFirst) {
 }
 
 }  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// Among the texels of surfaces whose indirect hits changed, those whose own indirect estimate
+// changed most are gathered first; one whose AIM was not rebuilt keeps its surface's place.
+TEST(IimSchedule, MostChangedTexelsFirst) {
+    Simulated s("cornell.json");
+    s.scene.settings.gather.cpu_rays = 16;
+    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
+    Iim map(s.scene);
+    const int texels = int(s.scene.atlas.texels.size());
+    map.gather(gather, texels, 0);  // everything gathered once
+    ASSERT_TRUE(map.complete());
+    PhotonMaps& maps = s.sim->maps();
+    for (int surface = 0; surface < int(maps.surface_count()); ++surface)
+        maps.surface(surface).delta_i = 1e9;
+    std::vector<float> change(size_t(texels), 0.0f);
+    std::vector<int> first;
+    for (int r = 0; r < texels; r += 5) {
+        change[size_t(r)] = 0.5f + float(r) / float(texels);  // distinct, growing with r
+        first.push_back(r);
+    }
+    change[1] = -1.0f;  // not rebuilt: counts as changed most
+    first.push_back(1);
+    map.note_indirect_changes(change);
+    map.schedule(maps);
+    map.gather(gather, int(first.size()), 1);
+    std::vector<int> got = map.last_gathered();
+    ASSERT_EQ(got.size(), first.size());
+    EXPECT_EQ(got.front(), 1);
+    for (size_t k = 2; k < got.size(); ++k)  // then by change, largest first
+        EXPECT_GT(change[size_t(got[k - 1])], change[size_t(got[k])]) << "position " << k;
+    std::sort(got.begin(), got.end());
+    std::sort(first.begin(), first.end());
+    EXPECT_EQ(got, first);
+}
+
+}  // namespace ag::cpu
