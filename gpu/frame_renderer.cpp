@@ -1,5 +1,6 @@
 #include "gpu/frame_renderer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -357,6 +358,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     };
     gl::Enable(GL_TEXTURE_CUBE_MAP_SEAMLESS);  // no seams where a lookup crosses a face edge
     cube_maps_.resize(scene.objects.size());
+    face_revision_.assign(scene.objects.size() * 6, 0);
     inner_maps_.resize(scene.objects.size());
     cube_radii_.assign(scene.objects.size(), 0.0f);
     for (size_t o = 0; o < scene.objects.size(); ++o) {
@@ -397,7 +399,8 @@ glm::vec3 FrameRenderer::cube_centre(size_t object) const {
     return o.transform.apply_point(mesh_bounds(o.mesh).center());
 }
 
-void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>& lights) {
+void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>& lights,
+                                     const std::vector<int>& faces) {
     const int size = scene_.settings.specular.cube_map_size;
     // Face order +X −X +Y −Y +Z −Z with the GL cube-map conventions for up vectors.
     const glm::vec3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
@@ -409,10 +412,11 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
                                 cube_depth_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
-    for (size_t s = 0; s < scene_.objects.size(); ++s) {
-        if (!cube_maps_[s]) continue;
+    for (int index : faces) {
+        const size_t s = size_t(index / 6);
+        const int f = index % 6;
         const glm::vec3 centre = cube_centre(s);
-        for (int f = 0; f < 6; ++f) {
+        {
             const glm::mat4 view_projection =
                 projection * glm::lookAt(centre, centre + dirs[f], ups[f]);
             const GLenum face = GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f);
@@ -517,19 +521,54 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
     render(IndirectTerm{iim, IndirectSpace::lightmap}, caustics);
 }
 
-bool FrameRenderer::cube_maps_stale(const IndirectTerm& indirect,
-                                    const std::vector<LightSample>& lights) {
+std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirect,
+                                                     const std::vector<LightSample>& lights) {
     auto same = [](const LightSample& a, const LightSample& b) {
         return a.position == b.position && a.intensity == b.intensity && a.normal == b.normal &&
                a.one_sided == b.one_sided && a.directional == b.directional && a.cone == b.cone;
     };
     const CubeMapKey& k = cube_key_;
-    bool stale = !k.valid || indirect.revision == 0 || k.revision != indirect.revision ||
-                 k.scene_version != scene_.version || k.texture != indirect.texture ||
-                 k.space != indirect.space || k.lights.size() != lights.size();
+    bool stale = !k.valid || indirect.revision == 0 || k.scene_version != scene_.version ||
+                 k.texture != indirect.texture || k.space != indirect.space ||
+                 k.lights.size() != lights.size();
     for (size_t i = 0; !stale && i < lights.size(); ++i) stale = !same(k.lights[i], lights[i]);
     cube_key_ = {scene_.version, indirect.revision, indirect.texture, indirect.space, lights, true};
-    return stale;
+    std::vector<int> faces;
+    if (stale) {
+        // What the cube maps see changed: every face now.
+        for (size_t s = 0; s < cube_maps_.size(); ++s)
+            if (cube_maps_[s])
+                for (int f = 0; f < 6; ++f) faces.push_back(int(s) * 6 + f);
+        for (int face : faces) face_revision_[size_t(face)] = indirect.revision;
+        return faces;
+    }
+    // Only the indirect term moved on (a converging IIM does every frame): the faces that show an
+    // older one follow it a share a frame, round robin, all within kIndirectRefreshFrames frames.
+    std::vector<int> behind;
+    for (size_t s = 0; s < cube_maps_.size(); ++s)
+        if (cube_maps_[s])
+            for (int f = 0; f < 6; ++f)
+                if (face_revision_[s * 6 + size_t(f)] != indirect.revision)
+                    behind.push_back(int(s) * 6 + f);
+    if (behind.empty()) return faces;
+    size_t total = 0;
+    for (const Texture& t : cube_maps_) total += t ? 6 : 0;
+    const size_t share = (total + kIndirectRefreshFrames - 1) / kIndirectRefreshFrames;
+    // Start after the face rendered last, so every face gets its turn.
+    std::rotate(behind.begin(), std::upper_bound(behind.begin(), behind.end(), last_face_),
+                behind.end());
+    behind.resize(std::min(behind.size(), share));
+    for (int face : behind) face_revision_[size_t(face)] = indirect.revision;
+    last_face_ = behind.back();
+    return behind;
+}
+
+bool FrameRenderer::cube_maps_current() const {
+    for (size_t s = 0; s < cube_maps_.size(); ++s)
+        if (cube_maps_[s])
+            for (int f = 0; f < 6; ++f)
+                if (face_revision_[s * 6 + size_t(f)] != cube_key_.revision) return false;
+    return cube_key_.valid;
 }
 
 void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
@@ -538,7 +577,8 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     // are kept while the scene, the term and the light samples stay as they were.
     const GLuint iim = indirect.texture;
     const bool in_screen = indirect.space == IndirectSpace::screen;
-    if (cube_maps_stale(indirect, lights)) render_cube_maps(in_screen ? 0 : iim, lights);
+    const std::vector<int> faces = cube_faces_to_render(indirect, lights);
+    if (!faces.empty()) render_cube_maps(in_screen ? 0 : iim, lights, faces);
 
     Camera camera = scene_.camera;
     camera.width = width_;

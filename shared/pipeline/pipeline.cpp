@@ -227,7 +227,7 @@ GLuint Pipeline::iim_texture() const {
 
 bool Pipeline::converged() const {
     return (photons_->settled() || !uses_photon_maps_) && aim_dirty_.empty() &&
-           indirect_->settled() &&
+           indirect_->settled() && renderer_->cube_maps_current() &&
            caustic_frames_since_edit_ > scene_.settings.caustics.frames;  // +1: drawn next frame
 }
 

@@ -81,7 +81,8 @@ public:
     const IimMethod* iim_method() const { return dynamic_cast<const IimMethod*>(indirect_.get()); }
     GLuint aim_texture() const { return aim_texture_.id(); }
     GLuint iim_texture() const;  // 0 without the IIM method
-    // Nothing queued, pending or blending anywhere.
+    // Nothing queued, pending or blending anywhere, and the cube maps show the latest indirect
+    // term.
     bool converged() const;
 
     // Gather backend of the IIM method (gl when there is none).
