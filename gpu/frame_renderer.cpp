@@ -1,5 +1,6 @@
 #include "gpu/frame_renderer.h"
 
+#include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 
@@ -638,8 +639,11 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
         direct_key_ = key;
         direct_frames_ = 0;
     }
+    // Without an enabled quad or mesh light every frame would draw the same samples: one is kept.
+    const bool area = std::any_of(scene_.lights.begin(), scene_.lights.end(),
+                                  [](const Light& l) { return l.enabled && l.is_area(); });
     const bool accumulate = direct.accumulate_frames > 1;
-    const bool fresh = !accumulate || direct_frames_ < direct.accumulate_frames;
+    const bool fresh = !accumulate || direct_frames_ < (area ? direct.accumulate_frames : 1);
     if (fresh)
         add_direct_light(direct_frames_ == 0
                              ? lights

@@ -145,6 +145,26 @@ TEST_F(FrameTest, AreaLightSamplesMoveOverFramesAndRestartAfterAnEdit) {
     EXPECT_EQ(direct(), first);
 }
 
+// Point lights give every frame the same samples: the first frame's direct term is kept (no light
+// pass drawn) until an edit, and equals what drawing it again gives.
+TEST_F(FrameTest, PointLightDirectTermIsKeptWhileNothingChanges) {
+    Scene scene = occluder_scene();
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
+    auto direct = [&] {
+        renderer.render(iim.id());
+        return renderer.read_back().aov[size_t(FrameTerm::direct)].pixels;
+    };
+    const std::vector<float> first = direct();
+    EXPECT_EQ(direct(), first);
+    EXPECT_EQ(direct(), first);
+    translate_object(scene, 1, glm::vec3(2.0f, 0.0f, 0.0f));  // the box moves: its shadow too
+    const std::vector<float> moved = direct();
+    EXPECT_NE(moved, first);
+    EXPECT_EQ(direct(), moved);
+}
+
 // Settings changed after loading (flags, the viewer) may ask for more light samples than the frame
 // holds: an InputError naming the scene, never a silently cut light list.
 TEST_F(FrameTest, TooManyLightSamplesAreAnErrorNotACut) {
