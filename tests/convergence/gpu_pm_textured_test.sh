@@ -3,7 +3,8 @@
 # indirect term on the checker-textured Cornell box (photons take the texel's albedo where they
 # bounce) must match pt's single-bounce reference as closely as gpu_pm does on the untextured box
 # at the same size and budgets (relMSE within 1.2x of it). Photons bouncing with the white base
-# albedo (before this issue: 1.47x the untextured error) fail it. 32x32: seconds, not accuracy.
+# albedo (before this issue: 1.33x the untextured error) fail it. 32x32, 16 frames: ~5 s, so the
+# errors are large; what counts is their ratio (textured 0.86x).
 # Exit 77 (skipped) without a GL context.
 set -uo pipefail
 bin="$1"; work="$2/gpu_pm_textured"
@@ -15,7 +16,7 @@ relmse() {
 for scene in cornell cornell_textured; do
   "$bin" reference scenes/$scene.json -m pt --indirect-bounces 1 --spp 512 --size 32x32 \
     -o "$work/$scene.pt.exr" -q >/dev/null || exit 1
-  "$bin" render scenes/$scene.json --indirect gpu_pm -n 32 --size 32x32 --aov \
+  "$bin" render scenes/$scene.json --indirect gpu_pm -n 16 --size 32x32 --aov \
     -o "$work/$scene.exr" -q >/dev/null 2>&1 || exit 1
 done
 plain=$(relmse "$work/cornell.indirect.exr" "$work/cornell.pt.indirect.exr")
