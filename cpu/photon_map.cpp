@@ -48,7 +48,7 @@ void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* ph
         const std::vector<TracedVertex>& path = photons[p];
         group.photon_begin.push_back(uint32_t(group.vertices.size()));
         for (const TracedVertex& t : path) {
-            PathVertex v{t.surface, t.position, t.local_position, -1, t.normal};
+            PathVertex v{t.surface, t.position, t.local_position, -1, t.normal, t.albedo};
             if (t.stored) {
                 SurfaceHits& s = surfaces_[size_t(t.surface)];
                 v.hit = int32_t(s.hits.size());

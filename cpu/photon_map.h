@@ -26,6 +26,7 @@ struct PathVertex {
     glm::vec3 local{0.0f};     // object space: a hit must also stay put on its moving object
     int32_t hit = -1;          // slot in the surface's hits, -1 if nothing was stored
     glm::vec3 normal{0.0f};    // world space, the side the photon arrived from (VPL orientation)
+    glm::vec3 albedo{0.0f};    // the albedo where it landed (the texel's on a textured surface)
 };
 
 struct PhotonGroup {

@@ -142,10 +142,11 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
             // Lightmaps cover the front of a surface; light reaching a back face is absorbed
             // (walls lit from both sides need thickness).
             v.stored = front;
+            const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
+            v.albedo = albedo;
             out.push_back(v);
             if (!front) return ends;
             // Russian roulette by albedo (Jensen): survive with p = max ρ, carry ρ/p.
-            const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
             const float p = std::min(1.0f, std::max({albedo.x, albedo.y, albedo.z}));
             if (p <= 0.0f || sample(light, k, dim) >= p) return ends;
             power *= albedo / p;

@@ -22,6 +22,7 @@ struct TracedVertex {
     glm::vec3 local_position{0.0f};  // object space (photon maps live in object space)
     glm::vec3 normal{0.0f};          // world-space unit normal on the side the photon arrived from
     glm::vec3 power{0.0f};           // incident flux carried by the photon, W
+    glm::vec3 albedo{0.0f};          // diffuse: the albedo where it landed (the texel's, if any)
     uint8_t bounce = 0;              // 0: straight from the light
     bool stored = false;             // deposited as a photon hit (front side of a diffuse surface)
 };

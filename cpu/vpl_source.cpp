@@ -7,7 +7,7 @@
 
 namespace ag::cpu {
 
-void group_vpls(const Scene& scene, const PhotonMaps& maps, int light, int group, int photons,
+void group_vpls(const Scene& /*scene*/, const PhotonMaps& maps, int light, int group, int photons,
                 std::vector<Vpl>& out) {
     const PhotonGroup& g = maps.group(light, group);
     if (!g.traced || g.photon_begin.size() < 2) return;
@@ -20,13 +20,12 @@ void group_vpls(const Scene& scene, const PhotonMaps& maps, int light, int group
         const PathVertex& pv = g.vertices[v];
         if (pv.hit < 0) continue;
         const PhotonHit& hit = maps.surface(pv.surface).hits[size_t(pv.hit)];
-        const Object& o = scene.objects[size_t(scene.surfaces[size_t(pv.surface)].object)];
         Vpl vpl;
         vpl.position = pv.position;
         vpl.normal = pv.normal;
-        // Path vertices keep no texture coordinates: a textured surface reflects with its mean
-        // albedo here (exact for untextured ones).
-        vpl.power = hit.power * base_albedo(o) * scale;
+        // The albedo where the photon landed (the texel's on a textured surface), kept with its
+        // path: an albedo edit retraces the groups with hits on the object.
+        vpl.power = hit.power * pv.albedo * scale;
         vpl.light = light;
         vpl.group = group;
         vpl.bounce = hit.bounce;

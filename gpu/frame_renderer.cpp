@@ -5,6 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "shared/camera.h"
+#include "shared/qmc.h"
 
 namespace ag::gpu {
 
@@ -250,9 +251,27 @@ void main() {
 }
 )";
 
+// The running mean of the direct term: mix(mean, current, weight), weight = 1/frames.
+const char* kDirectMeanFragment = R"(
+uniform sampler2D mean, current;
+uniform float weight;
+out vec4 color;
+void main() {
+    ivec2 p = ivec2(gl_FragCoord.xy);
+    color = mix(texelFetch(mean, p, 0), texelFetch(current, p, 0), weight);
+}
+)";
+
 }  // namespace
 
-std::vector<LightSample> light_samples(const Scene& scene) {
+glm::vec2 light_sample_jitter(int frame) {
+    if (frame <= 0) return glm::vec2(0.5f);
+    const auto k = uint64_t(frame);
+    return glm::fract(glm::vec2(0.5f) +
+                      glm::vec2(float(radical_inverse(2, k)), float(radical_inverse(3, k))));
+}
+
+std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter) {
     std::vector<LightSample> out;
     for (const Light& l : scene.lights) {
         if (!l.enabled) continue;
@@ -271,15 +290,16 @@ std::vector<LightSample> light_samples(const Scene& scene) {
         }
         const int n = quad_light_grid(scene.settings);
         if (l.type == LightType::mesh) {
-            // n² points spread over the triangles by area (a rank-1 lattice), each standing for
-            // A/n² of the surface; lifted off it so its own mesh does not shadow it.
+            // n² points spread over the triangles by area (a rank-1 lattice: stratum j is the
+            // strip u ∈ [j, j+1)/n² of the area CDF), each standing for A/n² of the surface;
+            // lifted off it so its own mesh does not shadow it.
             const int count = n * n;
             const glm::vec3 intensity = l.radiance * (l.area() / float(count));
             const float lift = 1e-4f * scene.diagonal();
             for (int j = 0; j < count; ++j) {
                 const LightPoint at =
-                    sample_area_light(scene, l, (float(j) + 0.5f) / float(count),
-                                      std::fmod(float(j) * 0.6180339887f + 0.5f, 1.0f));
+                    sample_area_light(scene, l, (float(j) + jitter.x) / float(count),
+                                      std::fmod(float(j) * 0.6180339887f + jitter.y, 1.0f));
                 out.push_back({at.position + lift * at.normal, intensity, at.normal, true});
             }
             continue;
@@ -289,8 +309,8 @@ std::vector<LightSample> light_samples(const Scene& scene) {
         const glm::vec3 intensity = l.radiance * (l.quad_area() / float(n * n));
         for (int j = 0; j < n; ++j)
             for (int i = 0; i < n; ++i)
-                out.push_back({l.corners[0] + (float(i) + 0.5f) / float(n) * e1 +
-                                   (float(j) + 0.5f) / float(n) * e3,
+                out.push_back({l.corners[0] + (float(i) + jitter.x) / float(n) * e1 +
+                                   (float(j) + jitter.y) / float(n) * e3,
                                intensity, l.quad_normal(), true});
     }
     // Never cut: the scene file was checked on load, but settings may have changed since.
@@ -376,6 +396,18 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::RenderbufferStorage(GL_RENDERBUFFER, GL_DEPTH32F_STENCIL8, cube, cube);
     cube_fbo_ = make_framebuffer();
     near_ = 1e-3f * scene.diagonal();
+
+    direct_mean_program_ =
+        Program("direct term running mean", kFullScreenTriangleVertex, kDirectMeanFragment);
+    for (size_t i = 0; i < direct_mean_.size(); ++i) {
+        direct_mean_[i] = make_float_texture(width, height);
+        direct_mean_fbo_[i] = make_framebuffer();
+        gl::BindFramebuffer(GL_FRAMEBUFFER, direct_mean_fbo_[i].get());
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                                 direct_mean_[i].get(), 0);
+        if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+            throw GlError("frame: direct mean framebuffer incomplete");
+    }
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("FrameRenderer");
 }
@@ -636,13 +668,68 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     }
 
     // 2. Per light: shadow volumes into the stencil (depth-fail), then add its light where the
-    //    count is zero (eq. 13.2).
-    add_direct_light(lights, view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
+    //    count is zero (eq. 13.2). While the scene stands still, each frame moves the area
+    //    lights' samples within their strata and the direct term is the mean over the frames:
+    //    n² samples a frame, n²·k after k frames; once accumulate_frames are in, it is kept.
+    const DirectSettings& direct = scene_.settings.direct;
+    const DirectKey key{scene_.version, direct.area_light_samples, direct.accumulate_frames,
+                        direct.shadows};
+    if (!(key == direct_key_)) {
+        direct_key_ = key;
+        direct_frames_ = 0;
+    }
+    // Without an enabled quad or mesh light every frame would draw the same samples: one is kept.
+    const bool area = std::any_of(scene_.lights.begin(), scene_.lights.end(),
+                                  [](const Light& l) { return l.enabled && l.is_area(); });
+    const bool accumulate = direct.accumulate_frames > 1;
+    const bool fresh = !accumulate || direct_frames_ < (area ? direct.accumulate_frames : 1);
+    if (fresh)
+        add_direct_light(direct_frames_ == 0
+                             ? lights
+                             : light_samples(scene_, light_sample_jitter(direct_frames_)),
+                         view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
+    if (accumulate) accumulate_direct(fresh);
     gl::DrawBuffers(kFrameTermCount, all);
     compose();
     gl::BindVertexArray(0);
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("FrameRenderer::render");
+}
+
+void FrameRenderer::accumulate_direct(bool fresh) {
+    gl::Disable(GL_DEPTH_TEST);
+    gl::Disable(GL_BLEND);
+    gl::Viewport(0, 0, width_, height_);
+    direct_mean_program_.use();
+    direct_mean_program_.set("mean", 0);
+    direct_mean_program_.set("current", 1);
+    gl::BindVertexArray(empty_vao_.get());
+    const GLenum draw = GL_COLOR_ATTACHMENT0;
+    auto pass = [&](GLuint framebuffer, GLenum buffer, GLuint mean, GLuint current, float weight) {
+        gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
+        gl::DrawBuffers(1, &buffer);
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, mean);
+        gl::ActiveTexture(GL_TEXTURE1);
+        gl::BindTexture(GL_TEXTURE_2D, current);
+        direct_mean_program_.set("weight", weight);
+        gl::DrawArrays(GL_TRIANGLES, 0, 3);
+    };
+    const GLuint this_frame = aov_[size_t(FrameTerm::direct)].get();
+    if (fresh) {
+        ++direct_frames_;
+        const int next = 1 - direct_mean_current_;
+        // The first frame replaces the mean (never read: it may hold an older scene's).
+        const GLuint mean =
+            direct_frames_ == 1 ? this_frame : direct_mean_[size_t(direct_mean_current_)].get();
+        pass(direct_mean_fbo_[size_t(next)].get(), draw, mean, this_frame,
+             1.0f / float(direct_frames_));
+        direct_mean_current_ = next;
+    }
+    const GLuint mean = direct_mean_[size_t(direct_mean_current_)].get();
+    pass(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect), mean, mean, 0.0f);
+    gl::ActiveTexture(GL_TEXTURE0);
+    gl::Enable(GL_DEPTH_TEST);
 }
 
 void FrameRenderer::compose() {

@@ -32,9 +32,14 @@ struct LightSample {
     glm::vec2 cone{-2.0f, -1.0f};  // spot: (cos outer, cos inner); a cone of every direction else
 };
 
-// The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples); at
-// most kMaxLightSamples (scene files needing more are rejected on load; an InputError otherwise).
-std::vector<LightSample> light_samples(const Scene& scene);
+// The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples; mesh
+// lights: n² strata of a rank-1 lattice over their area); at most kMaxLightSamples (scene files
+// needing more are rejected on load; an InputError otherwise). `jitter` ∈ [0,1)² places each
+// area-light sample within its stratum (0.5, 0.5: the centres).
+std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter = glm::vec2(0.5f));
+// Where frame k of an accumulation puts its samples within their strata: the centres for k = 0,
+// then the Halton points (bases 2, 3) shifted by one half, so the frames fill each stratum evenly.
+glm::vec2 light_sample_jitter(int frame);
 
 // Where an indirect method's term lives (DESIGN.md "Indirect methods on one scene graph"): an
 // atlas-sized lightmap read at each surface point (the IIM), or a frame-sized image read at each
@@ -93,6 +98,10 @@ private:
                           GLenum draw_buffer);
     void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
     void set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const;
+    // Progressive direct light: this frame's direct term (in the direct attachment) averaged
+    // into the running mean of the frames since the scene last changed, which then replaces it.
+    // With `fresh` false no new samples were drawn and the mean is copied back as it is.
+    void accumulate_direct(bool fresh);
 
     const Scene& scene_;
     const SceneMeshes& meshes_;
@@ -127,6 +136,20 @@ private:
     int last_face_ = -1;                   // the face the round robin rendered last
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
+
+    // The running mean of the direct term (ping-pong: one read, one written) and what it is the
+    // mean of: the frames drawn since the scene version or the direct settings last changed.
+    std::array<Texture, 2> direct_mean_;
+    std::array<Framebuffer, 2> direct_mean_fbo_;
+    int direct_mean_current_ = 0;
+    Program direct_mean_program_;
+    struct DirectKey {
+        uint64_t scene_version = 0;
+        int area_light_samples = 0, accumulate_frames = 0;
+        bool shadows = false;
+        bool operator==(const DirectKey&) const = default;
+    } direct_key_;
+    int direct_frames_ = 0;  // frames in the mean
 };
 
 }  // namespace ag::gpu

@@ -12,13 +12,15 @@ struct BvhNode { vec3 lo; uint link; vec3 hi; uint count; };
 struct BvhTriangle { vec3 v0; uint object; vec3 e1; uint triangle; vec3 e2; uint pad; };
 layout(std430, binding = 6) readonly buffer BvhNodes { BvhNode bvh_nodes[]; };
 layout(std430, binding = 7) readonly buffer BvhTriangles { BvhTriangle bvh_triangles[]; };
-struct BvhHit { float t; uint object; uint triangle; uint index; };  // index: into bvh_triangles
+// index: into bvh_triangles; barycentric: (u, v) of the triangle's v1 and v2 at the hit.
+struct BvhHit { float t; uint object; uint triangle; uint index; vec2 barycentric; };
 const uint kBvhInteriorBit = 0x80000000u;
 bool bvh_intersect(vec3 origin, vec3 direction, float tmin, float tmax, out BvhHit hit) {
     hit.t = tmax;
     hit.object = 0u;
     hit.triangle = 0u;
     hit.index = 0u;
+    hit.barycentric = vec2(0.0);
     if (bvh_nodes.length() == 0) return false;
     vec3 inv;
     for (int k = 0; k < 3; ++k)
@@ -59,6 +61,7 @@ bool bvh_intersect(vec3 origin, vec3 direction, float tmin, float tmax, out BvhH
                     hit.object = tri.object;
                     hit.triangle = tri.triangle;
                     hit.index = i;
+                    hit.barycentric = vec2(u, v);
                     found = true;
                 }
             }

@@ -15,7 +15,8 @@ namespace ag::gpu {
 inline constexpr GLuint kBvhNodeBinding = 6, kBvhTriangleBinding = 7;
 
 // `bool bvh_intersect(vec3 origin, vec3 direction, float tmin, float tmax, out BvhHit hit)` with
-// BvhHit {float t; uint object; uint triangle; uint index (into bvh_triangles);}; `bvh_count` says
+// BvhHit {float t; uint object; uint triangle; uint index (into bvh_triangles); vec2 barycentric;};
+// `bvh_count` says
 // whether there are any nodes.
 extern const char* const kBvhTraversalGlsl;
 

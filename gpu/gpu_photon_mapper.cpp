@@ -104,7 +104,8 @@ void main() {
         BvhTriangle tri = bvh_triangles[hit.index];
         vec3 n = normalize(cross(tri.e1, tri.e2));
         if (dot(n, d) > 0.0) n = -n;
-        power *= m.rgb;
+        // The albedo where it landed: base × the texel (bilinear) on a textured surface.
+        power *= m.rgb * texture_albedo(hit.object, hit.index, hit.barycentric);
         if (kwast != 0) power /= kPhotonPi;  // his Kd / π / p at the bounce
         seed = tea_next(seed);
         d = cosine_direction(tea_unit(seed), n);
@@ -322,7 +323,8 @@ void main() {
 // The trace walks the BVH; the tile passes read the tiles instead.
 std::string with_common(const char* body, bool tiles) {
     return std::string(kPhotonSamplingGlsl) + kComputeGroupIndex +
-           (tiles ? "" : kBvhTraversalGlsl) + kPhotonCommon + (tiles ? kTileCommon : "") + body;
+           (tiles ? "" : std::string(kBvhTraversalGlsl) + kSurfaceAlbedoGlsl) + kPhotonCommon +
+           (tiles ? kTileCommon : "") + body;
 }
 
 float luminance(const glm::vec3& c) { return 0.2126f * c.r + 0.7152f * c.g + 0.0722f * c.b; }
@@ -432,14 +434,16 @@ GpuPhotonMapper::GpuPhotonMapper(const Scene& scene, const GBuffer& g_buffer)
 }
 
 void GpuPhotonMapper::reset() {
-    bvh_.upload(build_flat_bvh(scene_));
+    const FlatBvh bvh = build_flat_bvh(scene_);
+    bvh_.upload(bvh);
+    albedo_.upload(scene_, bvh);
     const std::vector<PhotonEmitter> emitters = make_photon_emitters(scene_);
     emitter_count_ = uint32_t(emitters.size());
     emitters_ = make_storage_buffer(std::max<size_t>(emitters.size(), 1) * sizeof(PhotonEmitter),
                                     emitters.empty() ? nullptr : emitters.data());
     std::vector<glm::vec4> materials;
     for (const Object& o : scene_.objects)
-        materials.emplace_back(base_albedo(o), float(int(o.material.type)));  // no albedo maps
+        materials.emplace_back(base_albedo(o), float(int(o.material.type)));  // × the texture
     if (materials.empty()) materials.emplace_back(0.0f);
     materials_ = make_storage_buffer(materials.size() * sizeof(glm::vec4), materials.data());
     radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
@@ -477,6 +481,7 @@ void GpuPhotonMapper::trace() {
     trace_.set("epsilon", 1e-5f * scene_.diagonal());
     trace_.set("capacity", unsigned(capacity_));
     bvh_.bind();
+    albedo_.bind();
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, kPhotonsBinding, photons_.get());
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, kCounterBinding, counter_.get());
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, kEmittersBinding, emitters_.get());

@@ -16,6 +16,7 @@
 #include "gpu/gl_objects.h"
 #include "gpu/gpu_bvh.h"
 #include "gpu/prefix_sum.h"
+#include "gpu/surface_albedo.h"
 #include "shared/scene.h"
 
 namespace ag::gpu {
@@ -89,6 +90,7 @@ private:
     const GBuffer& g_buffer_;
     int width_, height_, tiles_x_, tiles_y_, low_w_, low_h_;
     GpuBvh bvh_;
+    SurfaceAlbedo albedo_;  // textures where photons bounce
     PrefixSum prefix_sum_;
     Program trace_, tile_bounds_, count_scatter_, insert_scatter_, count_brute_, insert_brute_,
         estimate_low_, composite_;

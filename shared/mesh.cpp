@@ -2,7 +2,10 @@
 #include "shared/mesh.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <set>
+#include <tuple>
 
 namespace ag {
 
@@ -66,6 +69,30 @@ int remove_degenerate_triangles(Mesh& mesh) {
     mesh.positions = std::move(positions);
     mesh.triangles = std::move(kept);
     return dropped;
+}
+
+int remove_duplicate_triangles(Mesh& mesh) {
+    // Corners rotated so the lexicographically smallest comes first: one key per orientation.
+    using Key = std::array<float, 9>;
+    auto less = [](const glm::vec3& a, const glm::vec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+    };
+    std::set<Key> seen;
+    std::vector<char> keep(mesh.triangles.size(), 1);
+    for (size_t i = 0; i < mesh.triangles.size(); ++i) {
+        const glm::uvec3 t = mesh.triangles[i];
+        const glm::vec3 c[3] = {mesh.positions[t.x], mesh.positions[t.y], mesh.positions[t.z]};
+        int first = 0;
+        for (int k = 1; k < 3; ++k)
+            if (less(c[k], c[first])) first = k;
+        Key key;
+        for (int k = 0; k < 3; ++k)
+            for (int d = 0; d < 3; ++d) key[size_t(3 * k + d)] = c[(first + k) % 3][d];
+        keep[i] = seen.insert(key).second ? 1 : 0;
+    }
+    const size_t before = mesh.triangles.size();
+    filter_triangles(mesh, [&](int i) { return keep[size_t(i)] != 0; });
+    return int(before - mesh.triangles.size());
 }
 
 void scale_mesh(Mesh& mesh, const glm::vec3& scale) {

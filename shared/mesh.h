@@ -66,6 +66,11 @@ bool is_degenerate_triangle(const Mesh& mesh, int triangle);
 // Drops degenerate triangles and unused vertices; returns how many triangles were dropped.
 int remove_degenerate_triangles(Mesh& mesh);
 
+// Drops triangles that repeat an earlier one: the same three corner positions in the same
+// orientation (any rotation of the corners). Renderers that add light per fragment would count
+// such a face twice, ray tracers once. Returns how many were dropped.
+int remove_duplicate_triangles(Mesh& mesh);
+
 // Bakes a uniform or per-axis scale into the positions (scene files may scale meshes).
 void scale_mesh(Mesh& mesh, const glm::vec3& scale);
 

@@ -232,13 +232,27 @@ Model load_obj(const std::string& path) {
 
 Model load_model(const std::string& path) {
     const std::string ext = lower_extension(path);
-    if (ext == ".obj") return load_obj(path);
-    if (ext == ".gltf" || ext == ".glb") return load_gltf(path);
     Model model;
-    ModelPart part;
-    part.name = part.material.name = "default";
-    part.mesh = load_mesh(path);
-    model.parts.push_back(std::move(part));
+    if (ext == ".obj") {
+        model = load_obj(path);
+    } else if (ext == ".gltf" || ext == ".glb") {
+        model = load_gltf(path);
+    } else {
+        ModelPart part;
+        part.name = part.material.name = "default";
+        part.mesh = load_mesh(path);
+        model.parts.push_back(std::move(part));
+    }
+    // A face given twice (McGuire's Cornell boxes give each block's front face again as its
+    // "bottom") would be lit twice by the GPU frame's additive light passes.
+    for (ModelPart& part : model.parts) {
+        const size_t faces = part.mesh.triangles.size();
+        const int dropped = remove_duplicate_triangles(part.mesh);
+        if (dropped > 0)
+            warn(path + ": part \"" + part.name + "\": dropped " + std::to_string(dropped) +
+                 " of " + std::to_string(faces) +
+                 " triangles that repeat another one (the same corners, the same side)");
+    }
     return model;
 }
 

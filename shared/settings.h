@@ -174,6 +174,9 @@ struct CausticSettings {
 struct DirectSettings {
     int area_light_samples = 16;  // point lights standing in for one quad light
     bool shadows = true;          // stencil shadow volumes (ch. 13)
+    // While nothing changes, each frame moves the quad and mesh lights' samples within their
+    // strata and the direct term averages this many frames (then it is kept); 1 = a fixed set.
+    int accumulate_frames = 64;
 };
 
 struct SpecularSettings {
@@ -351,6 +354,8 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"area_light_samples", s.direct.area_light_samples, 1, 4096,
                        "point lights per quad light"});
     v.field(Field<bool>{"shadows", s.direct.shadows, 0, 1, "stencil shadow volumes"});
+    v.field(Field<int>{"accumulate_frames", s.direct.accumulate_frames, 1, 65536,
+                       "frames of moved area-light samples the direct term averages"});
     v.end_section();
     v.section("specular", "cube-map reflection and refraction, Larsen ch. 13");
     v.field(Field<int>{"cube_map_size", s.specular.cube_map_size, 8, 4096, "cube map face size"});

@@ -23,3 +23,19 @@ add_test(NAME convergence.cornell_mcguire_pt
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(convergence.cornell_mcguire_pt PROPERTIES LABELS convergence
                      SKIP_RETURN_CODE 77 TIMEOUT 300)
+
+# Issue #14: an emissive mesh's direct light, its samples moved over frames, converges to pt's.
+add_test(NAME convergence.mesh_light_direct_pt
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/mesh_light_direct_test.sh
+                 $<TARGET_FILE:afterglow> ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.mesh_light_direct_pt PROPERTIES LABELS convergence
+                     SKIP_RETURN_CODE 77 TIMEOUT 120)
+
+# Issue #14: gpu_pm's photons bounce with the texel's albedo on textured surfaces.
+add_test(NAME convergence.gpu_pm_textured_pt
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/gpu_pm_textured_test.sh
+                 $<TARGET_FILE:afterglow> ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.gpu_pm_textured_pt PROPERTIES LABELS convergence
+                     SKIP_RETURN_CODE 77 TIMEOUT 120)

@@ -10,6 +10,7 @@
 #include "cpu/vpl_shading.h"
 #include "cpu/vpl_source.h"
 #include "shared/camera.h"
+#include "shared/texture.h"
 #include "test_scenes.h"
 
 namespace ag::cpu {
@@ -110,6 +111,40 @@ TEST(Vpl, PhotonVplsCarryTheReflectedFluxOfTheGroup) {
     std::vector<Vpl> none;
     group_vpls(scene, sim.maps(), 0, 3, 16, none);
     EXPECT_TRUE(none.empty());
+}
+
+// On a textured surface a photon VPL carries the albedo of the texel where the photon landed, not
+// the texture's mean: a box whose triangles alternate between a red and a green texel gives VPLs
+// that are purely red or purely green (the mean, or the white base albedo, would mix them).
+TEST(Vpl, PhotonVplsTakeTheTexelAlbedoWhereTheyLand) {
+    Scene scene = test::closed_box(1.0f, 10.0f, 16, 16);
+    auto texture = std::make_shared<Texture>();
+    texture->width = 2;
+    texture->height = 1;
+    texture->texels = {glm::vec3(0.8f, 0.0f, 0.0f), glm::vec3(0.0f, 0.8f, 0.0f)};
+    texture->mean = glm::vec3(0.4f, 0.4f, 0.0f);
+    Object& box = scene.objects[0];
+    box.material.albedo_map = texture;
+    box.mesh.texcoords.clear();
+    for (size_t t = 0; t < box.mesh.triangles.size(); ++t)  // a texel centre: no blending
+        box.mesh.texcoords.insert(box.mesh.texcoords.end(), 3,
+                                  glm::vec2(t % 2 == 0 ? 0.25f : 0.75f, 0.5f));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    std::vector<Vpl> vpls;
+    for (int g = 0; g < 16; ++g) group_vpls(scene, sim.maps(), 0, g, 16, vpls);
+    ASSERT_GT(vpls.size(), 100u);
+    size_t red = 0, green = 0;
+    for (const Vpl& v : vpls) {
+        EXPECT_EQ(v.power.b, 0.0f);
+        const float most = std::max(v.power.r, v.power.g);
+        EXPECT_LE(std::min(v.power.r, v.power.g), 1e-5f * most) << v.power.r << " " << v.power.g;
+        red += v.power.r == most ? 1 : 0;
+        green += v.power.g == most ? 1 : 0;
+    }
+    EXPECT_GT(red, vpls.size() / 4);
+    EXPECT_GT(green, vpls.size() / 4);
 }
 
 // In a closed box of albedo ρ every walk stores `bounces` VPLs, the k-th carrying Φ ρ^k / paths.

@@ -112,6 +112,59 @@ TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     EXPECT_EQ(terms[size_t(FrameTerm::caustics)], 0.0);  // none passed to render()
 }
 
+// A quad light's samples move within their strata from frame to frame while nothing changes; the
+// direct term is their running mean, kept once accumulate_frames are in, and restarted (frame 0's
+// samples again) by any edit.
+TEST_F(FrameTest, AreaLightSamplesMoveOverFramesAndRestartAfterAnEdit) {
+    Scene scene = occluder_scene();
+    scene.lights[0].type = LightType::quad;
+    scene.lights[0].corners = {glm::vec3(-1, 5, -1), glm::vec3(1, 5, -1), glm::vec3(1, 5, 1),
+                               glm::vec3(-1, 5, 1)};  // facing down
+    scene.lights[0].radiance = glm::vec3(10.0f);
+    scene.settings.direct.area_light_samples = 4;
+    scene.settings.direct.accumulate_frames = 3;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
+    auto direct = [&] {
+        renderer.render(iim.id());
+        return renderer.read_back().aov[size_t(FrameTerm::direct)].pixels;
+    };
+    const std::vector<float> first = direct();
+    const std::vector<float> second = direct();
+    size_t changed = 0;  // the penumbra's pixels: 2×2 samples moved
+    for (size_t i = 0; i < first.size(); ++i) changed += first[i] != second[i] ? 1 : 0;
+    EXPECT_GT(changed, first.size() / 100);
+    const std::vector<float> third = direct();
+    EXPECT_NE(third, second);
+    EXPECT_EQ(direct(), third) << "3 frames are in: the mean is kept";
+    set_camera(scene, scene.camera);  // an edit, even one that moves nothing, restarts the mean
+    EXPECT_EQ(direct(), first);
+    scene.settings.direct.accumulate_frames = 1;  // a fixed set: frame 0's every time
+    EXPECT_EQ(direct(), first);
+    EXPECT_EQ(direct(), first);
+}
+
+// Point lights give every frame the same samples: the first frame's direct term is kept (no light
+// pass drawn) until an edit, and equals what drawing it again gives.
+TEST_F(FrameTest, PointLightDirectTermIsKeptWhileNothingChanges) {
+    Scene scene = occluder_scene();
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, scene.camera.width, scene.camera.height);
+    auto direct = [&] {
+        renderer.render(iim.id());
+        return renderer.read_back().aov[size_t(FrameTerm::direct)].pixels;
+    };
+    const std::vector<float> first = direct();
+    EXPECT_EQ(direct(), first);
+    EXPECT_EQ(direct(), first);
+    translate_object(scene, 1, glm::vec3(2.0f, 0.0f, 0.0f));  // the box moves: its shadow too
+    const std::vector<float> moved = direct();
+    EXPECT_NE(moved, first);
+    EXPECT_EQ(direct(), moved);
+}
+
 // Settings changed after loading (flags, the viewer) may ask for more light samples than the frame
 // holds: an InputError naming the scene, never a silently cut light list.
 TEST_F(FrameTest, TooManyLightSamplesAreAnErrorNotACut) {

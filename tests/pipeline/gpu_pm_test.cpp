@@ -3,6 +3,7 @@
 // read-back per frame, restart after an edit.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -16,6 +17,7 @@
 #include "shared/pipeline/pipeline.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
+#include "shared/texture.h"
 
 namespace ag {
 
@@ -119,6 +121,50 @@ TEST_F(GpuPmTest, StoredPowerIsEmittedPowerTimesTheBounce) {
     glm::dvec3 kwast_sum(0.0);
     for (const auto& p : kwast.read_photons()) kwast_sum += glm::dvec3(p.power);
     for (int c = 0; c < 3; ++c) EXPECT_NEAR(kwast_sum[c] / sum[c], 100.0 / M_PI, 1e-3);
+}
+
+// A photon leaving a textured surface carries the texel's albedo where it landed: a floor whose two
+// triangles read a red and a green texel sends on purely red or purely green photons (its mean,
+// or the white base albedo, would send yellow or white ones); grey walls send the light's colour.
+TEST_F(GpuPmTest, PhotonsBounceWithTheTexelAlbedo) {
+    Scene scene = cornell();
+    for (Object& o : scene.objects) o.material.albedo = glm::vec3(0.5f);
+    Object& floor = scene.objects[size_t(scene.find_object("floor"))];
+    auto texture = std::make_shared<Texture>();
+    texture->width = 2;
+    texture->height = 1;
+    texture->texels = {glm::vec3(0.8f, 0.0f, 0.0f), glm::vec3(0.0f, 0.8f, 0.0f)};
+    texture->mean = glm::vec3(0.4f, 0.4f, 0.0f);
+    floor.material.albedo = glm::vec3(1.0f);
+    floor.material.albedo_map = texture;
+    floor.mesh.texcoords.clear();
+    for (size_t t = 0; t < floor.mesh.triangles.size(); ++t)  // a texel centre: no blending
+        floor.mesh.texcoords.insert(floor.mesh.texcoords.end(), 3,
+                                    glm::vec2(t % 2 == 0 ? 0.25f : 0.75f, 0.5f));
+    scene.settings.gpu_pm.paths = 20000;
+    scene.settings.gpu_pm.frames = 1;
+    gpu::SceneMeshes meshes(scene);
+    gpu::GBuffer g(scene, meshes, 16, 16);
+    gpu::GpuPhotonMapper m(scene, g);
+    m.trace();
+    size_t red = 0, green = 0, grey = 0, other = 0;
+    for (const auto& p : m.read_photons()) {
+        const glm::vec3 c =
+            glm::vec3(p.power) / scene.lights[0].power();  // the light's colour taken out
+        const float most = std::max({c.r, c.g, c.b});
+        if (std::abs(c.r - c.g) <= 1e-4f * most && std::abs(c.g - c.b) <= 1e-4f * most)
+            ++grey;
+        else if (c.g <= 1e-3f * c.r && c.b == 0.0f)
+            ++red;
+        else if (c.r <= 1e-3f * c.g && c.b == 0.0f)
+            ++green;
+        else
+            ++other;
+    }
+    EXPECT_EQ(other, 0u);
+    EXPECT_GT(red, 200u);
+    EXPECT_GT(green, 200u);
+    EXPECT_GT(grey, red);
 }
 
 TEST_F(GpuPmTest, TileListsEqualTheBruteForceBinning) {

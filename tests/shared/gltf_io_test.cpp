@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 
 #include "shared/image.h"
 #include "shared/input_error.h"
@@ -332,6 +333,64 @@ TEST_F(GltfTest, EachUnsupportedFeatureIsNamedInAWarning) {
           "point and line primitives", "extension EXT_fancy", "orthographic cameras", "animations"})
         EXPECT_NE(warnings.find(what), std::string::npos) << what << " in:\n" << warnings;
     EXPECT_NE(warnings.find("m.gltf"), std::string::npos);
+}
+
+// The rest of the warnings (the test above names the first eight): each remaining unsupported
+// feature of a file that still loads is named, once, beside the file's name.
+TEST_F(GltfTest, EveryOtherUnsupportedFeatureIsNamedInAWarning) {
+    GltfDoc doc;
+    Image image(1, 1);
+    image.set_rgb(0, 0, glm::vec3(0.5f));
+    write_image(image, path("grey.exr"));
+    doc.j["images"] = {{{"uri", "grey.exr"}}};
+    doc.j["textures"] = {{{"source", 0}}, Json::object()};  // texture 1 has no image source
+    // A diffuse material with every texture but the base colour, partial transmission with a
+    // texture, some metal and an unknown material extension.
+    const int diffuse =
+        doc.material({{"pbrMetallicRoughness",
+                       {{"metallicFactor", 0.5}, {"metallicRoughnessTexture", {{"index", 0}}}}},
+                      {"occlusionTexture", {{"index", 0}}},
+                      {"emissiveTexture", {{"index", 0}}},
+                      {"extensions",
+                       {{"KHR_materials_transmission",
+                         {{"transmissionFactor", 0.3}, {"transmissionTexture", {{"index", 0}}}}},
+                        {"EXT_material_other", Json::object()}}}});
+    const int glass = doc.material(
+        {{"pbrMetallicRoughness", {{"metallicFactor", 0}, {"baseColorTexture", {{"index", 0}}}}},
+         {"extensions", {{"KHR_materials_transmission", {{"transmissionFactor", 1.0}}}}}});
+    const int sourceless = doc.material(
+        {{"pbrMetallicRoughness", {{"metallicFactor", 0}, {"baseColorTexture", {{"index", 1}}}}}});
+    doc.j["extensionsUsed"] = {"KHR_materials_transmission", "KHR_lights_punctual"};
+    for (const int mat : {diffuse, glass, sourceless}) doc.node({{"mesh", doc.mesh(mat)}});
+    Json& prim = doc.j["meshes"][0]["primitives"][0];
+    prim["attributes"]["TEXCOORD_1"] = 0;  // no texture reads it
+    prim["attributes"]["COLOR_0"] = 0;
+    prim["targets"] = {{{"POSITION", 0}}};
+    doc.j["skins"] = {{{"joints", {0}}}};
+    doc.j["scenes"].push_back({{"nodes", Json::array()}});
+    doc.j["extensions"] = {{"KHR_lights_punctual",
+                            {{"lights", {{{"type", "point"}, {"intensity", 1}, {"range", 5}}}}}}};
+    doc.node({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    std::string warnings;
+    const Model m = load(doc, &warnings);
+    EXPECT_EQ(m.parts.size(), 3u);
+    EXPECT_EQ(m.parts[1].material.type, MaterialType::glass);
+    EXPECT_FALSE(m.parts[1].material.albedo_map);
+    EXPECT_FALSE(m.parts[2].material.albedo_map);
+    for (const char* what :
+         {"metallicRoughnessTexture", "occlusionTexture", "emissiveTexture", "transmissionTexture",
+          "material extension EXT_material_other", "partial transmission",
+          "metallic surfaces that are not mirrors", "baseColorTexture on glass or mirrors",
+          "textures without an image source", "TEXCOORD_1 without a texture", "COLOR_0 attribute",
+          "morph targets", "skins", "scenes other than the default", "light range"})
+        EXPECT_NE(warnings.find(what), std::string::npos) << what << " in:\n" << warnings;
+    // Each named once, every line naming the file.
+    EXPECT_EQ(warnings.find("skins"), warnings.rfind("skins")) << warnings;
+    std::istringstream lines(warnings);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty()) continue;
+        EXPECT_NE(line.find("m.gltf"), std::string::npos) << line;
+    }
 }
 
 TEST_F(GltfTest, BadInputIsAnErrorNamingTheFile) {

@@ -90,6 +90,24 @@ TEST_F(ModelIoTest, MissingMtlWarnsAndUsesTheDefaultMaterial) {
     EXPECT_EQ(model.parts[0].mesh.triangles.size(), 6u);
 }
 
+// A face given twice (rotated corners, or other vertices at the same places) is dropped with a
+// warning: the frame's additive light passes would light it twice (McGuire's Cornell boxes give
+// each block's front face again as its bottom). The same face turned over is another face.
+TEST_F(ModelIoTest, RepeatedFacesAreDroppedWithAWarning) {
+    const std::string obj = write("twice.obj",
+                                  "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 0\nv 1 0 0\nv 0 1 0\n"
+                                  "f 1 2 3\nf 2 3 1\nf 4 5 6\nf 1 3 2\n");
+    ::testing::internal::CaptureStderr();
+    const Model model = load_model(obj);
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    ASSERT_EQ(model.parts.size(), 1u);
+    ASSERT_EQ(model.parts[0].mesh.triangles.size(), 2u);
+    EXPECT_EQ(model.parts[0].mesh.triangles[0], glm::uvec3(0, 1, 2));
+    EXPECT_EQ(model.parts[0].mesh.triangles[1], glm::uvec3(0, 2, 1));
+    EXPECT_NE(err.find("twice.obj"), std::string::npos) << err;
+    EXPECT_NE(err.find("dropped 2 of 4 triangles that repeat"), std::string::npos) << err;
+}
+
 TEST_F(ModelIoTest, BadIndexIsAnErrorNamingTheFile) {
     const std::string obj = write("bad.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n");
     try {

@@ -57,6 +57,8 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
     }
     gpu::SceneMeshes meshes(scene);
     gpu::GBuffer g_buffer(scene, meshes, width, height);
+    // Every frame draws its direct light (no running mean that stops drawing once it is full).
+    scene.settings.direct.accumulate_frames = 1;
     gpu::FrameRenderer renderer(scene, meshes, width, height);
     std::printf(
         "%s, %dx%d, %d frames per cell (mean and sigma of the frame time; G-buffer, "
