@@ -1,20 +1,30 @@
--- scenes/compare.json: the edits every indirect method is compared under (afterglow
--- compare-methods, docs/compare_methods.md). Frames 10-40 the cube slides towards the red wall,
--- 50-70 the light moves 150 mm towards the red wall, at 80 the red wall turns blue; then the scene
--- is still (run to frame 150). Lengths in mm. The state follows from `frame` alone, and each item
--- is edited only in the frames it changes, so a method sees exactly these edits.
+-- The edits every indirect method is compared under (afterglow compare-methods,
+-- docs/compare_methods.md), for scenes/compare.json and scenes/conference.json: frames 10-40 an
+-- object slides, 50-70 a light moves, at 80 a surface changes colour; then the scene is still
+-- (run to frame 150). The state follows from `frame` alone, and each item is edited only in the
+-- frames it changes, so every method sees exactly these edits.
 
 local slide = {10, 40}
 local light_move = {50, 70}
 local recolour = 80
 
-local cube_offset = {254.5, 0, -59}  -- ends 12 mm short of the red wall, clear of the tall block
-local light_offset = {150, 0, 0}
+-- Per scene (the first whose object exists): what slides and by how much, which light moves and
+-- by how much, what turns blue. Offsets in the scene's unit.
+local setups = {
+    -- compare.json (mm): the cube ends 12 mm short of the red wall, clear of the tall block; the
+    -- light moves 150 mm towards the red wall, which then turns blue.
+    {object = "cube", offset = {254.5, 0, -59}, light = "ceiling", light_offset = {150, 0, 0},
+     recolour = "left_wall"},
+    -- conference.json (m): the box slides 1.4 m along the table towards the camera, the second
+    -- lamp moves 1 m along the table, the box turns blue.
+    {object = "box", offset = {1.4, 0, 0}, light = "lamp_2", light_offset = {1.0, 0, 0},
+     recolour = "box"},
+}
 local blue = {0.1, 0.15, 0.6}
 
-local cube, lamp, wall
-local cube_start, lamp_start, red = {}, {}, {}
-local cube_s, lamp_s, recoloured = 0, 0, false
+local setup, object, lamp, surface
+local object_start, lamp_start, original = {}, {}, {}
+local object_s, lamp_s, recoloured = 0, 0, false
 
 -- 0 before the span, 1 after it, eased in and out between.
 local function progress(span, frame)
@@ -22,32 +32,41 @@ local function progress(span, frame)
     return t * t * (3 - 2 * t)
 end
 
+local function place(item, start, offset, s)
+    item:set_position(start[1] + s * offset[1], start[2] + s * offset[2], start[3] + s * offset[3])
+end
+
 function on_start(scene)
-    cube = scene:object("cube")
-    lamp = scene:light("ceiling")
-    wall = scene:object("left_wall")
-    cube_start = {cube:position()}
+    for _, candidate in ipairs(setups) do
+        local ok, found = pcall(scene.object, scene, candidate.object)
+        if ok then
+            setup, object = candidate, found
+            break
+        end
+    end
+    if not setup then error("compare_edits.lua: the scene has neither a 'cube' nor a 'box'") end
+    lamp = scene:light(setup.light)
+    surface = scene:object(setup.recolour)
+    object_start = {object:position()}
     lamp_start = {lamp:position()}
-    red = {wall:albedo()}
+    original = {surface:albedo()}
 end
 
 function on_frame(scene, frame, time)
     local s = progress(slide, frame)
-    if s ~= cube_s then
-        cube:set_position(cube_start[1] + s * cube_offset[1], cube_start[2] + s * cube_offset[2],
-                          cube_start[3] + s * cube_offset[3])
-        cube_s = s
+    if s ~= object_s then
+        place(object, object_start, setup.offset, s)
+        object_s = s
     end
     local l = progress(light_move, frame)
     if l ~= lamp_s then
-        lamp:set_position(lamp_start[1] + l * light_offset[1], lamp_start[2] + l * light_offset[2],
-                          lamp_start[3] + l * light_offset[3])
+        place(lamp, lamp_start, setup.light_offset, l)
         lamp_s = l
     end
     local wanted = frame >= recolour
     if wanted ~= recoloured then
-        local c = wanted and blue or red
-        wall:set_albedo(c[1], c[2], c[3])
+        local c = wanted and blue or original
+        surface:set_albedo(c[1], c[2], c[3])
         recoloured = wanted
     end
 end

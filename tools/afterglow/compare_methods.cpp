@@ -35,7 +35,7 @@ struct Variant {
     std::string name;
     IndirectMethodKind method = IndirectMethodKind::iim;
     PipelineMode mode = PipelineMode::selective;
-    std::string settings;       // JSON
+    std::string settings;        // JSON
     bool single_bounce = false;  // also scored against the 1-bounce references
     std::string what;
 };
@@ -43,8 +43,8 @@ struct Variant {
 const std::vector<Variant> kVariants = {
     {"iim-gl", IndirectMethodKind::iim, PipelineMode::selective, R"({"gather":{"backend":"gl"}})",
      false, "Larsen: selective photons, AIM, IIM by the GL hemi-plane gather"},
-    {"iim-cpu", IndirectMethodKind::iim, PipelineMode::selective,
-     R"({"gather":{"backend":"cpu"}})", false, "the same, IIM gathered with Embree rays"},
+    {"iim-cpu", IndirectMethodKind::iim, PipelineMode::selective, R"({"gather":{"backend":"cpu"}})",
+     false, "the same, IIM gathered with Embree rays"},
     {"iim-full-budget", IndirectMethodKind::iim, PipelineMode::full_budget,
      R"({"gather":{"backend":"gl"}})", false,
      "everything recomputed round robin within the same frame budget (--baseline full-budget)"},
@@ -66,14 +66,13 @@ const std::vector<Variant> kVariants = {
 // A stretch of frames from one edit (or the start) to the next: its frames are scored against
 // the reference of the state at its end.
 struct Segment {
-    int begin = 0, end = 0;      // frames [begin, end)
-    int edit_last = -1;          // the last edited frame of the edit that opens it (-1: none)
+    int begin = 0, end = 0;         // frames [begin, end)
+    int edit_last = -1;             // the last edited frame of the edit that opens it (-1: none)
     Image reference, reference_1b;  // indirect term of the state at `end` (all bounces, one)
 };
 
 // The script run ahead on a copy: edit bursts (runs of consecutive edited frames) open segments.
-std::vector<Segment> find_segments(const Scene& scene, const std::string& script_path,
-                                   int frames) {
+std::vector<Segment> find_segments(const Scene& scene, const std::string& script_path, int frames) {
     std::vector<bool> edited(size_t(frames), false);
     if (!script_path.empty()) {
         Scene ahead = scene;
@@ -168,14 +167,16 @@ MethodResult run_variant(const Variant& v, const Scene& base, const std::string&
         Progress progress("compare-methods " + v.name, frames, !quiet);
         r.run = run_convergence(
             scene, script_path, v.mode, frames, width, height, "indirect",
-            [&](int f) -> const Image& { return segments[size_t(segment_of[size_t(f)])].reference; },
+            [&](int f) -> const Image& {
+                return segments[size_t(segment_of[size_t(f)])].reference;
+            },
             threads, prime, [&](int done) { progress.update(done); },
             [&](int f, const Image& image) {
                 rss_peak = std::max(rss_peak, resident_bytes());
                 if (f >= flicker_from - 1) flicker.add(image);
                 if (v.single_bounce) {
-                    const ImageMetrics m = compare_images(
-                        image, segments[size_t(segment_of[size_t(f)])].reference_1b);
+                    const ImageMetrics m =
+                        compare_images(image, segments[size_t(segment_of[size_t(f)])].reference_1b);
                     r.relmse_1b.push_back(m.rel_mse), r.ssim_1b.push_back(m.ssim);
                 }
             });
@@ -294,8 +295,10 @@ int run_compare_methods(const Args& args) {
             char* end = nullptr;
             const long n = std::strtol(item.c_str(), &end, 10);
             if (item.empty() || *end != '\0' || n < 1 || n > 1000000)
-                throw CliError("afterglow compare-methods: --pt-spp: expected positive integers, "
-                               "got '" + item + "'");
+                throw CliError(
+                    "afterglow compare-methods: --pt-spp: expected positive integers, "
+                    "got '" +
+                    item + "'");
             pt_spp.push_back(int(n));
         }
     }
@@ -351,8 +354,8 @@ int run_compare_methods(const Args& args) {
             const cpu::ReferenceResult image = cpu::render_reference(final_state, rs, pool);
             const double seconds =
                 std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-            const ImageMetrics m = compare_images(
-                image.components[size_t(FrameTerm::indirect)], segments.back().reference);
+            const ImageMetrics m = compare_images(image.components[size_t(FrameTerm::indirect)],
+                                                  segments.back().reference);
             pt.push_back({spp, seconds, m.rel_mse, m.ssim});
         }
     }
@@ -369,8 +372,10 @@ int run_compare_methods(const Args& args) {
             frames_csv << r.name << ',' << s << ',' << x.frame << ',' << x.wall_s << ','
                        << x.frame_ms << ',' << (x.edited ? 1 : 0) << ',' << x.relmse << ','
                        << x.ssim << ',';
-            if (r.single_bounce) frames_csv << r.relmse_1b[f] << ',' << r.ssim_1b[f];
-            else frames_csv << ',';
+            if (r.single_bounce)
+                frames_csv << r.relmse_1b[f] << ',' << r.ssim_1b[f];
+            else
+                frames_csv << ',';
             frames_csv << ",\n";
         }
     }
@@ -403,20 +408,19 @@ int run_compare_methods(const Args& args) {
         const SegmentResult& fin = r.segments.back();
         table_csv << r.name << ",," << fin.settle.settled << ',' << fin.ssim << ','
                   << (r.single_bounce ? fixed(r.settled_1b, 6) : "");
-        md << "| " << r.name << " | " << fixed(fin.settle.settled, 4) << " | "
-           << fixed(fin.ssim, 3) << " | " << (r.single_bounce ? fixed(r.settled_1b, 4) : "")
-           << " |";
+        md << "| " << r.name << " | " << fixed(fin.settle.settled, 4) << " | " << fixed(fin.ssim, 3)
+           << " | " << (r.single_bounce ? fixed(r.settled_1b, 4) : "") << " |";
         for (size_t s = 1; s < segments.size(); ++s) {
             const SettleAnalysis& a = r.segments[s].settle;
             table_csv << ',' << (a.settled_ok() ? fixed(a.seconds, 4) : "") << ','
                       << (a.settled_ok() ? std::to_string(a.frames) : "");
-            md << ' ' << (a.settled_ok() ? fixed(a.seconds, 2) + " (" + std::to_string(a.frames) +
-                                               " fr)"
-                                         : std::string("not settled"))
+            md << ' '
+               << (a.settled_ok() ? fixed(a.seconds, 2) + " (" + std::to_string(a.frames) + " fr)"
+                                  : std::string("not settled"))
                << " |";
         }
-        table_csv << ',' << r.ms_mean << ',' << r.ms_p95 << ',' << r.flicker << ','
-                  << r.memory_mib << "\n";
+        table_csv << ',' << r.ms_mean << ',' << r.ms_p95 << ',' << r.flicker << ',' << r.memory_mib
+                  << "\n";
         md << ' ' << fixed(r.ms_mean, 1) << " | " << fixed(r.ms_p95, 1) << " | "
            << fixed(r.flicker, 5) << " | " << fixed(r.memory_mib, 1) << " |\n";
     }
@@ -432,14 +436,15 @@ int run_compare_methods(const Args& args) {
         md << ' ' << fixed(1e3 * p.seconds, 1) << " | | | |\n";
     }
     std::ostringstream notes;
-    notes << "\n" << scene_path << (script_path.empty() ? "" : " with " + script_path) << ", "
-          << width << "x" << height << ", " << frames << " frames"
+    notes << "\n"
+          << scene_path << (script_path.empty() ? "" : " with " + script_path) << ", " << width
+          << "x" << height << ", " << frames << " frames"
           << (prime ? ", each run starting from the converged state of frame 0" : "")
           << "; GL: " << renderer << ". Indirect term against " << request.spp
           << "-spp pt references of the state each edit leads to (frames ";
     for (size_t s = 0; s < segments.size(); ++s)
-        notes << (s ? ", " : "") << segments[s].begin << "–" << segments[s].end - 1 << " → state at "
-              << segments[s].end;
+        notes << (s ? ", " : "") << segments[s].begin << "–" << segments[s].end - 1
+              << " → state at " << segments[s].end;
     notes << "). Settled: mean of the last tenth (≥ 3) of the final segment's frames; settle s: "
              "wall time from an edit's last frame until the error stays within 10% of that "
              "segment's own settled value; flicker: mean |frame-to-frame change| over the mean "

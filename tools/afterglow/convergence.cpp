@@ -2,6 +2,8 @@
 // with the error after every frame, and the settle rule.
 #include "tools/afterglow/convergence.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -11,8 +13,6 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
-
-#include <unistd.h>
 
 #include "cpu/reference/reference.h"
 #include "shared/frame_terms.h"
@@ -148,9 +148,9 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
                                int frames, int width, int height, const std::string& component,
                                const Image& reference, int threads, bool prime,
                                const std::function<void(int)>& on_frame) {
-    return run_convergence(
-        std::move(scene), script_path, mode, frames, width, height, component,
-        [&](int) -> const Image& { return reference; }, threads, prime, on_frame, {});
+    return run_convergence(std::move(scene), script_path, mode, frames, width, height, component,
+                           [&](int) -> const Image& { return reference; }, threads, prime, on_frame,
+                           {});
 }
 
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,

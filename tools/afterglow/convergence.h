@@ -29,9 +29,9 @@ struct ReferenceRequest {
     std::string log_prefix = "afterglow converge";  // for the messages on stderr
 };
 
-// The pm (or pt) reference of `scene`'s state after `script_path` (may be empty) has run for `frames`
-// frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with every
-// component beside it) unless already there; HASH covers everything the image depends on.
+// The pm (or pt) reference of `scene`'s state after `script_path` (may be empty) has run for
+// `frames` frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with
+// every component beside it) unless already there; HASH covers everything the image depends on.
 // Returns the full image's path.
 std::string cached_reference(const Scene& scene, const std::string& script_path, int frames,
                              const ReferenceRequest& request);
