@@ -39,3 +39,11 @@ add_test(NAME convergence.gpu_pm_textured_pt
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(convergence.gpu_pm_textured_pt PROPERTIES LABELS convergence
                      SKIP_RETURN_CODE 77 TIMEOUT 120)
+# Issue #20: every indirect method through the same edits at 48x48, each held to its settled error
+# and to the frames it takes to settle after the last edit (tests/convergence/check_compare_methods.py).
+add_test(NAME convergence.compare_methods
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/compare_methods_test.sh
+                 $<TARGET_FILE:afterglow> ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.compare_methods PROPERTIES LABELS convergence SKIP_RETURN_CODE 77
+                     TIMEOUT 300)

@@ -74,20 +74,6 @@ struct SettleResult {
     double after_last_edit_s = 0.0;  // wall time from the last edit's frame to the run's end
 };
 
-double mean(const std::vector<double>& v) {
-    if (v.empty()) return 0.0;
-    double s = 0.0;
-    for (double x : v) s += x;
-    return s / double(v.size());
-}
-
-double p95(std::vector<double> v) {
-    if (v.empty()) return 0.0;
-    std::sort(v.begin(), v.end());
-    const size_t i = size_t(std::ceil(0.95 * double(v.size()))) - 1;
-    return v[std::min(i, v.size() - 1)];
-}
-
 // Wall time of frame f in ms (its share of the run's wall time).
 double frame_wall_ms(const ConvergenceRun& run, size_t f) {
     return 1e3 * (run.frames[f].wall_s - (f ? run.frames[f - 1].wall_s : 0.0));

@@ -17,18 +17,11 @@
 #include "shared/pipeline/frame_loop.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
+#include "tools/afterglow/convergence.h"
 
 namespace ag::cli {
 
 namespace {
-
-// Resident set size in bytes (/proc/self/statm: size resident shared ...; in pages).
-double resident_bytes() {
-    std::ifstream statm("/proc/self/statm");
-    long long size = 0, resident = 0;
-    statm >> size >> resident;
-    return double(resident) * double(sysconf(_SC_PAGESIZE));
-}
 
 struct Sample {
     int frame = 0;

@@ -2,11 +2,14 @@
 // with the error after every frame, and the settle rule.
 #include "tools/afterglow/convergence.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <optional>
 #include <sstream>
@@ -72,7 +75,8 @@ std::string cached_reference(const Scene& scene, const std::string& script_path,
         run_script_ahead(ahead, final_state, frames);
     }
     cpu::ReferenceSettings rs;
-    rs.method = cpu::ReferenceMethod::photon_mapping;
+    rs.method = request.path_traced ? cpu::ReferenceMethod::path_tracing
+                                    : cpu::ReferenceMethod::photon_mapping;
     rs.spp = request.spp;
     rs.photons = request.photons;
     rs.indirect_bounces = request.indirect_bounces;
@@ -84,9 +88,12 @@ std::string cached_reference(const Scene& scene, const std::string& script_path,
     std::filesystem::create_directories(request.cache);
     const std::string reference_path = request.cache + "/" + request.name + "-" + hex + ".exr";
     if (!std::filesystem::exists(component_path(reference_path, "indirect"))) {
-        std::cerr << request.log_prefix << ": rendering the pm reference of the final state ("
-                  << rs.spp << " spp, " << rs.photons << " photons) into " << reference_path
-                  << "\n";
+        std::cerr << request.log_prefix << ": rendering the "
+                  << cpu::kReferenceMethodNames[size_t(rs.method)] << " reference of the state ("
+                  << rs.spp << " spp";
+        if (!request.path_traced) std::cerr << ", " << rs.photons << " photons";
+        if (rs.indirect_bounces >= 0) std::cerr << ", " << rs.indirect_bounces << " bounce(s)";
+        std::cerr << ") into " << reference_path << "\n";
         ThreadPool pool(request.threads);
         const cpu::ReferenceResult ref = cpu::render_reference(final_state, rs, pool);
         for (int c = 0; c < kFrameTermCount; ++c)
@@ -141,6 +148,16 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
                                int frames, int width, int height, const std::string& component,
                                const Image& reference, int threads, bool prime,
                                const std::function<void(int)>& on_frame) {
+    return run_convergence(std::move(scene), script_path, mode, frames, width, height, component,
+                           [&](int) -> const Image& { return reference; }, threads, prime, on_frame,
+                           {});
+}
+
+ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
+                               int frames, int width, int height, const std::string& component,
+                               const ReferenceAt& reference_at, int threads, bool prime,
+                               const std::function<void(int)>& on_frame,
+                               const std::function<void(int, const Image&)>& on_image) {
     scene.camera.width = width;
     scene.camera.height = height;
     const std::optional<FrameTerm> term =
@@ -167,7 +184,7 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         // Metrics are taken outside the timed part.
         const gpu::FrameImages images = pipeline.images();
         const Image& test = term ? images.aov[size_t(*term)] : images.frame;
-        const ImageMetrics m = compare_images(test, reference);
+        const ImageMetrics m = compare_images(test, reference_at(f));
         FrameRecord r;
         r.frame = f;
         r.wall_s = wall;
@@ -180,11 +197,33 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.iim_texels = st.iim_texels_gathered;
         r.iim_pending = st.iim_texels_pending;
         run.frames.push_back(r);
+        if (on_image) on_image(f, test);
         if (on_frame) on_frame(f + 1);
     }
     run.wall_s = wall;
     run.settle = analyse_settle(run.frames);
     return run;
+}
+
+double resident_bytes() {
+    std::ifstream statm("/proc/self/statm");  // size resident shared ..., in pages
+    long long size = 0, resident = 0;
+    statm >> size >> resident;
+    return double(resident) * double(sysconf(_SC_PAGESIZE));
+}
+
+double mean(const std::vector<double>& v) {
+    if (v.empty()) return 0.0;
+    double s = 0.0;
+    for (double x : v) s += x;
+    return s / double(v.size());
+}
+
+double p95(std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    std::sort(v.begin(), v.end());
+    const size_t i = size_t(std::ceil(0.95 * double(v.size()))) - 1;
+    return v[std::min(i, v.size() - 1)];
 }
 
 double converged_error(const Scene& scene, const std::string& script_path, int frames, int width,

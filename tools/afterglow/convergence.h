@@ -25,12 +25,13 @@ struct ReferenceRequest {
     int spp = 64, photons = 400000;
     int threads = 0;            // worker threads of the reference renderer
     int indirect_bounces = -1;  // the reference's indirect term: this many bounces (< 0 = all)
+    bool path_traced = false;   // the pt reference instead of pm (`photons` is then unused)
     std::string log_prefix = "afterglow converge";  // for the messages on stderr
 };
 
-// The pm reference of `scene`'s state after `script_path` (may be empty) has run for `frames`
-// frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with every
-// component beside it) unless already there; HASH covers everything the image depends on.
+// The pm (or pt) reference of `scene`'s state after `script_path` (may be empty) has run for
+// `frames` frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with
+// every component beside it) unless already there; HASH covers everything the image depends on.
 // Returns the full image's path.
 std::string cached_reference(const Scene& scene, const std::string& script_path, int frames,
                              const ReferenceRequest& request);
@@ -90,6 +91,23 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
                                int frames, int width, int height, const std::string& component,
                                const Image& reference, int threads, bool prime,
                                const std::function<void(int)>& on_frame = {});
+
+// The same with a reference per frame (`reference_at(frame)`: the image of the state that frame
+// converges to) and `on_image(frame, image)`, called with each frame's compared image outside
+// the timed part (for further metrics: other references, flicker, memory).
+using ReferenceAt = std::function<const Image&(int frame)>;
+ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
+                               int frames, int width, int height, const std::string& component,
+                               const ReferenceAt& reference_at, int threads, bool prime,
+                               const std::function<void(int)>& on_frame,
+                               const std::function<void(int, const Image&)>& on_image);
+
+// Resident set size of this process in bytes (/proc/self/statm).
+double resident_bytes();
+
+// Mean and 95th percentile (0 for none).
+double mean(const std::vector<double>& v);
+double p95(std::vector<double> v);
 
 // The CSV of a run as `afterglow converge` writes it (header and one row a frame).
 std::string convergence_csv(const ConvergenceRun& run);

@@ -22,9 +22,11 @@ namespace {
 void print_usage(std::ostream& out) {
     out << "usage: afterglow COMMAND [options]\n\n"
            "Progressive global illumination in dynamic scenes (Larsen 2004).\n\ncommands:\n";
+    size_t width = 10;
+    for (const auto& s : ag::cli::subcommands()) width = std::max(width, s.command->name.size());
     for (const auto& s : ag::cli::subcommands()) {
         std::string name = s.command->name;
-        name.resize(10, ' ');
+        name.resize(width, ' ');
         const std::string& summary = s.command->summary;  // first sentence only
         out << "  " << name << " " << summary.substr(0, summary.find(". ")) << "\n";
     }
