@@ -393,6 +393,49 @@ TEST_F(GltfTest, EveryOtherUnsupportedFeatureIsNamedInAWarning) {
     }
 }
 
+// The warnings left: degenerate triangles dropped (with the count), an unknown light type, and
+// what tinygltf itself warns about, passed on line by line with the file's name.
+TEST_F(GltfTest, DegenerateTrianglesUnknownLightsAndTinygltfWarnings) {
+    GltfDoc doc;
+    // A second index list over the same positions whose second triangle repeats a vertex.
+    const uint16_t idx[6] = {0, 1, 2, 0, 0, 3};
+    const size_t offset = doc.bin.size();
+    doc.bin.resize(offset + sizeof idx);
+    std::memcpy(doc.bin.data() + offset, idx, sizeof idx);
+    doc.j["bufferViews"].push_back(
+        {{"buffer", 0}, {"byteOffset", offset}, {"byteLength", sizeof idx}});
+    doc.j["accessors"].push_back(
+        {{"bufferView", 2}, {"componentType", 5123}, {"count", 6}, {"type", "SCALAR"}});
+    doc.j["meshes"].push_back(
+        {{"name", "pinched"},
+         {"primitives", {{{"attributes", {{"POSITION", 0}}}, {"indices", 2}}}}});
+    doc.node({{"mesh", 0}});
+    doc.j["extensionsUsed"] = {"KHR_lights_punctual"};
+    doc.j["extensions"] = {
+        {"KHR_lights_punctual", {{"lights", {{{"type", "area"}, {"intensity", 1}}}}}}};
+    doc.node({{"extensions", {{"KHR_lights_punctual", {{"light", 0}}}}}});
+    doc.j["images"] = {{{"uri", "missing.png"}}};  // tinygltf warns that it cannot read it
+    std::string warnings;
+    const Model m = load(doc, &warnings);
+    ASSERT_EQ(m.parts.size(), 1u);
+    EXPECT_EQ(m.parts[0].mesh.triangles.size(), 1u);
+    EXPECT_NE(warnings.find("dropped 1 of 2 triangles as degenerate"), std::string::npos)
+        << warnings;
+    EXPECT_NE(warnings.find("light type area"), std::string::npos) << warnings;
+    EXPECT_TRUE(m.lights.empty());
+    std::istringstream lines(warnings);
+    int count = 0;
+    for (std::string line; std::getline(lines, line);) {
+        if (line.empty()) continue;
+        ++count;
+        EXPECT_NE(line.find("m.gltf"), std::string::npos) << line;
+    }
+    EXPECT_NE(warnings.find("Failed to load external 'uri' for image[0]"), std::string::npos)
+        << "tinygltf's own warning:\n"
+        << warnings;
+    EXPECT_GE(count, 3) << warnings;
+}
+
 TEST_F(GltfTest, BadInputIsAnErrorNamingTheFile) {
     {
         GltfDoc doc;
