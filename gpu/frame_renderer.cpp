@@ -378,7 +378,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     };
     gl::Enable(GL_TEXTURE_CUBE_MAP_SEAMLESS);  // no seams where a lookup crosses a face edge
     cube_maps_.resize(scene.objects.size());
-    face_revision_.assign(scene.objects.size() * 6, 0);
+    face_generation_.assign(scene.objects.size() * 6, 0);
     inner_maps_.resize(scene.objects.size());
     cube_radii_.assign(scene.objects.size(), 0.0f);
     for (size_t o = 0; o < scene.objects.size(); ++o) {
@@ -560,27 +560,33 @@ std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirec
                a.one_sided == b.one_sided && a.directional == b.directional && a.cone == b.cone;
     };
     const CubeMapKey& k = cube_key_;
-    bool stale = !k.valid || indirect.revision == 0 || k.scene_version != scene_.version ||
-                 k.texture != indirect.texture || k.space != indirect.space ||
-                 k.lights.size() != lights.size();
-    for (size_t i = 0; !stale && i < lights.size(); ++i) stale = !same(k.lights[i], lights[i]);
+    // A new term texture (or none yet) is rendered whole at once; edits of the scene or the
+    // lights, and new revisions of the term, move the generation on.
+    const bool all = !k.valid || indirect.revision == 0 || k.texture != indirect.texture ||
+                     k.space != indirect.space;
+    bool moved_on = k.scene_version != scene_.version || k.revision != indirect.revision ||
+                    k.lights.size() != lights.size();
+    for (size_t i = 0; !moved_on && i < lights.size(); ++i)
+        moved_on = !same(k.lights[i], lights[i]);
     cube_key_ = {scene_.version, indirect.revision, indirect.texture, indirect.space, lights, true};
+    if (moved_on || all) ++generation_;
     std::vector<int> faces;
-    if (stale) {
-        // What the cube maps see changed: every face now.
+    if (all) {
         for (size_t s = 0; s < cube_maps_.size(); ++s)
             if (cube_maps_[s])
                 for (int f = 0; f < 6; ++f) faces.push_back(int(s) * 6 + f);
-        for (int face : faces) face_revision_[size_t(face)] = indirect.revision;
+        for (int face : faces) face_generation_[size_t(face)] = generation_;
         return faces;
     }
-    // Only the indirect term moved on (a converging IIM does every frame): the faces that show an
-    // older one follow it a share a frame, round robin, all within kIndirectRefreshFrames frames.
+    // The faces that show an older state follow a share a frame, round robin, all within
+    // kIndirectRefreshFrames frames: a converging IIM changes every frame, an edited scene
+    // often, and the six faces per mirror or glass object cost more than the frame itself (the
+    // reflections lag by a few frames; the frame rate holds).
     std::vector<int> behind;
     for (size_t s = 0; s < cube_maps_.size(); ++s)
         if (cube_maps_[s])
             for (int f = 0; f < 6; ++f)
-                if (face_revision_[s * 6 + size_t(f)] != indirect.revision)
+                if (face_generation_[s * 6 + size_t(f)] != generation_)
                     behind.push_back(int(s) * 6 + f);
     if (behind.empty()) return faces;
     size_t total = 0;
@@ -590,7 +596,7 @@ std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirec
     std::rotate(behind.begin(), std::upper_bound(behind.begin(), behind.end(), last_face_),
                 behind.end());
     behind.resize(std::min(behind.size(), share));
-    for (int face : behind) face_revision_[size_t(face)] = indirect.revision;
+    for (int face : behind) face_generation_[size_t(face)] = generation_;
     last_face_ = behind.back();
     return behind;
 }
@@ -599,7 +605,7 @@ bool FrameRenderer::cube_maps_current() const {
     for (size_t s = 0; s < cube_maps_.size(); ++s)
         if (cube_maps_[s])
             for (int f = 0; f < 6; ++f)
-                if (face_revision_[s * 6 + size_t(f)] != cube_key_.revision) return false;
+                if (face_generation_[s * 6 + size_t(f)] != generation_) return false;
     return cube_key_.valid;
 }
 

@@ -74,21 +74,22 @@ public:
     GLuint framebuffer() const { return fbo_.get(); }
     GLuint aov_texture(FrameTerm t) const { return aov_[size_t(t)].get(); }
     GLuint frame_texture() const { return frame_.get(); }  // the composed L, for display
-    // Whether every cube-map face shows the indirect term of the last render (they follow a
-    // converging IIM a share of faces a frame).
+    // Whether every cube-map face shows the scene, lights and indirect term of the last render
+    // (they follow changes a share of faces a frame).
     bool cube_maps_current() const;
-    // While only the indirect term changes (scene, lights and texture as they were), the cube-map
-    // faces showing an older term are rendered again round robin, all of them within this many
-    // frames: a converging IIM changes every frame, and the six faces per mirror or glass
-    // object cost more than the frame itself.
+    // When the scene, the lights or the indirect term's revision change, the cube-map faces
+    // showing an older state are rendered again round robin, all of them within this many
+    // frames: a converging IIM changes every frame, an edited scene often, and the six faces
+    // per mirror or glass object cost more than the frame itself. A new term texture is
+    // rendered whole at once.
     static constexpr size_t kIndirectRefreshFrames = 4;
 
 private:
     // Renders the listed faces (object × 6 + face, GL face order).
     void render_cube_maps(GLuint iim, const std::vector<LightSample>& lights,
                           const std::vector<int>& faces);
-    // The faces to render for this scene version, term and lights: all of them when what they
-    // see changed, a share of those behind when only the term's revision did, else none.
+    // The faces to render for this scene version, term and lights: all of them for a new term
+    // texture, else a share of those behind (kIndirectRefreshFrames), else none.
     std::vector<int> cube_faces_to_render(const IndirectTerm& indirect,
                                           const std::vector<LightSample>& lights);
     glm::vec3 cube_centre(size_t object) const;  // where its cube maps are rendered from (world)
@@ -132,8 +133,9 @@ private:
         std::vector<LightSample> lights;
         bool valid = false;
     } cube_key_;
-    std::vector<uint64_t> face_revision_;  // per object × 6 faces: the term revision shown
-    int last_face_ = -1;                   // the face the round robin rendered last
+    uint64_t generation_ = 0;                // moves on with every change of what the cube maps see
+    std::vector<uint64_t> face_generation_;  // per object × 6 faces: the generation shown
+    int last_face_ = -1;                     // the face the round robin rendered last
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
 
