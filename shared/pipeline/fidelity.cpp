@@ -28,6 +28,12 @@ namespace {
 
 constexpr int kReferenceBounces = 8;  // specular bounces of the full-hemisphere reference gather
 
+// Every texel gathered, then refined to settings.gather.refine_passes: the settled IIM.
+void settle_iim(cpu::Iim& map, Gatherer& gatherer, const std::vector<int>& all) {
+    map.gather_records(gatherer, all, 0);
+    for (uint64_t pass = 1; !map.complete(); ++pass) map.gather(gatherer, int(all.size()), pass);
+}
+
 std::vector<glm::vec3> iim_of(const std::vector<GatherResult>& results) {
     std::vector<glm::vec3> out(results.size());
     for (size_t i = 0; i < results.size(); ++i) out[i] = results[i].iim;
@@ -192,13 +198,13 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
             gpu::HemiPlaneGather plane(scene, *meshes, 256, aim_texture.get());
             SpecularRoutedGather routed(plane, rays_gather);
             if (saved.gather.specular_bounces > 0) {
-                map.gather_records(routed, all, 0);
+                settle_iim(map, routed, all);
                 report.routed = routed.total_routed();
             } else {
-                map.gather_records(plane, all, 0);
+                settle_iim(map, plane, all);
             }
         } else {
-            map.gather_records(rays_gather, all, 0);
+            settle_iim(map, rays_gather, all);
         }
         iim = map.gathered();
     }
