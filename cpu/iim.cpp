@@ -174,7 +174,8 @@ IimFrameStats Iim::refine_records(Gatherer& gatherer, const std::vector<int>& ba
     for (size_t k = 0; k < batch.size(); ++k) {
         const int r = batch[k];
         const int pass = passes_[size_t(r)];
-        const std::optional<FootprintPoint> p = texel_point_at(scene_, r, refine_offset(pass));
+        const std::optional<FootprintPoint> p = texel_point_at(
+            scene_, r, scene_.settings.gather.refine_footprint * refine_offset(pass));
         if (!p) continue;  // off the chart: this pass has nothing to add
         const TexelRecord& t = scene_.atlas.texels[size_t(r)];
         const Transform& transform = scene_.objects[size_t(t.object)].transform;
