@@ -122,7 +122,11 @@ IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
         // Nothing queued or stale: refine settled texels, round robin, so every texel gets its
         // k-th pass before any gets its (k+1)-th.
         const int max_passes = std::max(1, scene_.settings.gather.refine_passes);
-        for (int level = 1; level < max_passes && int(batch.size()) < budget; ++level) {
+        int fewest =
+            max_passes;  // a settled scene costs one pass over the records, not one a level
+        for (size_t t = 0; t < n; ++t)
+            if (refinable(t)) fewest = std::min(fewest, passes_[t]);
+        for (int level = fewest; level < max_passes && int(batch.size()) < budget; ++level) {
             for (size_t visited = 0; visited < n && int(batch.size()) < budget; ++visited) {
                 const size_t t = refine_sweep_;
                 refine_sweep_ = (refine_sweep_ + 1) % n;
