@@ -6,6 +6,7 @@
 
 #include "shared/charts.h"
 #include "shared/lightmap_sample.h"
+#include "shared/qmc.h"
 
 namespace ag::cpu {
 
@@ -15,6 +16,9 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     is_pending_.assign(records, 1);
     valid_.assign(records, 0);
     texel_generation_.assign(records, -1);
+    passes_.assign(records, 0);
+    sum_.assign(records, glm::dvec3(0.0));
+    valid_samples_.assign(records, 0);
     raw_.assign(n, glm::vec3(0.0f));
     from_.assign(n, glm::vec3(0.0f));
     to_.assign(n, glm::vec3(0.0f));
@@ -168,8 +172,98 @@ IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
             batch.push_back(int(t));
         }
     }
-    IimFrameStats stats = gather_records(gatherer, batch, frame);
+    IimFrameStats stats;
+    if (batch.empty()) {
+        // Nothing queued or stale: refine settled texels, round robin, so every texel gets its
+        // k-th pass before any gets its (k+1)-th.
+        const int max_passes = std::max(1, scene_.settings.gather.refine_passes);
+        int fewest =
+            max_passes;  // a settled scene costs one pass over the records, not one a level
+        for (size_t t = 0; t < n; ++t)
+            if (refinable(t)) fewest = std::min(fewest, passes_[t]);
+        for (int level = fewest; level < max_passes && int(batch.size()) < budget; ++level) {
+            for (size_t visited = 0; visited < n && int(batch.size()) < budget; ++visited) {
+                const size_t t = refine_sweep_;
+                refine_sweep_ = (refine_sweep_ + 1) % n;
+                if (refinable(t) && passes_[t] <= level && !in_batch[t]) {
+                    in_batch[t] = 1;
+                    batch.push_back(int(t));
+                }
+            }
+        }
+        stats = refine_records(gatherer, batch, frame);
+    } else {
+        stats = gather_records(gatherer, batch, frame);
+    }
     stats.pending = int(pending_.size());
+    return stats;
+}
+
+bool Iim::refinable(size_t t) const {
+    return valid_[t] && !is_pending_[t] && texel_generation_[t] == aim_generation_ &&
+           passes_[t] < std::max(1, scene_.settings.gather.refine_passes);
+}
+
+glm::vec2 Iim::refine_offset(int pass) {
+    // Shifted by ½ so that pass 0 is the centre, the point every first gather uses.
+    auto centred = [](double x) { return float(x + 0.5 >= 1.0 ? x - 0.5 : x + 0.5) - 0.5f; };
+    return {centred(radical_inverse(2, uint64_t(pass))),
+            centred(radical_inverse(3, uint64_t(pass)))};
+}
+
+void Iim::start_mean(int record, glm::vec3 value, bool valid) {
+    const TexelRecord& t = scene_.atlas.texels[size_t(record)];
+    raw_[size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x)] = value;
+    passes_[size_t(record)] = 1;
+    sum_[size_t(record)] = valid ? glm::dvec3(value) : glm::dvec3(0.0);
+    valid_samples_[size_t(record)] = valid ? 1 : 0;
+}
+
+IimFrameStats Iim::refine_records(Gatherer& gatherer, const std::vector<int>& batch,
+                                  uint64_t frame) {
+    IimFrameStats stats;
+    last_gathered_.clear();
+    if (batch.empty()) return stats;
+    // Each pass reads its own point of the footprint (an average over the footprint, not the
+    // centre's point sample: a texel then holds what bilinear reconstruction of a box-filtered
+    // signal needs, and small bright patches, such as the light a ball lens focuses, are not
+    // missed or over-weighted) with its own ray set (the CPU gather's shift is keyed by it).
+    std::vector<GatherPoint> points;
+    std::vector<int> owner;  // per point: index into batch
+    for (size_t k = 0; k < batch.size(); ++k) {
+        const int r = batch[k];
+        const int pass = passes_[size_t(r)];
+        const std::optional<FootprintPoint> p = texel_point_at(
+            scene_, r, scene_.settings.gather.refine_footprint * refine_offset(pass));
+        if (!p) continue;  // off the chart: this pass has nothing to add
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+        const Transform& transform = scene_.objects[size_t(t.object)].transform;
+        const uint32_t key = hash_u32(uint32_t(r) ^ hash_u32(uint32_t(pass) + 0x2545f491u));
+        points.push_back(
+            {transform.apply_point(p->position), transform.apply_vector(p->normal), key});
+        owner.push_back(int(k));
+    }
+    const std::vector<GatherResult> results =
+        points.empty() ? std::vector<GatherResult>{} : gatherer.gather_points(points);
+    for (size_t i = 0; i < results.size(); ++i) {
+        // A point inside geometry (beside a contact) says nothing about the texel's light.
+        if (results[i].back_fraction > kBackFaceInvalidFraction) continue;
+        const size_t r = size_t(batch[size_t(owner[i])]);
+        sum_[r] += glm::dvec3(results[i].iim);
+        ++valid_samples_[r];
+    }
+    const int w = scene_.atlas.width;
+    for (int r : batch) {
+        ++passes_[size_t(r)];
+        if (valid_samples_[size_t(r)] == 0) continue;
+        const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+        raw_[size_t(t.y) * size_t(w) + size_t(t.x)] =
+            glm::vec3(sum_[size_t(r)] / double(valid_samples_[size_t(r)]));
+    }
+    repair_and_blend(batch, frame);
+    stats.gathered = int(batch.size());
+    stats.refined = int(batch.size());
+    last_gathered_ = batch;
     return stats;
 }
 
@@ -181,17 +275,24 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
     for (int t : batch) texel_generation_[size_t(t)] = aim_generation_;
 
     const std::vector<GatherResult> results = gatherer.gather(batch);
-    const int w = scene_.atlas.width;
     std::vector<int> invalid;
     for (size_t k = 0; k < batch.size(); ++k) {
-        const TexelRecord& t = scene_.atlas.texels[size_t(batch[k])];
-        raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[k].iim;
         // Behind or inside geometry: take the chart's valid neighbours instead of leaking.
         const bool valid = results[k].back_fraction <= kBackFaceInvalidFraction;
+        start_mean(batch[k], results[k].iim, valid);
         valid_[size_t(batch[k])] = valid;
         if (!valid) invalid.push_back(batch[k]);
     }
     stats.relocated = relocate(gatherer, invalid);
+    repair_and_blend(batch, frame);
+    stats.gathered = int(batch.size());
+    stats.invalid = int(invalid.size());
+    last_gathered_ = batch;
+    return stats;
+}
+
+void Iim::repair_and_blend(const std::vector<int>& batch, uint64_t frame) {
+    const int w = scene_.atlas.width;
     // Repaired values follow their sources: every invalid texel gathered so far is filled again
     // from the valid values as they are now, not only this batch's. Otherwise a texel repaired
     // before a neighbour was re-gathered keeps the old value, and the settled IIM would depend
@@ -224,10 +325,6 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
             raw_[size_t(t.y) * size_t(w) + size_t(t.x)] != before[j])
             start_blend(repair[j]);
     }
-    stats.gathered = int(batch.size());
-    stats.invalid = int(invalid.size());
-    last_gathered_ = batch;
-    return stats;
 }
 
 int Iim::relocate(Gatherer& gatherer, std::vector<int>& invalid) {
@@ -251,7 +348,6 @@ int Iim::relocate(Gatherer& gatherer, std::vector<int>& invalid) {
     }
     if (points.empty()) return 0;
     const std::vector<GatherResult> results = gatherer.gather_points(points);
-    const int w = scene_.atlas.width;
     std::vector<int> still;
     int relocated = 0;
     for (size_t j = 0; j < invalid.size(); ++j) {
@@ -259,8 +355,7 @@ int Iim::relocate(Gatherer& gatherer, std::vector<int>& invalid) {
         bool found = false;
         for (int i = range[j].first; i < range[j].second && !found; ++i)
             if (results[size_t(i)].back_fraction <= kBackFaceInvalidFraction) {
-                const TexelRecord& t = scene_.atlas.texels[size_t(r)];
-                raw_[size_t(t.y) * size_t(w) + size_t(t.x)] = results[size_t(i)].iim;
+                start_mean(r, results[size_t(i)].iim, true);
                 valid_[size_t(r)] = 1;
                 found = true;
             }
@@ -294,6 +389,8 @@ bool Iim::complete() const {
     if (!pending_.empty()) return false;
     for (int g : texel_generation_)
         if (g < aim_generation_) return false;
+    for (size_t r = 0; r < passes_.size(); ++r)
+        if (refinable(r)) return false;
     return true;
 }
 

@@ -4,7 +4,9 @@
 // of the budget; with screen coverage known, the texels the camera sees go first in each class.
 // A gather that saw too many back faces is invalid and repaired from its chart's neighbours
 // (unless part of its footprint can gather, see relocate); new values fade in over blend_frames
-// so the picture never pops.
+// so the picture never pops. When nothing is queued or stale, settled texels are refined:
+// gathered again at other points of their footprint with other ray sets, the results averaged
+// (settings.gather.refine_passes), so a static scene's IIM noise keeps falling.
 #pragma once
 
 #include <cstdint>
@@ -25,6 +27,7 @@ struct IimFrameStats {
     int relocated = 0;  // of those, whose centre saw too many back faces but a point of their
                         // footprint did not: gathered there instead
     int pending = 0;    // texels still queued by Δi after scheduling
+    int refined = 0;    // of `gathered`, refinement passes of settled texels
 };
 
 class Iim {
@@ -51,11 +54,18 @@ public:
     // centre first: where a moved object changes what gathers see, before any photon says so.
     void queue_inside(const std::vector<Bounds>& regions);
     // Gathers up to `budget` texels with `gatherer`: queued ones first, then stale ones round
-    // robin. Results that saw more than kBackFaceInvalidFraction back faces are repaired from
-    // valid neighbours of their chart. The new values start blending at `frame`.
+    // robin; when there are none, refinement passes of settled texels, fewest passes first.
+    // Results that saw more than kBackFaceInvalidFraction back faces are repaired from valid
+    // neighbours of their chart. The new values start blending at `frame`.
     IimFrameStats gather(Gatherer& gatherer, int budget, uint64_t frame);
-    // Gathers exactly `records` (validity, repair and blending as above).
+    // Gathers exactly `records` (validity, repair and blending as above); each starts a new mean.
     IimFrameStats gather_records(Gatherer& gatherer, const std::vector<int>& records,
+                                 uint64_t frame);
+    // One more refinement pass of each of `records` (settled, valid, fewer passes than
+    // settings.gather.refine_passes): pass k gathers at footprint offset refine_offset(k) with the
+    // ray set of (record, k) and adds to the record's mean. The settled mean depends only on the
+    // record, the scene and the AIMs, never on the order passes ran in.
+    IimFrameStats refine_records(Gatherer& gatherer, const std::vector<int>& records,
                                  uint64_t frame);
     // Advances every blend to `frame` over `blend_frames` frames; returns the atlas texels whose
     // shown value changed (to upload).
@@ -69,15 +79,29 @@ public:
     const std::vector<char>& texel_valid() const { return valid_; }
     const std::vector<int>& last_gathered() const { return last_gathered_; }  // records
     int pending() const { return int(pending_.size()); }
-    // Nothing queued, blending, or gathered with an older AIM than the latest.
+    // Per record: gathers in its current mean (0: never gathered).
+    const std::vector<int>& texel_passes() const { return passes_; }
+    // Nothing queued, blending, gathered with an older AIM than the latest, or left to refine.
     bool settled() const;
-    // Nothing queued and nothing gathered with an older AIM (blends may still run).
+    // Nothing queued, nothing gathered with an older AIM and every valid texel refined (blends
+    // may still run).
     bool complete() const;
+    // Atlas offset from the texel centre of refinement pass `pass` (pass 0: the centre), a
+    // Halton (2, 3) point in the texel's footprint [−½, ½]².
+    static glm::vec2 refine_offset(int pass);
 
 private:
     // Gathers each invalid texel at the nearest point of its footprint that sees few back faces;
     // those become valid, `invalid` keeps the rest (to repair from neighbours). Returns how many.
     int relocate(Gatherer& gatherer, std::vector<int>& invalid);
+    // Sets a record's raw value, starting its mean at one gather.
+    void start_mean(int record, glm::vec3 value, bool valid);
+    // Refills invalid texels from their neighbours and starts the blends of `batch` and of every
+    // repaired texel whose value changed.
+    void repair_and_blend(const std::vector<int>& batch, uint64_t frame);
+    // Records refine_records may take: gathered with the latest AIM, valid, not queued, and
+    // fewer than refine_passes gathers in their mean.
+    bool refinable(size_t record) const;
 
     bool seen(int t) const { return coverage_.empty() || coverage_[size_t(t)] > 0.0f; }
 
@@ -98,6 +122,11 @@ private:
     std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;
     size_t sweep_seen_ = 0;  // the sweep over texels the camera sees
+    // Per record, the running mean of its gathers with the current inputs (refinement).
+    std::vector<int> passes_;         // gathers run: the first, then refinement passes
+    std::vector<glm::dvec3> sum_;     // of the valid ones
+    std::vector<int> valid_samples_;  // how many were valid
+    size_t refine_sweep_ = 0;
 };
 
 }  // namespace ag::cpu

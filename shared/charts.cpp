@@ -12,6 +12,7 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -929,37 +930,41 @@ void make_surfaces_and_atlas(Scene& scene) {
     scene.load_timing.texels = lap();
 }
 
-std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record) {
+std::optional<FootprintPoint> texel_point_at(const Scene& scene, int record, glm::vec2 offset) {
     const LightmapAtlas& atlas = scene.atlas;
     const TexelRecord& t = atlas.texels[size_t(record)];
     const Chart& chart = atlas.charts[size_t(t.chart)];
     const Mesh& mesh = scene.objects[size_t(t.object)].mesh;
     const std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(t.object)];
+    const glm::vec2 q = glm::vec2(float(t.x) + 0.5f, float(t.y) + 0.5f) + offset;
+    for (int tri : chart.triangles) {
+        const glm::vec2 a = uvs[3 * size_t(tri)], b = uvs[3 * size_t(tri) + 1],
+                        c = uvs[3 * size_t(tri) + 2];
+        const float det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+        if (std::abs(det) < 1e-12f) continue;
+        const float u = ((q.x - a.x) * (c.y - a.y) - (c.x - a.x) * (q.y - a.y)) / det;
+        const float v = ((b.x - a.x) * (q.y - a.y) - (q.x - a.x) * (b.y - a.y)) / det;
+        if (u < 0.0f || v < 0.0f || u + v > 1.0f) continue;
+        const glm::uvec3 f = mesh.triangles[size_t(tri)];
+        const glm::vec3 p0 = mesh.positions[f.x], p1 = mesh.positions[f.y],
+                        p2 = mesh.positions[f.z];
+        const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
+        if (glm::dot(n, n) <= 0.0f) continue;
+        return FootprintPoint{(1.0f - u - v) * p0 + u * p1 + v * p2, glm::normalize(n)};
+    }
+    return std::nullopt;
+}
+
+std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record) {
     constexpr float kStep = 0.4f;
     // Edge neighbours (distance 0.4) before corners (0.57).
     constexpr int kOffsets[8][2] = {{-1, 0},  {1, 0},  {0, -1}, {0, 1},
                                     {-1, -1}, {1, -1}, {-1, 1}, {1, 1}};
     std::vector<FootprintPoint> out;
-    for (const auto& o : kOffsets) {
-        const glm::vec2 q(float(t.x) + 0.5f + kStep * float(o[0]),
-                          float(t.y) + 0.5f + kStep * float(o[1]));
-        for (int tri : chart.triangles) {
-            const glm::vec2 a = uvs[3 * size_t(tri)], b = uvs[3 * size_t(tri) + 1],
-                            c = uvs[3 * size_t(tri) + 2];
-            const float det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
-            if (std::abs(det) < 1e-12f) continue;
-            const float u = ((q.x - a.x) * (c.y - a.y) - (c.x - a.x) * (q.y - a.y)) / det;
-            const float v = ((b.x - a.x) * (q.y - a.y) - (q.x - a.x) * (b.y - a.y)) / det;
-            if (u < 0.0f || v < 0.0f || u + v > 1.0f) continue;
-            const glm::uvec3 f = mesh.triangles[size_t(tri)];
-            const glm::vec3 p0 = mesh.positions[f.x], p1 = mesh.positions[f.y],
-                            p2 = mesh.positions[f.z];
-            const glm::vec3 n = glm::cross(p1 - p0, p2 - p0);
-            if (glm::dot(n, n) <= 0.0f) continue;
-            out.push_back({(1.0f - u - v) * p0 + u * p1 + v * p2, glm::normalize(n)});
-            break;
-        }
-    }
+    for (const auto& o : kOffsets)
+        if (const std::optional<FootprintPoint> p =
+                texel_point_at(scene, record, kStep * glm::vec2(float(o[0]), float(o[1]))))
+            out.push_back(*p);
     return out;
 }
 

@@ -2,6 +2,7 @@
 // per texel. Connectivity comes from OpenMesh; the result is plain arrays in scene.h/lightmap.h.
 #pragma once
 
+#include <optional>
 #include <vector>
 
 #include "shared/mesh.h"
@@ -31,6 +32,9 @@ struct FootprintPoint {
 // chart's triangles. Where a gather from the centre starts inside geometry (the floor under a
 // box), one of these usually does not, and gathers the light right beside the contact.
 std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int record);
+// The point of record `record`'s chart at atlas position (x + ½, y + ½) + offset, if it lies on
+// one of the chart's triangles (offsets in [−½, ½]² cover the texel's footprint).
+std::optional<FootprintPoint> texel_point_at(const Scene& scene, int record, glm::vec2 offset);
 // Atlas bounds. Texels (gutters included): each one costs a texel record, AIM and IIM values and
 // GL texels, about 100 bytes in all, so 2^24 is some 1.6 GiB. Side: the GL_MAX_TEXTURE_SIZE every
 // OpenGL 4.5 implementation must reach, for the AIM and IIM textures.

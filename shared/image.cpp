@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -19,6 +20,23 @@ namespace fs = std::filesystem;
 float srgb_encode(float x) {
     x = std::clamp(x, 0.0f, 1.0f);
     return x <= 0.0031308f ? 12.92f * x : 1.055f * std::pow(x, 1.0f / 2.4f) - 0.055f;
+}
+
+Image box_downsample(const Image& image, int factor) {
+    if (factor <= 1) return image;
+    assert(image.width % factor == 0 && image.height % factor == 0);
+    Image out(image.width / factor, image.height / factor, image.channels);
+    const float scale = 1.0f / float(factor * factor);
+    for (int y = 0; y < out.height; ++y)
+        for (int x = 0; x < out.width; ++x) {
+            float* o = out.at(x, y);
+            for (int sy = 0; sy < factor; ++sy)
+                for (int sx = 0; sx < factor; ++sx) {
+                    const float* p = image.at(factor * x + sx, factor * y + sy);
+                    for (int c = 0; c < image.channels; ++c) o[c] += scale * p[c];
+                }
+        }
+    return out;
 }
 
 float srgb_decode(float x) {

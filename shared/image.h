@@ -30,6 +30,10 @@ struct Image {
     }
 };
 
+// The mean of each factor × factor block (a box pixel filter, as the reference renderers'
+// jittered pixel samples integrate): width and height must be multiples of `factor`.
+Image box_downsample(const Image& image, int factor);
+
 float srgb_encode(float linear);  // [0,1] linear → [0,1] sRGB
 float srgb_decode(float encoded);
 

@@ -94,6 +94,11 @@ struct GatherSettings {
     // reflection and refraction); 0 = specular objects are black to the gather. The GL gather
     // hands texels whose hemi-plane shows a specular object to the CPU gather when this is > 0.
     int specular_bounces = 6;
+    // Gathers averaged per settled texel: once nothing is queued, texels whose inputs have not
+    // changed are gathered again at other points of their footprint with other ray sets and the
+    // results averaged, so a static scene's IIM noise keeps falling; 1 = one gather per texel.
+    int refine_passes = 16;
+    float refine_footprint = 0.5f;  // share of the texel's footprint refinement passes spread over
 };
 
 // Scheduling by time, not by counts (DESIGN.md): with a frame-time target the pipeline measures
@@ -270,6 +275,10 @@ void visit_settings(Settings& s, Visitor& v) {
                                            "CPU gather: full hemisphere or the hemi-plane"});
     v.field(Field<int>{"specular_bounces", s.gather.specular_bounces, 0, 64,
                        "mirror/glass bounces a gather ray follows; 0 = specular is black"});
+    v.field(Field<int>{"refine_passes", s.gather.refine_passes, 1, 4096,
+                       "gathers averaged per settled texel (footprint, ray sets)"});
+    v.field(Field<float>{"refine_footprint", s.gather.refine_footprint, 0, 1,
+                         "share of the texel footprint refinement passes spread over; 0 = centre"});
     v.end_section();
     v.section("schedule", "scheduling by frame time (DESIGN.md)");
     v.field(Field<float>{"frame_ms", s.schedule.frame_ms, 0, 1e6,

@@ -28,6 +28,15 @@ namespace {
 
 constexpr int kReferenceBounces = 8;  // specular bounces of the full-hemisphere reference gather
 
+// Every texel gathered once (returned: the IIM after one gather per texel), then refined to
+// settings.gather.refine_passes (left in `map`: the settled IIM).
+std::vector<glm::vec3> settle_iim(cpu::Iim& map, Gatherer& gatherer, const std::vector<int>& all) {
+    map.gather_records(gatherer, all, 0);
+    std::vector<glm::vec3> once = map.gathered();
+    for (uint64_t pass = 1; !map.complete(); ++pass) map.gather(gatherer, int(all.size()), pass);
+    return once;
+}
+
 std::vector<glm::vec3> iim_of(const std::vector<GatherResult>& results) {
     std::vector<glm::vec3> out(results.size());
     for (size_t i = 0; i < results.size(); ++i) out[i] = results[i].iim;
@@ -184,7 +193,7 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     // What the pipeline gathers with these settings (the CPU rays, or the GL hemi-plane with
     // texels that see mirrors or glass handed to the rays), through cpu::Iim as the pipeline
     // does: invalid texels gathered at their footprint or repaired from neighbours.
-    std::vector<glm::vec3> iim;
+    std::vector<glm::vec3> iim, once;
     {
         cpu::CpuGather rays_gather(scene, rays, pool, &aim_radiance);
         cpu::Iim map(scene);
@@ -192,21 +201,28 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
             gpu::HemiPlaneGather plane(scene, *meshes, 256, aim_texture.get());
             SpecularRoutedGather routed(plane, rays_gather);
             if (saved.gather.specular_bounces > 0) {
-                map.gather_records(routed, all, 0);
+                once = settle_iim(map, routed, all);
                 report.routed = routed.total_routed();
             } else {
-                map.gather_records(plane, all, 0);
+                once = settle_iim(map, plane, all);
             }
         } else {
-            map.gather_records(rays_gather, all, 0);
+            once = settle_iim(map, rays_gather, all);
         }
         iim = map.gathered();
     }
-    std::vector<glm::vec3> pipeline(records);
-    for (size_t r = 0; r < records; ++r)
-        pipeline[r] =
-            iim[size_t(atlas.texels[r].y) * size_t(atlas.width) + size_t(atlas.texels[r].x)];
-    values["pipeline"] = pipeline;
+    // "pipeline": one gather per texel (what stage b holds to the full gather); "refined": the
+    // settled IIM, each texel the mean of settings.gather.refine_passes gathers over its
+    // footprint, which the frame shows.
+    auto per_record = [&](const std::vector<glm::vec3>& atlas_values) {
+        std::vector<glm::vec3> out(records);
+        for (size_t r = 0; r < records; ++r)
+            out[r] = atlas_values[size_t(atlas.texels[r].y) * size_t(atlas.width) +
+                                  size_t(atlas.texels[r].x)];
+        return out;
+    };
+    values["pipeline"] = per_record(once);
+    values["refined"] = per_record(iim);
 
     // Rows per stage, for the whole scene and per object.
     std::vector<std::string> regions = {"all"};
@@ -231,8 +247,10 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     add_texel_rows("b", "cpu_full_" + std::to_string(saved.gather.cpu_rays), "full");
     add_texel_rows("b", "full_black", "full");
     add_texel_rows("b", "pipeline", "full");
+    add_texel_rows("b", "refined", "full");
     add_texel_rows("c", "full", "pt_indirect");
     add_texel_rows("c", "pipeline", "pt_indirect");
+    add_texel_rows("c", "refined", "pt_indirect");
 
     if (!options.gl) return report;
 

@@ -28,6 +28,18 @@ Image gradient(int w, int h) {
 }
 }  // namespace
 
+TEST(Image, BoxDownsampleAveragesEachBlock) {
+    Image image(4, 2);
+    for (int y = 0; y < 2; ++y)
+        for (int x = 0; x < 4; ++x) image.set_rgb(x, y, glm::vec3(float(x + 4 * y), 1.0f, -1.0f));
+    const Image half = box_downsample(image, 2);
+    ASSERT_EQ(half.width, 2);
+    ASSERT_EQ(half.height, 1);
+    EXPECT_EQ(half.rgb(0, 0), glm::vec3((0.0f + 1.0f + 4.0f + 5.0f) / 4.0f, 1.0f, -1.0f));
+    EXPECT_EQ(half.rgb(1, 0), glm::vec3((2.0f + 3.0f + 6.0f + 7.0f) / 4.0f, 1.0f, -1.0f));
+    EXPECT_EQ(box_downsample(image, 1).pixels, image.pixels);
+}
+
 TEST(Image, SrgbCurveRoundTripsAndMatchesStandard) {
     EXPECT_NEAR(srgb_encode(0.0f), 0.0f, 1e-7);
     EXPECT_NEAR(srgb_encode(1.0f), 1.0f, 1e-6);

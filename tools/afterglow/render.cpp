@@ -27,6 +27,10 @@ const Command kRenderCommand{
              "the EXR to write; a PNG with the same stem is written beside it"),
         integer("frames,n", "N", "frames to run", 1, 1000000, 30),
         size_option("image size (default: the scene camera's resolution)"),
+        integer("supersample", "S",
+                "render S x S samples per pixel and average them (a box pixel filter, as the "
+                "reference renderers use; what comparisons with them need at edges)",
+                1, 16, 1),
         flag("aov",
              "also write OUT.direct.exr, .indirect, .caustics, .specular, .volume (and PNGs)"),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
@@ -69,6 +73,7 @@ int run_render(const Args& args) {
     args.apply_settings(scene);
     int width = scene.camera.width, height = scene.camera.height;
     args.get_size("size", width, height);
+    const int supersample = args.get_int("supersample");
     const int threads = args.get_int("threads", scene.settings.threads);
 
     std::optional<Script> script;
@@ -76,7 +81,7 @@ int run_render(const Args& args) {
     if (!script_path.empty()) script.emplace(script_path);  // a syntax error stops here (exit 1)
 
     auto context = gpu::make_gl_context(backend);
-    Pipeline pipeline(scene, PipelineOptions{width, height, threads});
+    Pipeline pipeline(scene, PipelineOptions{width * supersample, height * supersample, threads});
     if (scene.settings.gather.backend == GatherBackend::automatic && pipeline.iim_method())
         std::fprintf(
             stderr,
@@ -101,7 +106,9 @@ int run_render(const Args& args) {
                      rc->records().size(), (unsigned long long)s.records_made, s.added, s.replaced,
                      s.deleted, s.splat_ms, s.scan_ms, s.gather_ms);
     }
-    const gpu::FrameImages images = pipeline.images();
+    gpu::FrameImages images = pipeline.images();
+    images.frame = box_downsample(images.frame, supersample);
+    for (Image& aov : images.aov) aov = box_downsample(aov, supersample);
     std::filesystem::create_directories(std::filesystem::absolute(out).parent_path());
     write_image(images.frame, out);
     write_image(images.frame, with_suffix(out, "", ".png"), exposure);
