@@ -201,6 +201,11 @@ int bench_settle(const Args& args, int width, int height) {
                         e.what());
             continue;
         }
+        // Settling is about repair after an edit: refinement of settled texels (which only
+        // selective does, and which takes the static error further down over ~165 frames on
+        // cornell) would move the target the baselines are measured against. --set
+        // gather.refine_passes=N turns it back on.
+        scene.settings.gather.refine_passes = 1;
         args.apply_settings(scene);
         scene.settings.schedule.frame_ms = float(frame_ms);
         scene.camera.width = width;
