@@ -559,6 +559,7 @@ namespace ag::cpu {
 TEST(IimSchedule, TexelsNeverGatheredAreNotStarvedByRepeatedEdits) {
     Simulated s("cornell.json");
     s.scene.settings.gather.cpu_rays = 16;
+    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
     CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
     Iim map(s.scene);
     PhotonMaps& maps = s.sim->maps();
@@ -593,6 +594,7 @@ namespace ag::cpu {
 TEST(IimSchedule, TexelsTheCameraSeesGoFirst) {
     Simulated s("cornell.json");
     s.scene.settings.gather.cpu_rays = 16;
+    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
     CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
     Iim map(s.scene);
     const int texels = int(s.scene.atlas.texels.size());
@@ -622,6 +624,7 @@ namespace ag::cpu {
 TEST(IimSchedule, MostChangedTexelsFirst) {
     Simulated s("cornell.json");
     s.scene.settings.gather.cpu_rays = 16;
+    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
     CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
     Iim map(s.scene);
     const int texels = int(s.scene.atlas.texels.size());
