@@ -121,7 +121,12 @@ PipelineStats Pipeline::frame() {
     PipelineStats stats;
     stats.frame = ++frame_;
     sync();
-    if (scene_.version != seen_version_ || frame_ == 1) caustic_frames_since_edit_ = 0;
+    const bool edited = scene_.version != seen_version_ && frame_ > 1;
+    // The first edit after frames without one brings costs the running estimates do not hold
+    // yet; in a run of edits they are part of every frame, and measured.
+    const bool first_edit = edited && !last_frame_edited_;
+    last_frame_edited_ = edited;
+    if (edited || frame_ == 1) caustic_frames_since_edit_ = 0;
     seen_version_ = scene_.version;
     ++caustic_frames_since_edit_;
     int invalidated = 0;
@@ -130,7 +135,7 @@ PipelineStats Pipeline::frame() {
         indirect_->invalidate_all();
     }
     const FrameBudgets budgets =
-        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()));
+        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit);
     start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.

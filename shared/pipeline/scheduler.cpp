@@ -20,7 +20,8 @@ int fit(double ms, const RunningCost& cost, int fallback) {
 }
 }  // namespace
 
-FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_total) const {
+FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_total,
+                                     bool edited) const {
     FrameBudgets b;
     const double target = settings.schedule.frame_ms;
     if (target <= 0.0) {
@@ -32,7 +33,8 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // GL thread: what drawing leaves of the target goes to gathering (at least a share of it).
     // Until a cost is known, gather the fixed count once to measure it.
     const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
-    const double gather_ms = std::max(target - draw, kMinGatherShare * target);
+    const double gather_ms =
+        std::max(target - draw, kMinGatherShare * target) * (edited ? kEditGatherShare : 1.0);
     b.iim_texels =
         std::clamp(fit(gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
                    std::max(1, iim_texels_total));

@@ -39,8 +39,13 @@ struct FrameBudgets {
 class FrameScheduler {
 public:
     // Budgets for the next frame: the fixed counts of the settings without a target; with one,
-    // what the measured costs say fits (the counts then cap them only with counts_cap).
-    FrameBudgets budgets(const Settings& settings, int iim_texels_total) const;
+    // what the measured costs say fits (the counts then cap them only with counts_cap). In the
+    // frame of an edit after frames without one (`edited`) the GL thread gathers kEditGatherShare
+    // of that: its one-time costs (moved geometry, shadow volumes, the first gathers that see the
+    // change) are not known in advance, and what it gathers is stale again when the edit's AIMs
+    // arrive a frame later.
+    FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false) const;
+    static constexpr double kEditGatherShare = 0.5;
     // AIM texels the workers may still rebuild, `elapsed_ms` into their frame.
     int aim_texels_left(const Settings& settings, double elapsed_ms) const;
     // Learns from a finished frame.

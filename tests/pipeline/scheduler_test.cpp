@@ -64,6 +64,8 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
     EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
+    // The frame of an edit gathers half as much (its one-time costs are not known).
+    EXPECT_EQ(scheduler.budgets(settings, 100000, true).iim_texels, 115);
     // Never more texels than there are, never none.
     EXPECT_EQ(scheduler.budgets(settings, 50).iim_texels, 50);
     // Drawing alone overruns the target: gathering keeps a quarter of it.
