@@ -39,7 +39,9 @@ struct Simulated {
     std::unique_ptr<PhotonSimulation> sim;
     std::unique_ptr<Aim> aim;
 
-    explicit Simulated(const std::string& file) : scene(load_scene(test::scene_path(file))) {
+    explicit Simulated(const std::string& file, void (*tweak)(Scene&) = nullptr)
+        : scene(load_scene(test::scene_path(file))) {
+        if (tweak) tweak(scene);
         sim = std::make_unique<PhotonSimulation>(scene, pool);
         sim->trace_all();
         aim = std::make_unique<Aim>(scene, pool);
@@ -553,15 +555,27 @@ TEST(CpuGather, SameResultForAnyThreadCount) {
 
 namespace ag::cpu {
 
+namespace {
+// The Cornell box simulated, a cheap CPU gather of its AIMs and an empty IIM, for the scheduling
+// tests (refinement off: complete() then means gathered, not refined).
+struct ScheduleCase {
+    Simulated s{"cornell.json", [](Scene& scene) {
+                    scene.settings.gather.cpu_rays = 16;
+                    scene.settings.gather.refine_passes = 1;
+                }};
+    CpuGather gather{s.scene, s.sim->rays(), s.pool, &s.aim->radiance()};
+    Iim map{s.scene};
+};
+}  // namespace
+
 // An object edited every frame keeps its surfaces' Δi high; the texels it queues must not starve
 // the ones never gathered (they show no indirect light at all), so with a budget of B texels a
 // frame every texel is gathered once within ⌈texels / B⌉ frames.
 TEST(IimSchedule, TexelsNeverGatheredAreNotStarvedByRepeatedEdits) {
-    Simulated s("cornell.json");
-    s.scene.settings.gather.cpu_rays = 16;
-    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
-    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
-    Iim map(s.scene);
+    ScheduleCase c;
+    Simulated& s = c.s;
+    CpuGather& gather = c.gather;
+    Iim& map = c.map;
     PhotonMaps& maps = s.sim->maps();
     // The surface with the most texels plays the edited one.
     std::vector<int> per_surface(maps.surface_count(), 0);
@@ -592,11 +606,10 @@ namespace ag::cpu {
 // With screen coverage known, the texels the camera sees are gathered before the others of their
 // class: first when never gathered, then again when a new AIM makes every texel stale.
 TEST(IimSchedule, TexelsTheCameraSeesGoFirst) {
-    Simulated s("cornell.json");
-    s.scene.settings.gather.cpu_rays = 16;
-    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
-    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
-    Iim map(s.scene);
+    ScheduleCase c;
+    Simulated& s = c.s;
+    CpuGather& gather = c.gather;
+    Iim& map = c.map;
     const int texels = int(s.scene.atlas.texels.size());
     std::vector<float> coverage(size_t(texels), 0.0f);
     int seen = 0;
@@ -622,11 +635,10 @@ namespace ag::cpu {
 // Among the texels of surfaces whose indirect hits changed, those whose own indirect estimate
 // changed most are gathered first; one whose AIM was not rebuilt keeps its surface's place.
 TEST(IimSchedule, MostChangedTexelsFirst) {
-    Simulated s("cornell.json");
-    s.scene.settings.gather.cpu_rays = 16;
-    s.scene.settings.gather.refine_passes = 1;  // complete() then means gathered, not refined
-    CpuGather gather(s.scene, s.sim->rays(), s.pool, &s.aim->radiance());
-    Iim map(s.scene);
+    ScheduleCase c;
+    Simulated& s = c.s;
+    CpuGather& gather = c.gather;
+    Iim& map = c.map;
     const int texels = int(s.scene.atlas.texels.size());
     map.gather(gather, texels, 0);  // everything gathered once
     ASSERT_TRUE(map.complete());
