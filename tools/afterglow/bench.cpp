@@ -93,6 +93,12 @@ const Command kBenchCommand{
         integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
                 400000),
         flag("quick", "'settle': only the cornell scene (for tests)"),
+        integer("phases", "K",
+                "'settle': run each entry K times, the script starting 0, S, 2S, ... untimed "
+                "frames after priming (S = --phase-step), so that full-budget meets the edit at "
+                "K points of its round-robin sweep; prints the median speed-up",
+                1, 100, 1),
+        integer("phase-step", "S", "'settle': frames between the phases' starts", 1, 1000, 1),
         text("modes", "LIST",
              "'settle': the modes to run, comma-separated (selective, full, full-budget); "
              "selective's speed-up needs full-budget",

@@ -137,6 +137,28 @@ std::string fixed(double v, int decimals, bool valid = true) {
     return b;
 }
 
+// "median M× (min A×, max B×, N phases)" over the phases where full-budget settled, plus the
+// lower bounds of those where it did not.
+std::string phase_summary(std::vector<double> speedups, std::vector<double> bounds) {
+    std::ostringstream out;
+    if (speedups.empty()) {
+        out << "full-budget settled in no phase";
+    } else {
+        std::sort(speedups.begin(), speedups.end());
+        const size_t n = speedups.size();
+        const double median =
+            n % 2 ? speedups[n / 2] : 0.5 * (speedups[n / 2 - 1] + speedups[n / 2]);
+        out << "median " << fixed(median, 2) << "x (min " << fixed(speedups.front(), 2) << "x, max "
+            << fixed(speedups.back(), 2) << "x, " << n << " phase" << (n == 1 ? "" : "s") << ")";
+    }
+    if (!bounds.empty()) {
+        std::sort(bounds.begin(), bounds.end());
+        out << "; full-budget unsettled in " << bounds.size() << " more (selective at least "
+            << fixed(bounds.front(), 1) << "x sooner there)";
+    }
+    return out.str();
+}
+
 }  // namespace
 
 int bench_settle(const Args& args, int width, int height) {
@@ -147,6 +169,9 @@ int bench_settle(const Args& args, int width, int height) {
     const std::string csv_path = args.get("csv", "out/bench-settle.csv");
     const std::string plot_path = args.get("plot", "out/bench-settle.png");
     const std::string component = "indirect";
+    const int phases = args.get_int("phases", 1);
+    const int phase_step = args.get_int("phase-step", 1);
+    std::ostringstream summary;  // the speed-up over phases, per entry
 
     std::vector<LadderEntry> ladder;
     for (size_t i = 1; i < args.positionals().size(); ++i) {
@@ -174,12 +199,14 @@ int bench_settle(const Args& args, int width, int height) {
         prime ? "each run starts from the converged state of frame 0 (untimed)"
               : "each run starts from nothing",
         prime ? "the error of the converged final state" : "the mean of the last tenth of frames");
-    std::printf("%-10s %8s %-22s %-11s %9s %6s %8s %15s %15s %9s %9s %9s %9s %8s\n", "scene",
-                "tris", "script", "mode", "settled", "frames", "settle_s", "ms mean/p95 set",
-                "ms mean/p95 all", "photons", "AIM tx", "IIM tx", "area", "speedup");
+    std::printf("%-10s %8s %-22s %4s %-11s %9s %6s %8s %15s %15s %9s %9s %9s %9s %8s\n", "scene",
+                "tris", "script", "lead", "mode", "settled", "frames", "settle_s",
+                "ms mean/p95 set", "ms mean/p95 all", "photons", "AIM tx", "IIM tx", "area",
+                "speedup");
 
     std::ostringstream csv;
-    csv << "scene,script,triangles,mode,frame_ms_target,width,height,frames,settled_relmse,first_"
+    csv << "scene,script,triangles,lead_in,mode,frame_ms_target,width,height,frames,settled_relmse,"
+           "first_"
            "edit,last_edit,settle_frames,settle_s,frame_ms_mean_settle,frame_ms_p95_settle,frame_"
            "ms_mean,frame_ms_p95,photons_retraced,aim_texels,iim_texels,error_area,error_area_"
            "window_s,speedup_vs_full_budget,speedup_at_least\n";
@@ -229,68 +256,95 @@ int bench_settle(const Args& args, int width, int height) {
         const double target = prime ? converged_error(scene, entry.script, frames, width, height,
                                                       component, reference, threads)
                                     : 0.0;
-        std::vector<ConvergenceRun> runs;
-        for (PipelineMode mode : modes) {
-            runs.push_back(run_convergence(scene, entry.script, mode, frames, width, height,
-                                           component, reference, threads, prime));
-            runs.back().settle = analyse_settle(runs.back().frames, target);
-            std::filesystem::create_directories(runs_dir);
-            write_file_atomically((runs_dir / (request.name + "." + stem(entry.script) + "." +
-                                               kPipelineModeNames[size_t(mode)] + ".csv"))
-                                      .string(),
-                                  convergence_csv(runs.back()));
+        // Full-budget's settle depends on where its round-robin sweep is when the edit lands:
+        // each phase starts the script `lead_in` untimed frames later.
+        std::vector<double> speedups, bounds;
+        for (int phase = 0; phase < phases; ++phase) {
+            const int lead_in = phase * phase_step;
+            std::vector<ConvergenceRun> runs;
+            double speedup_of_phase = 0.0, bound_of_phase = 0.0;
+            const std::string phase_suffix = phases > 1 ? ".lead" + std::to_string(lead_in) : "";
+            for (PipelineMode mode : modes) {
+                runs.push_back(run_convergence(scene, entry.script, mode, frames, width, height,
+                                               component, reference, threads, prime, {}, lead_in));
+                runs.back().settle = analyse_settle(runs.back().frames, target);
+                std::filesystem::create_directories(runs_dir);
+                write_file_atomically(
+                    (runs_dir / (request.name + "." + stem(entry.script) + "." +
+                                 kPipelineModeNames[size_t(mode)] + phase_suffix + ".csv"))
+                        .string(),
+                    convergence_csv(runs.back()));
+            }
+            // The error area over the same window for every mode: the shortest run after the edit.
+            double window = 1e30;
+            for (const ConvergenceRun& run : runs)
+                window = std::min(window, run.wall_s - edit_time(run));
+            std::vector<SettleResult> results;
+            for (const ConvergenceRun& run : runs) {
+                results.push_back(analyse(run));
+                results.back().auc = error_area(run, window);
+            }
+            // A mode settles only where the others do: a run whose own plateau is more than 10%
+            // above the best mode's never reached the converged state within the run (it is "-").
+            double best = 1e30;
+            for (const SettleResult& r : results) best = std::min(best, r.settle.settled);
+            if (target > 0.0) best = target;
+            auto settled = [&](const SettleResult& r) {
+                return r.settle.settled_ok() && r.settle.settled <= 1.1 * best;
+            };
+            const SettleResult* budget = nullptr;
+            for (const SettleResult& r : results)
+                if (r.mode == PipelineMode::full_budget) budget = &r;
+            for (const SettleResult& r : results) {
+                const bool ok = settled(r);
+                const bool speedup_ok = ok && budget && settled(*budget) && r.settle.seconds > 0;
+                const double speedup = speedup_ok ? budget->settle.seconds / r.settle.seconds : 0.0;
+                // Full-budget still unsettled at the end of its run: it settles later than the
+                // run's time after the edit, so selective is at least that much sooner.
+                const bool bound_ok = ok && budget && !settled(*budget) && r.settle.seconds > 0;
+                const double at_least =
+                    bound_ok ? budget->after_last_edit_s / r.settle.seconds : 0.0;
+                if (r.mode == PipelineMode::selective) {
+                    speedup_of_phase = speedup;
+                    bound_of_phase = at_least;
+                }
+                const char* mode = kPipelineModeNames[size_t(r.mode)];
+                std::printf(
+                    "%-10s %8zu %-22s %4d %-11s %9.5f %6s %8s %7.1f/%-7.1f %7.1f/%-7.1f %9llu "
+                    "%9llu "
+                    "%9llu %9.5f %8s\n",
+                    request.name.c_str(), scene.triangle_count(), stem(entry.script).c_str(),
+                    lead_in, mode, r.settle.settled,
+                    ok ? std::to_string(r.settle.frames).c_str() : "-",
+                    fixed(r.settle.seconds, 3, ok).c_str(), r.frame_mean_settle, r.frame_p95_settle,
+                    r.frame_mean, r.frame_p95, static_cast<unsigned long long>(r.photons),
+                    static_cast<unsigned long long>(r.aim_texels),
+                    static_cast<unsigned long long>(r.iim_texels), r.auc,
+                    r.mode != PipelineMode::selective ? ""
+                    : speedup_ok                      ? (fixed(speedup, 2) + "x").c_str()
+                    : bound_ok                        ? (">" + fixed(at_least, 1) + "x").c_str()
+                                                      : "-");
+                csv << request.name << ',' << stem(entry.script) << ',' << scene.triangle_count()
+                    << ',' << lead_in << ',' << mode << ',' << frame_ms << ',' << width << ','
+                    << height << ',' << frames << ',' << r.settle.settled << ','
+                    << r.settle.first_edit << ',' << r.settle.last_edit << ','
+                    << (ok ? std::to_string(r.settle.frames) : "") << ','
+                    << (ok ? fixed(r.settle.seconds, 6) : "") << ',' << r.frame_mean_settle << ','
+                    << r.frame_p95_settle << ',' << r.frame_mean << ',' << r.frame_p95 << ','
+                    << r.photons << ',' << r.aim_texels << ',' << r.iim_texels << ',' << r.auc
+                    << ',' << window << ',' << (speedup_ok ? fixed(speedup, 4) : "") << ','
+                    << (bound_ok ? fixed(at_least, 4) : "") << "\n";
+            }
+            if (speedup_of_phase > 0.0) speedups.push_back(speedup_of_phase);
+            if (bound_of_phase > 0.0) bounds.push_back(bound_of_phase);
         }
-        // The error area over the same window for every mode: the shortest run after the edit.
-        double window = 1e30;
-        for (const ConvergenceRun& run : runs)
-            window = std::min(window, run.wall_s - edit_time(run));
-        std::vector<SettleResult> results;
-        for (const ConvergenceRun& run : runs) {
-            results.push_back(analyse(run));
-            results.back().auc = error_area(run, window);
-        }
-        // A mode settles only where the others do: a run whose own plateau is more than 10% above
-        // the best mode's never reached the converged state within the run (it is "-").
-        double best = 1e30;
-        for (const SettleResult& r : results) best = std::min(best, r.settle.settled);
-        if (target > 0.0) best = target;
-        auto settled = [&](const SettleResult& r) {
-            return r.settle.settled_ok() && r.settle.settled <= 1.1 * best;
-        };
-        const SettleResult* budget = nullptr;
-        for (const SettleResult& r : results)
-            if (r.mode == PipelineMode::full_budget) budget = &r;
-        for (const SettleResult& r : results) {
-            const bool ok = settled(r);
-            const bool speedup_ok = ok && budget && settled(*budget) && r.settle.seconds > 0;
-            const double speedup = speedup_ok ? budget->settle.seconds / r.settle.seconds : 0.0;
-            // Full-budget still unsettled at the end of its run: it settles later than the run's
-            // time after the edit, so selective is at least that much sooner.
-            const bool bound_ok = ok && budget && !settled(*budget) && r.settle.seconds > 0;
-            const double at_least = bound_ok ? budget->after_last_edit_s / r.settle.seconds : 0.0;
-            const char* mode = kPipelineModeNames[size_t(r.mode)];
-            std::printf(
-                "%-10s %8zu %-22s %-11s %9.5f %6s %8s %7.1f/%-7.1f %7.1f/%-7.1f %9llu %9llu "
-                "%9llu %9.5f %8s\n",
-                request.name.c_str(), scene.triangle_count(), stem(entry.script).c_str(), mode,
-                r.settle.settled, ok ? std::to_string(r.settle.frames).c_str() : "-",
-                fixed(r.settle.seconds, 3, ok).c_str(), r.frame_mean_settle, r.frame_p95_settle,
-                r.frame_mean, r.frame_p95, static_cast<unsigned long long>(r.photons),
-                static_cast<unsigned long long>(r.aim_texels),
-                static_cast<unsigned long long>(r.iim_texels), r.auc,
-                r.mode != PipelineMode::selective ? ""
-                : speedup_ok                      ? (fixed(speedup, 2) + "x").c_str()
-                : bound_ok                        ? (">" + fixed(at_least, 1) + "x").c_str()
-                                                  : "-");
-            csv << request.name << ',' << stem(entry.script) << ',' << scene.triangle_count() << ','
-                << mode << ',' << frame_ms << ',' << width << ',' << height << ',' << frames << ','
-                << r.settle.settled << ',' << r.settle.first_edit << ',' << r.settle.last_edit
-                << ',' << (ok ? std::to_string(r.settle.frames) : "") << ','
-                << (ok ? fixed(r.settle.seconds, 6) : "") << ',' << r.frame_mean_settle << ','
-                << r.frame_p95_settle << ',' << r.frame_mean << ',' << r.frame_p95 << ','
-                << r.photons << ',' << r.aim_texels << ',' << r.iim_texels << ',' << r.auc << ','
-                << window << ',' << (speedup_ok ? fixed(speedup, 4) : "") << ','
-                << (bound_ok ? fixed(at_least, 4) : "") << "\n";
+        if (phases > 1) {
+            std::sort(speedups.begin(), speedups.end());
+            std::printf("%-10s %-22s speed-up over %d phases: %s\n", request.name.c_str(),
+                        stem(entry.script).c_str(), phases,
+                        phase_summary(speedups, bounds).c_str());
+            summary << request.name << " " << stem(entry.script) << ": "
+                    << phase_summary(speedups, bounds) << "\n";
         }
         std::fflush(stdout);
         ++measured;
@@ -301,6 +355,9 @@ int bench_settle(const Args& args, int width, int height) {
         "gathered from the first edit until settled; area: ∫ relMSE dt from the first edit over "
         "the shortest mode's remaining run; speedup: full-budget's settle time over "
         "selective's, '>N' where full-budget had not settled when its run ended)\n");
+    if (!summary.str().empty())
+        std::printf("selective's speed-up over full-budget, by phase of full-budget's sweep:\n%s",
+                    summary.str().c_str());
     if (measured == 0) {
         std::fprintf(stderr, "afterglow bench settle: nothing measured\n");
         return 1;

@@ -147,17 +147,18 @@ SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double tar
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
                                int frames, int width, int height, const std::string& component,
                                const Image& reference, int threads, bool prime,
-                               const std::function<void(int)>& on_frame) {
-    return run_convergence(std::move(scene), script_path, mode, frames, width, height, component,
-                           [&](int) -> const Image& { return reference; }, threads, prime, on_frame,
-                           {});
+                               const std::function<void(int)>& on_frame, int lead_in) {
+    return run_convergence(
+        std::move(scene), script_path, mode, frames, width, height, component,
+        [&](int) -> const Image& { return reference; }, threads, prime, on_frame, {}, lead_in);
 }
 
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
                                int frames, int width, int height, const std::string& component,
                                const ReferenceAt& reference_at, int threads, bool prime,
                                const std::function<void(int)>& on_frame,
-                               const std::function<void(int, const Image&)>& on_image) {
+                               const std::function<void(int, const Image&)>& on_image,
+                               int lead_in) {
     scene.camera.width = width;
     scene.camera.height = height;
     const std::optional<FrameTerm> term =
@@ -176,6 +177,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
     double wall = 0.0;
     FrameLoop loop(pipeline, script ? &*script : nullptr);
     loop.on_script_error = [](const std::string& message) { warn(message); };
+    for (int f = 0; f < lead_in; ++f) loop.step(/*play=*/false);  // untimed, before the script
+    pipeline.sync();
     for (int f = 0; f < frames; ++f) {
         const Clock::time_point t0 = Clock::now();
         const PipelineStats st = loop.step();

@@ -86,11 +86,13 @@ double converged_error(const Scene& scene, const std::string& script_path, int f
 // the script (may be empty) in `mode`, comparing `component` ("full" or a frame term) with
 // `reference` after every frame; wall time counts the script and the pipeline, not the read-back
 // and metrics. A GL context must be current. `on_frame` (may be empty) is called after each frame
-// with the number done. threads < 0: settings.threads.
+// with the number done. threads < 0: settings.threads. `lead_in` frames are drawn after priming
+// and before the script's first frame, untimed and unrecorded: a mode that sweeps round robin
+// (full-budget) then meets the edit at another point of its sweep.
 ConvergenceRun run_convergence(Scene scene, const std::string& script_path, PipelineMode mode,
                                int frames, int width, int height, const std::string& component,
                                const Image& reference, int threads, bool prime,
-                               const std::function<void(int)>& on_frame = {});
+                               const std::function<void(int)>& on_frame = {}, int lead_in = 0);
 
 // The same with a reference per frame (`reference_at(frame)`: the image of the state that frame
 // converges to) and `on_image(frame, image)`, called with each frame's compared image outside
@@ -100,7 +102,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
                                int frames, int width, int height, const std::string& component,
                                const ReferenceAt& reference_at, int threads, bool prime,
                                const std::function<void(int)>& on_frame,
-                               const std::function<void(int, const Image&)>& on_image);
+                               const std::function<void(int, const Image&)>& on_image,
+                               int lead_in = 0);
 
 // Resident set size of this process in bytes (/proc/self/statm).
 double resident_bytes();
