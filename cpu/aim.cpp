@@ -51,8 +51,8 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     radiance_.assign(n, glm::vec3(0.0f));
     irradiance_.assign(n, glm::vec3(0.0f));
     dirty_flag_.assign(n, 0);
-    indirect_.assign(scene_.atlas.texels.size(), 0.0f);
-    indirect_change_.assign(scene_.atlas.texels.size(), -1.0f);
+    indirect_.assign(scene_.atlas.texels.size(), -1.0f);
+    indirect_floor_.assign(scene_.atlas.texels.size(), 0.0f);
     texture_mean_.resize(scene_.atlas.texels.size());
     pool_.parallel_for(
         texture_mean_.size(),
@@ -120,12 +120,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         const size_t a = size_t(t.y) * size_t(scene_.atlas.width) + size_t(t.x);
         irradiance_[a] = e[i];
         radiance_[a] = albedo * texture_mean_[size_t(texels[i])] / float(std::numbers::pi) * e[i];
-        const float before = indirect_[size_t(texels[i])], now = float(energy(indirect[i]));
-        const float denominator = before + now + floor_indirect;
-        const float change = denominator > 0.0f ? std::abs(now - before) / denominator : 0.0f;
-        float& noted = indirect_change_[size_t(texels[i])];
-        noted = std::max(noted, change);
-        indirect_[size_t(texels[i])] = now;
+        indirect_[size_t(texels[i])] = float(energy(indirect[i]));
+        indirect_floor_[size_t(texels[i])] = floor_indirect;
         if (!dirty_flag_[a]) {
             dirty_flag_[a] = 1;
             dirty_.push_back(int(a));
@@ -183,12 +179,6 @@ int Aim::rebuild_all(PhotonMaps& maps) {
     int texels = 0;
     for (int s = 0; s < int(maps.surface_count()); ++s) texels += rebuild_surface(maps, s);
     return texels;
-}
-
-std::vector<float> Aim::take_indirect_changes() {
-    std::vector<float> changes(indirect_change_.size(), -1.0f);
-    changes.swap(indirect_change_);
-    return changes;
 }
 
 std::vector<int> Aim::take_dirty_texels() {

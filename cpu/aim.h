@@ -37,19 +37,20 @@ public:
     const std::vector<glm::vec3>& irradiance() const { return irradiance_; }
     // Atlas texel indices (y·width + x) changed since the last call, for uploads.
     std::vector<int> take_dirty_texels();
-    // Per texel record: how much its indirect irradiance estimate (the hits that made at least
-    // one bounce, the light a final gather there collects) changed over the rebuilds since the
-    // last call, relative, |ΔE| / (E_old + E_new + 5% of the surface's mean); −1 where the texel
-    // was not rebuilt. The IIM gathers the most changed texels first.
-    std::vector<float> take_indirect_changes();
+    // Per texel record: its indirect irradiance estimate (energy of the hits that made at least
+    // one bounce: the light a final gather there collects) as last built, −1 = never built; and
+    // 5% of its surface's mean estimate then (the floor of a relative change). The IIM compares a
+    // texel's estimate now with the one it had when the texel was last gathered.
+    const std::vector<float>& indirect_estimates() const { return indirect_; }
+    const std::vector<float>& indirect_floors() const { return indirect_floor_; }
 
 private:
     const Scene& scene_;
     ThreadPool& pool_;
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
-    std::vector<float> indirect_;         // per record: indirect irradiance (energy) as last built
-    std::vector<float> indirect_change_;  // per record, since take_indirect_changes; −1 = none
+    std::vector<float> indirect_;        // per record: indirect irradiance (energy), −1 = never
+    std::vector<float> indirect_floor_;  // per record: 5% of its surface's mean indirect_
     // Per atlas texel record: the mean of its object's albedo texture over the texel (1 without
     // one), so that the AIM's radiance is the texel's mean exitant radiance.
     std::vector<glm::vec3> texture_mean_;

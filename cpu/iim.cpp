@@ -48,9 +48,6 @@ void Iim::schedule(PhotonMaps& maps) {
         return maps.surface(a).delta_i > maps.surface(b).delta_i;
     });
     if (surfaces.empty()) return;
-    // The photons say where the light changed: those texels go before everything else queued by
-    // proximity to a moved object or by a sweep, largest Δi first (a texel already queued moves
-    // up to its surface's place).
     // Texels never gathered show no indirect light at all, the largest error there is: they keep
     // their place ahead of everything, or an object edited every frame would starve them. Then
     // the photons say where the light changed: those texels go before everything else queued by
@@ -76,17 +73,11 @@ void Iim::schedule(PhotonMaps& maps) {
             changed.push_back(t);
         }
     }
-    // Within them, the texels whose own indirect estimate changed most go first (a texel whose
-    // AIM was not rebuilt yet is not known to be unchanged: it keeps its surface's place).
-    if (!change_.empty()) {
-        auto key = [&](int t) {
-            const float c = change_[size_t(t)];
-            return c < 0.0f ? std::numeric_limits<float>::infinity() : c;
-        };
+    // Within them, the texels whose own indirect estimate moved most since they were last
+    // gathered go first (one whose estimate is not known keeps its surface's place, first).
+    if (!estimate_.empty())
         std::stable_sort(changed.begin(), changed.end(),
-                         [&](int a, int b) { return key(a) > key(b); });
-        for (int t : changed) change_[size_t(t)] = -1.0f;
-    }
+                         [&](int a, int b) { return staleness(a) > staleness(b); });
     order.insert(order.end(), changed.begin(), changed.end());
     for (int t : pending_)
         if (!moved[size_t(t)]) order.push_back(t);
@@ -94,10 +85,20 @@ void Iim::schedule(PhotonMaps& maps) {
     pending_.assign(order.begin(), order.end());
 }
 
-void Iim::note_indirect_changes(const std::vector<float>& per_record) {
-    if (per_record.size() != texel_generation_.size()) return;
-    if (change_.empty()) change_.assign(per_record.size(), -1.0f);
-    for (size_t r = 0; r < per_record.size(); ++r) change_[r] = std::max(change_[r], per_record[r]);
+void Iim::note_indirect_estimates(const std::vector<float>& estimates,
+                                  const std::vector<float>& floors) {
+    if (estimates.size() != texel_generation_.size() || floors.size() != estimates.size()) return;
+    if (estimate_gathered_.empty()) estimate_gathered_.assign(estimates.size(), -1.0f);
+    estimate_ = estimates;
+    estimate_floor_ = floors;
+}
+
+float Iim::staleness(int record) const {
+    if (estimate_.empty()) return std::numeric_limits<float>::infinity();
+    const float now = estimate_[size_t(record)], then = estimate_gathered_[size_t(record)];
+    if (now < 0.0f || then < 0.0f) return std::numeric_limits<float>::infinity();
+    const float denominator = now + then + estimate_floor_[size_t(record)];
+    return denominator > 0.0f ? std::abs(now - then) / denominator : 0.0f;
 }
 
 void Iim::set_coverage(const std::vector<float>& per_record) {
@@ -272,7 +273,10 @@ IimFrameStats Iim::gather_records(Gatherer& gatherer, const std::vector<int>& ba
     IimFrameStats stats;
     last_gathered_.clear();
     if (batch.empty()) return stats;
-    for (int t : batch) texel_generation_[size_t(t)] = aim_generation_;
+    for (int t : batch) {
+        texel_generation_[size_t(t)] = aim_generation_;
+        if (!estimate_.empty()) estimate_gathered_[size_t(t)] = estimate_[size_t(t)];
+    }
 
     const std::vector<GatherResult> results = gatherer.gather(batch);
     std::vector<int> invalid;

@@ -41,10 +41,16 @@ public:
     // the surface's flux), largest Δi first and ahead of everything else queued but texels never
     // gathered, and resets those surfaces' Δi.
     void schedule(PhotonMaps& maps);
-    // Per texel record, how much its indirect estimate changed in the AIM rebuilds since the last
-    // call (Aim::take_indirect_changes; −1 = not rebuilt): the next schedule() orders the texels
-    // of changed surfaces by it, largest first.
-    void note_indirect_changes(const std::vector<float>& per_record);
+    // Per texel record, its indirect irradiance estimate from the photons as the AIMs now hold it
+    // and the floor of a relative change (Aim::indirect_estimates, indirect_floors; −1 = never
+    // built). A texel's staleness is how far its estimate moved since the texel was last gathered,
+    // |E_now − E_gathered| / (E_now + E_gathered + floor): the next schedule() orders the texels
+    // of changed surfaces by it, most stale first. Measured from the last gather, not from the
+    // last AIM rebuild, so small changes over many frames of a continuous move add up.
+    void note_indirect_estimates(const std::vector<float>& estimates,
+                                 const std::vector<float>& floors);
+    // The staleness above; +∞ where either estimate is not known.
+    float staleness(int record) const;
     // Per texel record, the fraction of the screen it covers (gpu::TexelCoverage); empty = not
     // known. Texels the camera sees are queued and refreshed before the others of their class.
     void set_coverage(const std::vector<float>& per_record);
@@ -107,8 +113,10 @@ private:
 
     const Scene& scene_;
     std::vector<float> coverage_;  // per record; empty = not known
-    std::vector<float> change_;    // per record: noted indirect change, −1 = none; empty = never
-    std::deque<int> pending_;      // texel records, FIFO, each at most once
+    // Per record: the photons' indirect estimate now and when last gathered (−1 = not known),
+    // and the floor of a relative change; empty = never noted.
+    std::vector<float> estimate_, estimate_gathered_, estimate_floor_;
+    std::deque<int> pending_;  // texel records, FIFO, each at most once
     std::vector<char> is_pending_;
     std::vector<int> last_gathered_;
     std::vector<char> valid_;                         // per record: last gather saw few back faces

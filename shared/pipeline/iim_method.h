@@ -38,10 +38,11 @@ public:
     uint64_t changes_seen() const override { return seen_sequence_; }
 
     const cpu::Iim& iim() const { return iim_; }
-    // Per texel record, the AIM's relative indirect change since the last hand-over (see
-    // cpu::Aim::take_indirect_changes); the selective schedule gathers the most changed first.
-    void note_indirect_changes(const std::vector<float>& per_record) {
-        iim_.note_indirect_changes(per_record);
+    // Per texel record, the photons' indirect estimate as the AIMs now hold it (see
+    // cpu::Iim::note_indirect_estimates); the selective schedule gathers the most stale first.
+    void note_indirect_estimates(const std::vector<float>& estimates,
+                                 const std::vector<float>& floors) {
+        iim_.note_indirect_estimates(estimates, floors);
     }
     GLuint texture() const { return texture_.id(); }
     Gatherer& gatherer(GatherBackend backend);

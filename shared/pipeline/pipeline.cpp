@@ -182,7 +182,7 @@ void Pipeline::hand_over(PipelineStats& stats) {
     aim_dirty_ = aim_->take_dirty_texels();
     for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     if (IimMethod* m = iim_method(); m && mode_ == PipelineMode::selective)
-        m->note_indirect_changes(aim_->take_indirect_changes());
+        m->note_indirect_estimates(aim_->indirect_estimates(), aim_->indirect_floors());
     indirect_->hand_over(*photons_, stats);
     // Both readers of the change log have seen this frame's edits: without trimming, the log
     // grows by every edit for as long as the program runs.
@@ -200,12 +200,14 @@ int Pipeline::prime(int max_frames) {
     const int aim_texels = uses_photon_maps_ ? aim_->rebuild_all(photons_->maps()) : 0;
     const Clock::time_point t2 = Clock::now();
     for (int a : aim_->take_dirty_texels()) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
-    aim_->take_indirect_changes();  // everything is gathered below: nothing to order
     std::vector<int> all(staged_aim_.size());
     for (size_t a = 0; a < all.size(); ++a) all[a] = int(a);
     aim_texture_.update(staged_aim_, all);
     aim_dirty_.clear();
     const Clock::time_point t3 = Clock::now();
+    // Every texel is gathered below with these estimates: its staleness starts at 0.
+    if (IimMethod* m = iim_method(); m && mode_ == PipelineMode::selective)
+        m->note_indirect_estimates(aim_->indirect_estimates(), aim_->indirect_floors());
     indirect_->prime(*photons_, frame_);
     gpu::gl::Finish();
     int enabled = 0;

@@ -69,16 +69,18 @@ TEST(Aim, UpdateFollowsDeltaAndBudget) {
 
 namespace ag::cpu {
 
-// Per-texel indirect change: zero for a rebuild from the same hits, −1 where nothing was rebuilt,
-// positive where the bounced light (and only the bounced light) changed.
-TEST(Aim, IndirectChangePerTexel) {
+// Per-texel indirect estimate: −1 until built, the same for a rebuild from the same hits, and
+// following the bounced light (only the bounced light) when it changes; its floor is 5% of the
+// surface's mean estimate.
+TEST(Aim, IndirectEstimatePerTexel) {
     Scene scene = load_scene(test::scene_path("cornell.json"));
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     sim.trace_all();
     Aim aim(scene, pool);
+    for (float e : aim.indirect_estimates()) ASSERT_EQ(e, -1.0f);  // nothing built yet
     aim.rebuild_all(sim.maps());
-    for (float c : aim.take_indirect_changes()) ASSERT_GE(c, 0.0f);  // every texel rebuilt
+    for (float e : aim.indirect_estimates()) ASSERT_GE(e, 0.0f);  // every texel built
 
     // The surface with the most indirect hits.
     PhotonMaps& maps = sim.maps();
@@ -90,16 +92,21 @@ TEST(Aim, IndirectChangePerTexel) {
         if (bounced > most) most = bounced, surface = s;
     }
     ASSERT_GT(most, 0u);
+    const std::vector<float> before = aim.indirect_estimates();
     aim.rebuild_surface(maps, surface);
-    std::vector<float> c = aim.take_indirect_changes();
-    for (size_t r = 0; r < c.size(); ++r) {
-        if (scene.atlas.texels[r].surface == surface)
-            EXPECT_EQ(c[r], 0.0f) << "record " << r;
-        else
-            EXPECT_EQ(c[r], -1.0f) << "record " << r;
+    EXPECT_EQ(aim.indirect_estimates(), before);
+    double mean = 0.0;
+    int texels = 0;
+    for (size_t r = 0; r < before.size(); ++r)
+        if (scene.atlas.texels[r].surface == surface) mean += before[r], ++texels;
+    mean /= texels;
+    for (size_t r = 0; r < before.size(); ++r) {
+        if (scene.atlas.texels[r].surface != surface) continue;
+        EXPECT_NEAR(aim.indirect_floors()[r], 0.05 * mean, 1e-5 * mean) << "record " << r;
     }
+
     // Bounced hits three times as strong (the surface's flux kept equal to its hits'): the
-    // indirect estimate changes across the surface.
+    // indirect estimate changes across the surface and nowhere else.
     SurfaceHits& hits = maps.surface(surface);
     hits.flux = glm::dvec3(0.0);
     for (PhotonHit& h : hits.hits) {
@@ -107,13 +114,16 @@ TEST(Aim, IndirectChangePerTexel) {
         hits.flux += glm::dvec3(h.power);
     }
     aim.rebuild_surface(maps, surface);
-    c = aim.take_indirect_changes();
-    int changed = 0, texels = 0;
-    for (size_t r = 0; r < c.size(); ++r)
-        if (scene.atlas.texels[r].surface == surface) {
-            ++texels;
-            changed += c[r] > 0.1f ? 1 : 0;
+    const std::vector<float>& after = aim.indirect_estimates();
+    int changed = 0;
+    for (size_t r = 0; r < after.size(); ++r) {
+        if (scene.atlas.texels[r].surface != surface) {
+            EXPECT_EQ(after[r], before[r]) << "record " << r;
+            continue;
         }
+        const float relative = std::abs(after[r] - before[r]) / (after[r] + before[r] + 1e-30f);
+        changed += relative > 0.1f ? 1 : 0;
+    }
     EXPECT_GT(changed, texels / 2);
 }
 

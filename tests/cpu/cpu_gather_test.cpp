@@ -633,37 +633,59 @@ TEST(IimSchedule, TexelsTheCameraSeesGoFirst) {
 namespace ag::cpu {
 
 // Among the texels of surfaces whose indirect hits changed, those whose own indirect estimate
-// changed most are gathered first; one whose AIM was not rebuilt keeps its surface's place.
-TEST(IimSchedule, MostChangedTexelsFirst) {
+// moved most since they were last gathered go first; one whose estimate is not known keeps its
+// surface's place (first). Staleness is measured from the last gather, so a texel that drifts a
+// little every frame of a continuous move overtakes one that jumped once by less in all: ordering
+// by each rebuild's own change (as before) put the one-time jump first.
+TEST(IimSchedule, MostStaleTexelsFirst) {
     ScheduleCase c;
     Simulated& s = c.s;
     CpuGather& gather = c.gather;
     Iim& map = c.map;
     const int texels = int(s.scene.atlas.texels.size());
-    map.gather(gather, texels, 0);  // everything gathered once
+    ASSERT_GT(texels, 10);
+    const std::vector<float> floors(size_t(texels), 0.0f);
+    std::vector<float> estimate(size_t(texels), 1.0f);
+    map.note_indirect_estimates(estimate, floors);
+    map.gather(gather, texels, 0);  // everything gathered once, at estimate 1
     ASSERT_TRUE(map.complete());
+    for (int r = 0; r < texels; ++r) EXPECT_EQ(map.staleness(r), 0.0f) << "record " << r;
     PhotonMaps& maps = s.sim->maps();
-    for (int surface = 0; surface < int(maps.surface_count()); ++surface)
-        maps.surface(surface).delta_i = 1e9;
-    std::vector<float> change(size_t(texels), 0.0f);
-    std::vector<int> first;
-    for (int r = 0; r < texels; r += 5) {
-        change[size_t(r)] = 0.5f + float(r) / float(texels);  // distinct, growing with r
-        first.push_back(r);
+
+    // Ten frames of a move: every fifth record drifts by d/10 a frame to 1 + d (d distinct,
+    // growing with the record); record 3 jumps once, in the last frame, to 1.3.
+    std::vector<int> drifting;
+    for (int r = 0; r < texels; r += 5) drifting.push_back(r);
+    auto drift = [&](int r) { return 0.5f + float(r) / float(texels); };
+    for (int frame = 1; frame <= 10; ++frame) {
+        for (int r : drifting) estimate[size_t(r)] = 1.0f + drift(r) * float(frame) / 10.0f;
+        if (frame == 10) {
+            estimate[3] = 1.3f;
+            estimate[1] = -1.0f;  // not known
+        }
+        map.note_indirect_estimates(estimate, floors);
+        for (int surface = 0; surface < int(maps.surface_count()); ++surface)
+            maps.surface(surface).delta_i = 1e9;
+        map.schedule(maps);
     }
-    change[1] = -1.0f;  // not rebuilt: counts as changed most
-    first.push_back(1);
-    map.note_indirect_changes(change);
-    map.schedule(maps);
-    map.gather(gather, int(first.size()), 1);
-    std::vector<int> got = map.last_gathered();
-    ASSERT_EQ(got.size(), first.size());
+    EXPECT_NEAR(map.staleness(3), 0.3f / 2.3f, 1e-6f);
+    EXPECT_NEAR(map.staleness(0), drift(0) / (2.0f + drift(0)), 1e-6f);
+    EXPECT_EQ(map.staleness(1), std::numeric_limits<float>::infinity());
+    EXPECT_EQ(map.staleness(2), 0.0f);
+
+    map.gather(gather, int(drifting.size()) + 2, 11);
+    const std::vector<int> got = map.last_gathered();
+    ASSERT_EQ(got.size(), drifting.size() + 2);
     EXPECT_EQ(got.front(), 1);
-    for (size_t k = 2; k < got.size(); ++k)  // then by change, largest first
-        EXPECT_GT(change[size_t(got[k - 1])], change[size_t(got[k])]) << "position " << k;
-    std::sort(got.begin(), got.end());
-    std::sort(first.begin(), first.end());
-    EXPECT_EQ(got, first);
+    for (size_t k = 1; k < drifting.size(); ++k)  // the drifting ones, most stale first
+        EXPECT_EQ(got[k], drifting[drifting.size() - k]) << "position " << k;
+    EXPECT_EQ(got[drifting.size()], 0);
+    EXPECT_EQ(got.back(), 3);  // the one-time jump: less stale than any drifting record
+    // Gathering resets staleness.
+    for (int r : got) {
+        if (r == 1) continue;
+        EXPECT_EQ(map.staleness(r), 0.0f) << "record " << r;
+    }
 }
 
 }  // namespace ag::cpu
