@@ -128,6 +128,10 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
     const std::vector<double> radii = parse_list(args.get("radii"), "radii");
     const bool no_direct = args.has("no-direct");
     const bool budget = args.has("budget");
+    if (args.has("reference") && no_direct)
+        throw CliError(
+            "afterglow bench gpu_pm: --reference compares the composed frame; --no-direct has "
+            "none");
     auto context = gpu::make_gl_context(args.gl_backend());
     std::printf("GL: %s (%s)\n", context->renderer().c_str(), context->version().c_str());
     Scene scene = load_scene(scene_path);
