@@ -167,9 +167,9 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
     if (budget)
         std::printf("paths per radius chosen for %.3g ms of the method's time (Table 6.2)\n",
                     args.get_double("budget"));
-    std::printf("%8s %9s %8s %9s %8s %8s %9s %8s %8s %8s %8s %7s\n", "paths", "(stored)",
-                "radius", "gpu_pm ms", "sigma", "median", "frame ms", "sigma", "refined", "MSE",
-                "NRMSE", "MSSIM");
+    std::printf("%8s %9s %8s %9s %8s %8s %9s %8s %8s %8s %8s %7s\n", "paths", "(stored)", "radius",
+                "gpu_pm ms", "sigma", "median", "frame ms", "sigma", "refined", "MSE", "NRMSE",
+                "MSSIM");
     auto report = [&](int n, double r) {
         const Cell c = run_cell(scene, g_buffer, renderer.get(), n, float(r), frames);
         std::printf("%8d %9u %8.4g %9.2f %8.2f %8.2f", n, c.stored, r, c.method.mean,
