@@ -93,19 +93,20 @@ Cell run_cell(Scene& scene, gpu::GBuffer& g_buffer, gpu::FrameRenderer* renderer
 
 // Table 6.2: the paths whose method time is `budget` ms at this radius. The time is close to
 // linear in the paths (tracing and binning are per photon, the estimate per photon in a tile), so
-// a line through two probes gives the count, refined once by a third probe's line.
+// a line through two probes (medians of 8 frames: the machine may be loaded) gives the count,
+// refined once by a third probe's line.
 int paths_for_budget(Scene& scene, gpu::GBuffer& g_buffer, float radius, double budget) {
-    constexpr int kProbeFrames = 4;
+    constexpr int kProbeFrames = 8;
     int lo = 250, hi = 4000;
-    double t_lo = run_cell(scene, g_buffer, nullptr, lo, radius, kProbeFrames).method.mean;
-    double t_hi = run_cell(scene, g_buffer, nullptr, hi, radius, kProbeFrames).method.mean;
+    double t_lo = run_cell(scene, g_buffer, nullptr, lo, radius, kProbeFrames).method.median;
+    double t_hi = run_cell(scene, g_buffer, nullptr, hi, radius, kProbeFrames).method.median;
     int paths = lo;
     for (int round = 0; round < 2; ++round) {
         const double slope = std::max((t_hi - t_lo) / double(hi - lo), 1e-9);
-        paths = int(std::clamp(double(lo) + (budget - t_lo) / slope, 50.0, 1e6));
+        paths = int(std::clamp(double(lo) + (budget - t_lo) / slope, 50.0, 100000.0));
         if (round == 1) break;
         const double t =
-            run_cell(scene, g_buffer, nullptr, paths, radius, kProbeFrames).method.mean;
+            run_cell(scene, g_buffer, nullptr, paths, radius, kProbeFrames).method.median;
         // Keep the probe nearer the answer; the line through it and the other is the refinement.
         if (std::abs(paths - lo) < std::abs(paths - hi)) {
             hi = paths;
