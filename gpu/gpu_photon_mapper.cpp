@@ -231,24 +231,30 @@ void main() {
 )";
 
 // Eq. 5.6 with k = 1 over the photons of the pixel's tile: E/π = Σ Φ_p w_p / ((1 − 2/3) π r² · π)
-// over photons arriving at the front of the surface; `kwast` adds his N·L.
+// over photons arriving at the front of the surface; `kwast` adds his N·L. The sum is taken in
+// 64-bit fixed point (units of `fixed_unit`, 2⁻²⁴ of the largest photon power; two 32-bit words
+// with carry), so it does not depend on the order of the tile's list, which GPU atomics choose:
+// the same seed gives the same bits on every run and with either binning.
 const char* kEstimate = R"(
 uniform sampler2D position_map, normal_map, ids_map;
-uniform float estimate_scale;
+uniform float estimate_scale, fixed_unit;
 uniform int kwast;
 vec3 estimate(ivec2 px, vec3 x, vec3 n) {
     int t = (px.y / 8) * tiles.x + px.x / 8;
     uint begin = min(tile_offsets[t], index_capacity), end = min(tile_offsets[t + 1], index_capacity);
-    vec3 sum = vec3(0.0);
+    uvec3 lo = uvec3(0u), hi = uvec3(0u);
     for (uint k = begin; k < end; ++k) {
         Photon ph = photons[indices[k]];
         float d = distance(ph.position.xyz, x);
         if (d >= radius) continue;
         float cos_in = dot(n, octahedral_decode(vec2(ph.position.w, ph.power.w)));
         if (cos_in <= 0.0) continue;
-        sum += ph.power.xyz * cone_weight(d, radius, 1.0) * (kwast != 0 ? min(cos_in, 1.0) : 1.0);
+        vec3 c = ph.power.xyz * cone_weight(d, radius, 1.0) * (kwast != 0 ? min(cos_in, 1.0) : 1.0);
+        uvec3 carry;
+        lo = uaddCarry(lo, uvec3(clamp(c / fixed_unit + 0.5, 0.0, 4294967040.0)), carry);
+        hi += carry;
     }
-    return sum * estimate_scale;
+    return (vec3(hi) * 4294967296.0 + vec3(lo)) * (fixed_unit * estimate_scale);
 }
 )";
 
@@ -317,6 +323,25 @@ void main() {
     }
     barrier();
     if (gl_LocalInvocationIndex == 0u && group_refined > 0u) atomicAdd(refined, group_refined);
+}
+)";
+
+// The viewer's picture of the binning: each pixel coloured by its tile's photon count (log scale,
+// blue → red, 1 to 2¹⁶ photons; black: none; grey: a tile with no geometry), tile edges darker;
+// a holds the count.
+const char* kTileView = R"(
+layout(local_size_x = 8, local_size_y = 8) in;
+layout(rgba32f, binding = 2) writeonly uniform image2D tile_image;
+void main() {
+    ivec2 p = ivec2(gl_GlobalInvocationID.xy);
+    if (p.x >= size.x || p.y >= size.y) return;
+    int t = (p.y / 8) * tiles.x + p.x / 8;
+    uint n = tile_offsets[t + 1] - tile_offsets[t];
+    float s = clamp(log2(1.0 + float(n)) / 16.0, 0.0, 1.0);
+    vec3 c = clamp(1.5 - abs(4.0 * s - vec3(3.0, 2.0, 1.0)), 0.0, 1.0);
+    if (n == 0u) c = tile_depth[t].x > tile_depth[t].y ? vec3(0.05) : vec3(0.0);
+    if (p.x % 8 == 0 || p.y % 8 == 0) c *= 0.6;
+    imageStore(tile_image, p, vec4(c, float(n)));
 }
 )";
 
@@ -418,6 +443,7 @@ GpuPhotonMapper::GpuPhotonMapper(const Scene& scene, const GBuffer& g_buffer)
                          with_common((std::string(kEstimate) + kEstimateLow).c_str(), true));
     composite_ = Program::compute("gpu_pm composite",
                                   with_common((std::string(kEstimate) + kComposite).c_str(), true));
+    tile_view_program_ = Program::compute("gpu_pm tile view", with_common(kTileView, true));
     capacity_ = size_t(s.paths) * size_t(s.frames) * size_t(s.bounces);
     photons_ = make_storage_buffer(std::max<size_t>(capacity_, 1) * sizeof(Photon));
     counter_ = make_storage_buffer(4 * sizeof(uint32_t));
@@ -447,6 +473,17 @@ void GpuPhotonMapper::reset() {
     if (materials.empty()) materials.emplace_back(0.0f);
     materials_ = make_storage_buffer(materials.size() * sizeof(glm::vec4), materials.data());
     radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();
+    // The largest power one photon can carry: the trace's Φ_e / (paths · p_e), up to 2× for a
+    // spot's weight, ×100 under `kwast` (albedo ≤ 1 only lowers it).
+    max_photon_power_ = 0.0f;
+    for (const PhotonEmitter& e : emitters) {
+        const float p = e.cdf_hi - e.cdf_lo;
+        if (p > 0.0f)
+            max_photon_power_ =
+                std::max(max_photon_power_, std::max({e.power.r, e.power.g, e.power.b}) *
+                                                (e.type == kEmitterSpot ? 2.0f : 1.0f) / p);
+    }
+    if (scene_.settings.gpu_pm.estimator == GpuPmEstimator::kwast) max_photon_power_ *= 100.0f;
     clear_photons();
 }
 
@@ -562,10 +599,14 @@ void GpuPhotonMapper::render() {
     const float norm = photon::cone_normalisation(radius_, 1.0f);
     const float scale =
         frames_ > 0 ? 1.0f / (float(frames_) * std::numbers::pi_v<float> * norm) : 0.0f;
+    // Photon power is Φ_e / (paths · p_e): the fixed-point unit follows the paths per frame.
+    const float fixed_unit =
+        std::max(max_photon_power_ / float(std::max(1, s.paths)), 1e-30f) * 0x1p-24f;
     const int f = std::max(1, s.low_res);
     if (f > 1) {
         set_view_uniforms(estimate_low_, view);
         estimate_low_.set("estimate_scale", scale);
+        estimate_low_.set("fixed_unit", fixed_unit);
         estimate_low_.set("kwast", s.estimator == GpuPmEstimator::kwast ? 1 : 0);
         estimate_low_.set("low_res", f);
         gl::Uniform2i(estimate_low_.location("low_size"), low_w_, low_h_);
@@ -575,6 +616,7 @@ void GpuPhotonMapper::render() {
     }
     set_view_uniforms(composite_, view);
     composite_.set("estimate_scale", scale);
+    composite_.set("fixed_unit", fixed_unit);
     composite_.set("kwast", s.estimator == GpuPmEstimator::kwast ? 1 : 0);
     composite_.set("low_res", f);
     gl::Uniform2i(composite_.location("low_size"), low_w_, low_h_);
@@ -593,6 +635,19 @@ void GpuPhotonMapper::render() {
     }
     gl::UseProgram(0);
     check_gl("GpuPhotonMapper::render");
+}
+
+GLuint GpuPhotonMapper::render_tile_view() {
+    if (!tile_view_) tile_view_ = make_float_texture(width_, height_);
+    const GBuffer::View& view = g_buffer_.last_view();
+    bind_tile_buffers();
+    set_view_uniforms(tile_view_program_, view);
+    gl::BindImageTexture(2, tile_view_.get(), 0, GL_FALSE, 0, GL_WRITE_ONLY, GL_RGBA32F);
+    gl::DispatchCompute(groups_for(uint64_t(width_), 8), groups_for(uint64_t(height_), 8), 1);
+    gl::MemoryBarrier(GL_TEXTURE_FETCH_BARRIER_BIT | GL_SHADER_IMAGE_ACCESS_BARRIER_BIT);
+    gl::UseProgram(0);
+    check_gl("GpuPhotonMapper::render_tile_view");
+    return tile_view_.get();
 }
 
 uint32_t GpuPhotonMapper::stored_photons() const {

@@ -58,6 +58,9 @@ public:
     void render();
 
     GLuint texture() const { return result_.get(); }  // E/π, RGBA32F; a = 1 where refined
+    // The viewer's picture of the last render's binning, at the G-buffer's size: rgb a log-scale
+    // colour of the pixel's tile's photon count (tile edges darker), a the count.
+    GLuint render_tile_view();
     int frames_accumulated() const { return frames_; }
     bool settled() const;
     uint64_t paths_traced() const { return paths_total_; }  // since reset
@@ -93,13 +96,14 @@ private:
     SurfaceAlbedo albedo_;  // textures where photons bounce
     PrefixSum prefix_sum_;
     Program trace_, tile_bounds_, count_scatter_, insert_scatter_, count_brute_, insert_brute_,
-        estimate_low_, composite_;
+        estimate_low_, composite_, tile_view_program_;
     Buffer emitters_, materials_, photons_, counter_, tile_bounds_buffer_, tile_counts_,
         tile_offsets_, tile_cursor_, indices_;
-    Texture low_radiance_, result_;
+    Texture low_radiance_, result_, tile_view_;
     size_t capacity_ = 0, index_capacity_ = 0;
     uint32_t emitter_count_ = 0;
     float radius_ = 1.0f, total_power_ = 0.0f;
+    float max_photon_power_ = 0.0f;  // × paths: the largest photon's power (fixed-point scale)
     int frames_ = 0;
     uint64_t paths_total_ = 0, revision_ = 1;
 };

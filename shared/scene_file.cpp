@@ -30,8 +30,8 @@ namespace fs = std::filesystem;
 
 constexpr double kMaxSigma = 1e6;     // per scene unit
 constexpr double kMaxPhaseK = 0.999;  // Schlick k; |k| → 1 is a delta peak
-constexpr std::array kShapeNames = {"box", "sphere", "quad", "bumpy_plane"};
-enum class ShapeType { box, sphere, quad, bumpy_plane };
+constexpr std::array kShapeNames = {"box", "sphere", "quad", "bumpy_plane", "lumpy_sphere"};
+enum class ShapeType { box, sphere, quad, bumpy_plane, lumpy_sphere };
 
 std::string format_vec(const glm::vec3& v) {
     return "[" + JsonInput::format_number(v.x) + ", " + JsonInput::format_number(v.y) + ", " +
@@ -648,9 +648,9 @@ private:
 
     Mesh read_shape(const Json& json, const std::string& path) {
         in_.object(json, path);
-        const auto type = ShapeType(
-            in_.choice(in_.require(json, path, "type", "box, sphere, quad or bumpy_plane"),
-                       path + "/type", kShapeNames));
+        const auto type = ShapeType(in_.choice(
+            in_.require(json, path, "type", "box, sphere, quad, bumpy_plane or lumpy_sphere"),
+            path + "/type", kShapeNames));
         Mesh mesh;
         switch (type) {
             case ShapeType::box: {
@@ -694,6 +694,23 @@ private:
                     seed = in_.integer(*v, path + "/seed", 0, 4294967295ll);
                 mesh = make_bumpy_plane(size.x, size.y, int(resolution), float(amplitude),
                                         uint32_t(seed));
+                break;
+            }
+            case ShapeType::lumpy_sphere: {
+                in_.check_keys(json, path, {"type", "radius", "triangles", "amplitude", "seed"});
+                const double radius = in_.number(in_.require(json, path, "radius", "a number > 0"),
+                                                 path + "/radius", 0, kMaxCoordinate, true);
+                const long long triangles = in_.integer(
+                    in_.require(json, path, "triangles", "an integer in [12, 20000000]"),
+                    path + "/triangles", 12, 20000000);
+                double amplitude = 0.0;
+                if (const Json* v = JsonInput::find(json, "amplitude"))
+                    amplitude = in_.number(*v, path + "/amplitude", 0, 0.5 * radius);
+                long long seed = 1;
+                if (const Json* v = JsonInput::find(json, "seed"))
+                    seed = in_.integer(*v, path + "/seed", 0, 4294967295ll);
+                mesh = make_lumpy_sphere(float(radius), lumpy_sphere_cells(triangles),
+                                         float(amplitude), uint32_t(seed));
                 break;
             }
         }

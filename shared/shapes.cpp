@@ -1,10 +1,12 @@
-// Built-in shapes: box, icosphere, quad and bumpy height field, all counter-clockwise outward.
+// Built-in shapes: box, icosphere, quad, bumpy height field and lumpy cube sphere, all
+// counter-clockwise outward.
 #include "shared/shapes.h"
 
 #include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <unordered_map>
 #include <utility>
 
 namespace ag {
@@ -174,6 +176,75 @@ Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude,
             mesh.triangles.push_back({v00, v01, v11});
             mesh.triangles.push_back({v00, v11, v10});
         }
+    return mesh;
+}
+
+int lumpy_sphere_cells(long long triangles) {
+    return std::max(1, int(std::lround(std::sqrt(double(std::max(triangles, 12ll)) / 12.0))));
+}
+
+Mesh make_lumpy_sphere(float radius, int cells, float amplitude, uint32_t seed) {
+    // Lumps: a few waves along random directions, 2–7 cycles round the sphere, as the bumpy plane.
+    constexpr int kWaves = 8;
+    SplitMix rng{0x10B5F3E2ull ^ (uint64_t(seed) << 32 | seed)};
+    glm::vec3 axis[kWaves];
+    float cycles[kWaves], phase[kWaves], weight[kWaves], weight_sum = 0.0f;
+    for (int k = 0; k < kWaves; ++k) {
+        const float z = rng.uniform(-1.0f, 1.0f),
+                    a = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
+        const float s = std::sqrt(std::max(0.0f, 1.0f - z * z));
+        axis[k] = {s * std::cos(a), s * std::sin(a), z};
+        cycles[k] = rng.uniform(2.0f, 7.0f);
+        phase[k] = rng.uniform(0.0f, 2.0f * std::numbers::pi_v<float>);
+        weight[k] = rng.uniform(0.5f, 1.0f);
+        weight_sum += weight[k];
+    }
+    auto lump = [&](const glm::vec3& d) {
+        float h = 0.0f;
+        for (int k = 0; k < kWaves; ++k)
+            h += weight[k] *
+                 std::sin(cycles[k] * std::numbers::pi_v<float> * glm::dot(axis[k], d) + phase[k]);
+        return h / weight_sum;
+    };
+
+    // Lattice points (i, j, k) ∈ [0, n]³ on the cube's surface, each made once, so faces meeting at
+    // an edge share its vertices. tan() spreads them evenly over the sphere.
+    const int n = std::max(1, cells);
+    Mesh mesh;
+    std::unordered_map<uint64_t, unsigned> index;
+    index.reserve(size_t(6) * size_t(n + 1) * size_t(n + 1));
+    auto vertex = [&](int i, int j, int k) {
+        const uint64_t key =
+            (uint64_t(i) * uint64_t(n + 1) + uint64_t(j)) * uint64_t(n + 1) + uint64_t(k);
+        auto [it, inserted] = index.try_emplace(key, unsigned(mesh.positions.size()));
+        if (inserted) {
+            auto warp = [&](int c) {
+                return std::tan(0.25f * std::numbers::pi_v<float> *
+                                (2.0f * float(c) / float(n) - 1.0f));
+            };
+            mesh.positions.push_back(glm::normalize(glm::vec3(warp(i), warp(j), warp(k))));
+        }
+        return it->second;
+    };
+    mesh.triangles.reserve(size_t(12) * size_t(n) * size_t(n));
+    for (int axis_index = 0; axis_index < 3; ++axis_index)
+        for (const int side : {0, n})
+            for (int a = 0; a < n; ++a)
+                for (int b = 0; b < n; ++b) {
+                    auto at = [&](int u, int v) {
+                        int c[3];
+                        c[axis_index] = side;
+                        c[(axis_index + 1) % 3] = u;
+                        c[(axis_index + 2) % 3] = v;
+                        return vertex(c[0], c[1], c[2]);
+                    };
+                    const unsigned v00 = at(a, b), v10 = at(a + 1, b), v01 = at(a, b + 1),
+                                   v11 = at(a + 1, b + 1);
+                    mesh.triangles.push_back({v00, v10, v11});
+                    mesh.triangles.push_back({v00, v11, v01});
+                }
+    orient_outward(mesh);  // on the unit sphere, before the lumps could tilt a face inwards
+    for (glm::vec3& p : mesh.positions) p *= radius + amplitude * lump(p);
     return mesh;
 }
 

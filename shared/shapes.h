@@ -18,5 +18,13 @@ Mesh make_quad(float width, float depth);
 // Height field over the XZ plane (normal +Y), `resolution` × `resolution` cells (2 triangles
 // each), heights a smooth deterministic bump function of amplitude `amplitude`.
 Mesh make_bumpy_plane(float width, float depth, int resolution, float amplitude, uint32_t seed);
+// The number of cells per cube edge that make_lumpy_sphere uses for a target triangle count:
+// 12·n² triangles come closest to `triangles` (n ≥ 1).
+int lumpy_sphere_cells(long long triangles);
+// Closed, dense stand-in for a scanned statue: a cube sphere (each face `cells` × `cells` quads
+// of 2 triangles, 12·cells² in all, vertices shared along the cube's edges so it is watertight)
+// of `radius` with smooth lumps of up to ±`amplitude` (< radius) along the normal; the same seed
+// gives the same lumps everywhere.
+Mesh make_lumpy_sphere(float radius, int cells, float amplitude, uint32_t seed);
 
 }  // namespace ag

@@ -37,6 +37,9 @@ ag_cli_external_test(info_conference conference/conference.obj 0
 ag_cli_external_test(info_conference_faces conference/conference.obj 0
                      "dropped 53627 of 331179 faces as degenerate" info scenes/conference.json)
 ag_cli_test(info_bumpy_133k_box 0 "objects +9 \\(1 dynamic\\)" info scenes/bumpy_133k_box.json)
+# Kwast's box with the Stanford bunny in place of the blocks (69,451 + 10 walls + 320 lamp).
+ag_cli_external_test(info_cornell_kwast_bunny stanford-bunny/bun_zipper.ply 0
+                     "triangles +69781$" info scenes/cornell_kwast_bunny.json)
 add_test(NAME cli.export_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/export_test.sh ${AG_BIN}
          scenes/cornell.json WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.export_cornell PROPERTIES LABELS unit)
@@ -157,6 +160,8 @@ ag_cli_test(compare_ldr_json 0 "\"mse\":0.0" compare --ldr --json docs/images/sp
 ag_cli_test(bench_gpu_pm_bad_paths 2 "--paths: expects positive numbers separated by commas"
             bench gpu_pm --paths 1,x)
 ag_cli_test(bench_gpu_pm_bad_radii 2 "--radii: expects positive numbers" bench gpu_pm --radii 0)
+ag_cli_test(bench_gpu_pm_reference_without_frame 2 "--no-direct has none"
+            bench gpu_pm --no-direct --reference x.exr)
 
 # Irradiance cache (Gautron 2006, docs/irradiance_cache.md): the bench's three variants run on a
 # few tiny frames of Cube in a Box; a bad rc setting names its key.

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "../gpu/gl_fixture.h"
@@ -192,6 +193,82 @@ TEST_F(GpuPmTest, TileListsEqualTheBruteForceBinning) {
     }
     EXPECT_GT(entries, 3000u);           // photons reach several tiles each
     EXPECT_LT(empty, brute.size() / 2);  // and most tiles hold some
+}
+
+static std::vector<float> read_texture(GLuint texture, int width, int height) {
+    std::vector<float> rgba(size_t(width) * size_t(height) * 4);
+    gpu::gl::BindTexture(GL_TEXTURE_2D, texture);
+    gpu::gl::GetTexImage(GL_TEXTURE_2D, 0, GL_RGBA, GL_FLOAT, rgba.data());
+    gpu::gl::BindTexture(GL_TEXTURE_2D, 0);
+    return rgba;
+}
+
+// The estimate sums in fixed point, so the order of a tile's list (chosen by GPU atomics: scatter
+// and brute-force binning fill the lists in different orders, and runs differ) does not change a
+// bit. A float sum differs in the last bits between the two binnings; so would two runs.
+TEST_F(GpuPmTest, TheEstimateHasTheSameBitsWhateverTheOrderOfTheTileLists) {
+    Scene scene = cornell();
+    scene.settings.gpu_pm.paths = 3000;
+    scene.settings.gpu_pm.frames = 2;
+    gpu::SceneMeshes meshes(scene);
+    gpu::GBuffer g(scene, meshes, 48, 40);
+    auto render = [&](GpuPmBinning binning) {
+        gpu::GpuPhotonMapper m(scene, g);
+        m.trace();
+        m.trace();
+        g.render();
+        scene.settings.gpu_pm.binning = binning;
+        m.render();
+        EXPECT_FALSE(m.index_overflow());
+        return read_texture(m.texture(), 48, 40);
+    };
+    const std::vector<float> scatter = render(GpuPmBinning::scatter);
+    const std::vector<float> brute = render(GpuPmBinning::brute);
+    const std::vector<float> again = render(GpuPmBinning::scatter);
+    size_t lit = 0;
+    for (size_t i = 0; i < scatter.size(); ++i) {
+        ASSERT_EQ(std::memcmp(&scatter[i], &brute[i], sizeof(float)), 0)
+            << "value " << i << ": " << scatter[i] << " vs " << brute[i];
+        ASSERT_EQ(std::memcmp(&scatter[i], &again[i], sizeof(float)), 0) << "value " << i;
+        lit += (i % 4 != 3 && scatter[i] > 0.0f) ? 1 : 0;
+    }
+    EXPECT_GT(lit, scatter.size() / 2);  // most of the picture has indirect light
+}
+
+// The viewer's tile view: every pixel carries its tile's list length (a) and a colour that is
+// black only for tiles without photons.
+TEST_F(GpuPmTest, TheTileViewShowsEachTilesPhotonCount) {
+    Scene scene = cornell();
+    scene.settings.gpu_pm.paths = 2000;
+    scene.settings.gpu_pm.frames = 1;
+    gpu::SceneMeshes meshes(scene);
+    gpu::GBuffer g(scene, meshes, 44, 36);  // partial tiles
+    gpu::GpuPhotonMapper m(scene, g);
+    m.trace();
+    g.render();
+    m.render();
+    const auto lists = m.read_tile_lists();
+    const std::vector<float> view = read_texture(m.render_tile_view(), 44, 36);
+    size_t distinct_counts = 0;
+    float last = -1.0f;
+    for (int y = 0; y < 36; ++y)
+        for (int x = 0; x < 44; ++x) {
+            const float* p = &view[(size_t(y) * 44 + size_t(x)) * 4];
+            const size_t n = lists[size_t((y / 8) * m.tiles_x() + x / 8)].size();
+            ASSERT_EQ(p[3], float(n)) << x << "," << y;
+            if (n > 0) {
+                EXPECT_GT(p[0] + p[1] + p[2], 0.0f) << x << "," << y;
+            }
+            if (n > 0 && p[3] != last) ++distinct_counts;
+            last = p[3];
+        }
+    EXPECT_GT(distinct_counts, 5u);
+    // Tile edges are drawn darker than the tile's inside.
+    const float* edge = &view[(size_t(8) * 44 + 12) * 4];
+    const float* inside = &view[(size_t(11) * 44 + 12) * 4];
+    if (edge[3] > 0.0f) {
+        EXPECT_LT(edge[0] + edge[1] + edge[2], inside[0] + inside[1] + inside[2]);
+    }
 }
 
 TEST_F(GpuPmTest, NoCpuRaysAndNoReadBackPerFrame) {

@@ -502,7 +502,23 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
         {"subdivisions", [](Json& j) { j["objects"][1]["shape"]["subdivisions"] = 9; },
          "/objects/1/shape/subdivisions", "expected an integer in [0, 7], got 9"},
         {"shape_type", [](Json& j) { j["objects"][1]["shape"]["type"] = "torus"; },
-         "/objects/1/shape/type", "expected one of box, sphere, quad, bumpy_plane"},
+         "/objects/1/shape/type", "expected one of box, sphere, quad, bumpy_plane, lumpy_sphere"},
+        {"lumpy_triangles",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {{"type", "lumpy_sphere"}, {"radius", 1}, {"triangles", 5}};
+         },
+         "/objects/1/shape/triangles", "expected an integer in [12, 20000000], got 5"},
+        {"lumpy_amplitude",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {
+                 {"type", "lumpy_sphere"}, {"radius", 1}, {"triangles", 100}, {"amplitude", 0.6}};
+         },
+         "/objects/1/shape/amplitude", "expected a number in [0, 0.5], got 0.6"},
+        {"lumpy_missing_triangles",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {{"type", "lumpy_sphere"}, {"radius", 1}};
+         },
+         "/objects/1/shape", "triangles"},
         {"shape_key",
          [](Json& j) {
              j["objects"][1]["shape"]["size"] = {1, 1, 1};

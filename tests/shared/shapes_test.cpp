@@ -104,5 +104,40 @@ TEST(Shapes, BumpyPlaneIsDeterministicPerSeed) {
     for (const glm::vec3& p : flat.positions) EXPECT_EQ(p.y, 0.0f);
 }
 
+TEST(Shapes, LumpySphereHitsItsTriangleTargetClosedOutwardAndWithinItsAmplitude) {
+    // 12·n² triangles nearest the target: 1,000,000 → n = 289 → 1,002,252 (within 0.3%).
+    EXPECT_EQ(lumpy_sphere_cells(1000000), 289);
+    EXPECT_EQ(lumpy_sphere_cells(12), 1);
+    EXPECT_EQ(lumpy_sphere_cells(3), 1);
+    const Mesh smooth = make_lumpy_sphere(2.0f, 6, 0.0f, 1);
+    EXPECT_EQ(smooth.triangles.size(), 12u * 36);
+    EXPECT_EQ(smooth.positions.size(), 6u * 36 + 2);  // V = E − F + 2 on a closed genus-0 mesh
+    for (const glm::vec3& p : smooth.positions) EXPECT_NEAR(glm::length(p), 2.0f, 1e-5f);
+    expect_outward(smooth);
+    expect_closed_and_consistent(smooth);
+    const Mesh lumpy = make_lumpy_sphere(2.0f, 24, 0.3f, 5);
+    expect_closed_and_consistent(lumpy);
+    float lo = 10.0f, hi = 0.0f;
+    for (const glm::vec3& p : lumpy.positions) {
+        lo = std::min(lo, glm::length(p));
+        hi = std::max(hi, glm::length(p));
+    }
+    EXPECT_GE(lo, 1.7f - 1e-5f);
+    EXPECT_LE(hi, 2.3f + 1e-5f);
+    EXPECT_GT(hi - lo, 0.2f) << "the sphere should actually be lumpy";
+    // Outward on average: the enclosed volume (divergence theorem) is positive and near 4/3·π·r³.
+    double volume = 0.0;
+    for (const glm::uvec3& t : lumpy.triangles)
+        volume +=
+            glm::dot(lumpy.positions[t.x], glm::cross(lumpy.positions[t.y], lumpy.positions[t.z])) /
+            6.0;
+    EXPECT_NEAR(volume, 4.0 / 3.0 * std::numbers::pi * 8.0,
+                0.25 * 4.0 / 3.0 * std::numbers::pi * 8.0);
+    EXPECT_EQ(make_lumpy_sphere(2.0f, 8, 0.3f, 5).positions,
+              make_lumpy_sphere(2.0f, 8, 0.3f, 5).positions);
+    EXPECT_NE(make_lumpy_sphere(2.0f, 8, 0.3f, 5).positions,
+              make_lumpy_sphere(2.0f, 8, 0.3f, 6).positions);
+}
+
 }  // namespace
 }  // namespace ag

@@ -16,3 +16,5 @@ endfunction()
 ag_viewer_test(script)
 # Recorded clicks drag the cube: it moved, and IIM texels around it were gathered again.
 ag_viewer_test(replay)
+# gpu_pm's photon-tile view draws a picture.
+ag_viewer_test(photon_tiles)

@@ -62,6 +62,13 @@ case $test_name in
             expect "$check" not-blank "$out/$shot"
         done
         ;;
+    photon_tiles)
+        # gpu_pm's photon-tile view from the first frame (docs/gpu_pm.md): a picture, not black.
+        view scenes/cornell.json --indirect gpu_pm --view photon_tiles --frames 6 --size 128x128 \
+            --shots "$out" --set gpu_pm.paths=500
+        expect "$check" not-blank "$out/first.png"
+        expect "$check" not-blank "$out/last.png"
+        ;;
     *)
         echo "unknown viewer test '$test_name'"
         exit 2

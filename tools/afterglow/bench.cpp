@@ -55,7 +55,9 @@ const Command kBenchCommand{
     "--indirect gpu_pm (--paths x --radii, radius as a fraction of the scene diagonal) at --size "
     "(default 256x256): stored photons, frame time mean and sigma over --frames (default 20), "
     "pixels refined at full resolution, and with --reference the 8-bit MSE, NRMSE and MSSIM of the "
-    "frame (docs/gpu_pm.md). 'vpl [SCENE]': Barczak 2006's claims on the VPL path "
+    "frame; --budget MS picks the paths of each radius for a fixed time (Table 6.2); "
+    "--no-direct times the method alone (docs/gpu_pm.md). 'vpl [SCENE]': Barczak 2006's claims on "
+    "the VPL path "
     "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
     "150/100/50 map updates a frame, static maps, no visibility and exact CPU rays; fps against "
     "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md). "
@@ -108,6 +110,12 @@ const Command kBenchCommand{
         text("radii", "LIST", "'gpu_pm': radii as fractions of the scene diagonal, comma-separated",
              "0.0125,0.025,0.05,0.075,0.1"),
         text("reference", "REF.exr", "'gpu_pm': reference frame for the 8-bit metrics"),
+        number("budget", "MS",
+               "'gpu_pm': Table 6.2: per radius of --radii, the paths per frame that make the "
+               "method's own time (G-buffer, photons, binning, estimate) about MS milliseconds",
+               0.001, 1e6),
+        flag("no-direct",
+             "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },

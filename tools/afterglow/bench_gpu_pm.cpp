@@ -1,5 +1,6 @@
 #include "tools/afterglow/bench_gpu_pm.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -35,11 +36,105 @@ std::vector<double> parse_list(const std::string& text, const char* what) {
     return out;
 }
 
+struct MeanSigma {
+    double mean = 0.0, sigma = 0.0, median = 0.0;  // the median reads through a loaded machine
+};
+
+MeanSigma mean_sigma(std::vector<double> v) {
+    MeanSigma m;
+    std::sort(v.begin(), v.end());
+    m.median = v.empty() ? 0.0 : 0.5 * (v[(v.size() - 1) / 2] + v[v.size() / 2]);
+    for (const double x : v) m.mean += x / double(v.size());
+    for (const double x : v) m.sigma += (x - m.mean) * (x - m.mean) / double(v.size());
+    m.sigma = std::sqrt(m.sigma);
+    return m;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
+}
+
+// One cell of the grid: `frames` timed frames after 2 untimed, each tracing its photons anew.
+struct Cell {
+    MeanSigma method;  // G-buffer, photons, binning, estimate
+    MeanSigma frame;   // and the direct light and compose (not with --no-direct)
+    uint32_t stored = 0;
+    int refined = 0;
+};
+
+Cell run_cell(Scene& scene, gpu::GBuffer& g_buffer, gpu::FrameRenderer* renderer, int paths,
+              float radius, int frames) {
+    scene.settings.gpu_pm.paths = paths;
+    scene.settings.gpu_pm.frames = 1;
+    scene.settings.gpu_pm.radius = radius;
+    gpu::GpuPhotonMapper mapper(scene, g_buffer);
+    std::vector<double> method, frame;
+    for (int f = 0; f < frames + 2; ++f) {
+        gpu::gl::Finish();
+        const auto t = std::chrono::steady_clock::now();
+        g_buffer.render();
+        mapper.clear_photons();
+        mapper.trace();
+        mapper.render();
+        gpu::gl::Finish();
+        if (f >= 2) method.push_back(ms_since(t));
+        if (!renderer) continue;
+        renderer->render(gpu::IndirectTerm{mapper.texture(), gpu::IndirectSpace::screen, 0});
+        gpu::gl::Finish();
+        if (f >= 2) frame.push_back(ms_since(t));
+    }
+    Cell c;
+    c.method = mean_sigma(method);
+    if (renderer) c.frame = mean_sigma(frame);
+    c.stored = mapper.stored_photons();
+    c.refined = mapper.refined_pixels();
+    return c;
+}
+
+// Table 6.2: the paths whose method time is `budget` ms at this radius. The time is close to
+// linear in the paths (tracing and binning are per photon, the estimate per photon in a tile), so
+// a line through two probes (medians of 8 frames: the machine may be loaded) gives the count,
+// refined once by a third probe's line.
+int paths_for_budget(Scene& scene, gpu::GBuffer& g_buffer, float radius, double budget) {
+    constexpr int kProbeFrames = 8;
+    int lo = 250, hi = 4000;
+    double t_lo = run_cell(scene, g_buffer, nullptr, lo, radius, kProbeFrames).method.median;
+    double t_hi = run_cell(scene, g_buffer, nullptr, hi, radius, kProbeFrames).method.median;
+    int paths = lo;
+    for (int round = 0; round < 2; ++round) {
+        const double slope = std::max((t_hi - t_lo) / double(hi - lo), 1e-9);
+        paths = int(std::clamp(double(lo) + (budget - t_lo) / slope, 50.0, 100000.0));
+        if (round == 1) break;
+        const double t =
+            run_cell(scene, g_buffer, nullptr, paths, radius, kProbeFrames).method.median;
+        // Keep the probe nearer the answer; the line through it and the other is the refinement.
+        if (std::abs(paths - lo) < std::abs(paths - hi)) {
+            hi = paths;
+            t_hi = t;
+        } else {
+            lo = paths;
+            t_lo = t;
+        }
+        if (lo == hi) break;
+        if (lo > hi) {
+            std::swap(lo, hi);
+            std::swap(t_lo, t_hi);
+        }
+    }
+    return std::max(50, paths / 25 * 25);  // round as his table does (multiples of 25)
+}
+
 }  // namespace
 
 int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int height) {
     const std::vector<double> paths = parse_list(args.get("paths"), "paths");
     const std::vector<double> radii = parse_list(args.get("radii"), "radii");
+    const bool no_direct = args.has("no-direct");
+    const bool budget = args.has("budget");
+    if (args.has("reference") && no_direct)
+        throw CliError(
+            "afterglow bench gpu_pm: --reference compares the composed frame; --no-direct has "
+            "none");
     auto context = gpu::make_gl_context(args.gl_backend());
     std::printf("GL: %s (%s)\n", context->renderer().c_str(), context->version().c_str());
     Scene scene = load_scene(scene_path);
@@ -47,6 +142,10 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
     const int frames = args.get_int("frames", 20);
     Image reference;
     const bool has_reference = args.has("reference");
+    if (has_reference && no_direct)
+        throw CliError(
+            "afterglow bench gpu_pm: --reference compares the composed frame; --no-direct has "
+            "none");
     if (has_reference) {
         reference = read_image(args.get("reference"));
         if (reference.width != width || reference.height != height)
@@ -59,52 +158,42 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
     gpu::GBuffer g_buffer(scene, meshes, width, height);
     // Every frame draws its direct light (no running mean that stops drawing once it is full).
     scene.settings.direct.accumulate_frames = 1;
-    gpu::FrameRenderer renderer(scene, meshes, width, height);
+    std::unique_ptr<gpu::FrameRenderer> renderer;
+    if (!no_direct) renderer = std::make_unique<gpu::FrameRenderer>(scene, meshes, width, height);
     std::printf(
-        "%s, %dx%d, %d frames per cell (mean and sigma of the frame time; G-buffer, "
-        "photons traced anew, binning, estimate, direct light and compose)\n",
-        scene_path.c_str(), width, height, frames);
-    std::printf("%8s %9s %8s %9s %8s %9s %8s %8s %8s %7s\n", "paths", "(stored)", "radius",
-                "mean ms", "sigma", "gpu_pm ms", "refined", "MSE", "NRMSE", "MSSIM");
-    for (const double n : paths)
-        for (const double r : radii) {
-            scene.settings.gpu_pm.paths = int(n);
-            scene.settings.gpu_pm.frames = 1;
-            scene.settings.gpu_pm.radius = float(r);
-            gpu::GpuPhotonMapper mapper(scene, g_buffer);
-            std::vector<double> ms;
-            double pm_ms = 0.0;  // G-buffer, photons, binning and estimate alone
-            for (int f = 0; f < frames + 2; ++f) {
-                gpu::gl::Finish();
-                const auto t = std::chrono::steady_clock::now();
-                g_buffer.render();
-                mapper.clear_photons();
-                mapper.trace();
-                mapper.render();
-                gpu::gl::Finish();
-                const double pm =
-                    std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
-                        .count();
-                if (f >= 2) pm_ms += pm / double(frames);
-                renderer.render(gpu::IndirectTerm{mapper.texture(), gpu::IndirectSpace::screen, 0});
-                gpu::gl::Finish();
-                if (f >= 2)
-                    ms.push_back(std::chrono::duration<double, std::milli>(
-                                     std::chrono::steady_clock::now() - t)
-                                     .count());
-            }
-            double mean = 0.0, var = 0.0;
-            for (const double v : ms) mean += v / double(ms.size());
-            for (const double v : ms) var += (v - mean) * (v - mean) / double(ms.size());
-            std::printf("%8d %9u %8.4g %9.2f %8.2f %9.2f %8d", int(n), mapper.stored_photons(), r,
-                        mean, std::sqrt(var), pm_ms, mapper.refined_pixels());
-            if (has_reference) {
-                const LdrMetrics m = compare_ldr(renderer.read_back().frame, reference);
-                std::printf(" %8.2f %8.4f %7.4f", m.mse, m.nrmse, m.mssim);
-            }
-            std::printf("\n");
-            std::fflush(stdout);
+        "%s, %dx%d, %d frames per cell, photons traced anew each frame; mean and sigma of the "
+        "method's time (G-buffer, photons, binning, estimate)%s\n",
+        scene_path.c_str(), width, height, frames,
+        no_direct ? "" : " and of the frame's (with direct light and compose)");
+    if (budget)
+        std::printf("paths per radius chosen for %.3g ms of the method's time (Table 6.2)\n",
+                    args.get_double("budget"));
+    std::printf("%8s %9s %8s %9s %8s %8s %9s %8s %8s %8s %8s %7s\n", "paths", "(stored)", "radius",
+                "gpu_pm ms", "sigma", "median", "frame ms", "sigma", "refined", "MSE", "NRMSE",
+                "MSSIM");
+    auto report = [&](int n, double r) {
+        const Cell c = run_cell(scene, g_buffer, renderer.get(), n, float(r), frames);
+        std::printf("%8d %9u %8.4g %9.2f %8.2f %8.2f", n, c.stored, r, c.method.mean,
+                    c.method.sigma, c.method.median);
+        if (renderer)
+            std::printf(" %9.2f %8.2f", c.frame.mean, c.frame.sigma);
+        else
+            std::printf(" %9s %8s", "-", "-");
+        std::printf(" %8d", c.refined);
+        if (has_reference) {
+            const LdrMetrics m = compare_ldr(renderer->read_back().frame, reference);
+            std::printf(" %8.2f %8.4f %7.4f", m.mse, m.nrmse, m.mssim);
         }
+        std::printf("\n");
+        std::fflush(stdout);
+    };
+    if (budget) {
+        for (const double r : radii)
+            report(paths_for_budget(scene, g_buffer, float(r), args.get_double("budget")), r);
+    } else {
+        for (const double n : paths)
+            for (const double r : radii) report(int(n), r);
+    }
     return 0;
 }
 

@@ -370,8 +370,14 @@ void Viewer::copy_camera() {
 bool Viewer::handle_key(const InputEvent& e) {
     if (e.type != InputType::key_down) return false;
     const bool shift = e.mods & kModShift;
-    if (e.key >= GLFW_KEY_1 && e.key < GLFW_KEY_1 + int(kViewModeNames.size())) {
+    // 1 … 9 the first nine views, 0 the tenth; later views from the panel or --view (the key codes
+    // after 9 are punctuation).
+    if (e.key >= GLFW_KEY_1 && e.key <= GLFW_KEY_9) {
         state_.mode = ViewMode(e.key - GLFW_KEY_1);
+        return true;
+    }
+    if (e.key == GLFW_KEY_0) {
+        state_.mode = ViewMode(9);
         return true;
     }
     switch (e.key) {
@@ -848,6 +854,10 @@ int Viewer::run() {
             case ViewMode::records:
                 if (auto* rc = dynamic_cast<IrradianceCacheMethod*>(&pipeline_->indirect()))
                     source = rc->render_record_view();
+                break;
+            case ViewMode::photon_tiles:
+                if (auto* pm = dynamic_cast<GpuPmMethod*>(&pipeline_->indirect()))
+                    source = pm->mapper().render_tile_view();
                 break;
         }
         const int highlight =

@@ -26,7 +26,8 @@ enum class ViewMode {
     aim = 1 + kFrameTermCount,
     iim,
     surfaces,
-    records  // irradiance cache records and their zones (docs/irradiance_cache.md)
+    records,      // irradiance cache records and their zones (docs/irradiance_cache.md)
+    photon_tiles  // gpu_pm's photons per 8×8 screen tile (docs/gpu_pm.md)
 };
 inline constexpr std::array kViewModeNames = {"frame",
                                               kFrameTermNames[0],
@@ -37,8 +38,9 @@ inline constexpr std::array kViewModeNames = {"frame",
                                               "aim",
                                               "iim",
                                               "surfaces",
-                                              "records"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::records) + 1);
+                                              "records",
+                                              "photon_tiles"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::photon_tiles) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
