@@ -231,6 +231,44 @@ TEST_F(MediaMarcherTest, PhotonPlanePowerIsTheGridsSolidAngle) {
     EXPECT_EQ(again.flow, r.flow);
 }
 
+// The adaptive pipeline's statistics (ch. 3.2): photons along +x through an n = 1 grid, one per
+// (y, z) column of voxels, each carrying attributes (y, z, 7, 0): every voxel counts one crossing
+// of one voxel, and the crossing-weighted attributes give back its photon's; the walk counts 1
+// per voxel. A marcher that counted segments (4 a voxel at ¼-voxel steps) or mixed up the photon
+// a voxel's sums come from would fail.
+TEST_F(MediaMarcherTest, CountsCrossingsAndPhotonAttributes) {
+    const MediaMarcher marcher;
+    Bounds b;
+    b.min = glm::vec3(0.0f);
+    b.max = glm::vec3(1.0f);
+    const MediaGrid grid = make_media_grid(b, glm::ivec3(8));
+    std::vector<MediaPhoton> photons;
+    std::vector<glm::vec4> attributes;
+    for (int z = 0; z < 8; ++z)
+        for (int y = 0; y < 8; ++y) {
+            photons.push_back({{0.0f, (y + 0.3f) / 8.0f, (z + 0.6f) / 8.0f}, {1, 0, 0}, 1.0f});
+            attributes.emplace_back(float(y), float(z), 7.0f, 0.0f);
+        }
+    for (MediaDeposit deposit : {MediaDeposit::track_length, MediaDeposit::voxel_walk}) {
+        MediaMarchSettings settings;
+        settings.deposit = deposit;
+        const MediaMarchResult r = marcher.march(grid, photons, settings, attributes, 4);
+        ASSERT_EQ(r.stats.size(), 4 * grid.voxel_count());
+        for (int z = 0; z < 8; ++z)
+            for (int y = 0; y < 8; ++y)
+                for (int x = 0; x < 8; ++x) {
+                    const size_t i = grid.index(x, y, z);
+                    ASSERT_NEAR(r.stats[4 * i], 1.0f, 2e-3f) << x << " " << y << " " << z;
+                    ASSERT_NEAR(r.stats[4 * i + 1] / r.stats[4 * i], float(y), 1e-3f);
+                    ASSERT_NEAR(r.stats[4 * i + 2] / r.stats[4 * i], float(z), 1e-3f);
+                    ASSERT_NEAR(r.stats[4 * i + 3] / r.stats[4 * i], 7.0f, 1e-3f);
+                }
+        // The statistics leave the fluence as it was.
+        EXPECT_EQ(r.fluence, marcher.march(grid, photons, settings).fluence);
+    }
+    EXPECT_THROW(marcher.march(grid, photons, MediaMarchSettings{}, {}, 2), std::invalid_argument);
+}
+
 }  // namespace
 
 }  // namespace ag::gpu

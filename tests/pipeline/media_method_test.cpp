@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "../gpu/gl_fixture.h"
@@ -106,6 +107,72 @@ TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
         compare_images(result.volume, pt.components[size_t(FrameTerm::volume)]).rel_mse;
     std::printf("glass sphere in fog: relMSE %.5f against pt\n", rel_mse);
     EXPECT_LT(rel_mse, 0.05);
+}
+
+// His importance sampling (ch. 3.2.3) is unbiased: photons drawn by the pilots' density and
+// weighted by 1/(N p) deposit, seed by seed (pilot jitter and Hammersley rotation), what uniform
+// photons deposit, in total and in each octant of the grid and in the caustic (the voxels over
+// twice the mean fluence) — `media_glass_fog_point.json`, 32³. Photons not weighted by 1/p
+// would pile their power into the selected regions and fail every region.
+TEST_F(MediaViewTest, ImportanceSamplingIsUnbiased) {
+    const Scene scene =
+        load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    MediaMethodSettings uniform;
+    uniform.grid = 32;
+    uniform.photons = 200000;
+    const MediaMethodResult reference = render_media(scene, uniform, false);
+    const glm::ivec3 size = reference.grid;
+    double mean = 0.0;
+    for (float f : reference.fluence) mean += f;
+    mean /= double(reference.fluence.size());
+    // Regions: the eight octants, then the caustic.
+    const auto regions = [&](const std::vector<float>& fluence) {
+        std::vector<double> sums(9, 0.0);
+        for (int z = 0; z < size.z; ++z)
+            for (int y = 0; y < size.y; ++y)
+                for (int x = 0; x < size.x; ++x) {
+                    const size_t i = (size_t(z) * size.y + y) * size.x + x;
+                    const int octant =
+                        (x * 2 / size.x) + 2 * (y * 2 / size.y) + 4 * (z * 2 / size.z);
+                    sums[size_t(octant)] += fluence[i];
+                    if (reference.fluence[i] > 2.0 * mean) sums[8] += fluence[i];
+                }
+        return sums;
+    };
+    const std::vector<double> expected = regions(reference.fluence);
+    MediaMethodSettings adaptive = uniform;
+    adaptive.photons = 10000;
+    adaptive.adaptive.enabled = true;
+    adaptive.adaptive.pilot_side = 32;
+    adaptive.adaptive.reconstruct = false;
+    std::vector<double> mean_regions(9, 0.0);
+    double worst_total = 0.0, worst_region = 0.0;
+    for (uint32_t seed = 1; seed <= 10; ++seed) {
+        adaptive.adaptive.seed = seed;
+        const MediaMethodResult r = render_media(scene, adaptive, false);
+        // The density is far from uniform (else this would test nothing).
+        const auto [low, high] = std::minmax_element(r.density.begin(), r.density.end());
+        EXPECT_GT(*high, 4.0 * *low);
+        if (seed == 1) std::printf("density: %.3f to %.3f\n", *low, *high);
+        const double total = r.power_deposited / reference.power_deposited - 1.0;
+        worst_total = std::max(worst_total, std::abs(total));
+        const std::vector<double> got = regions(r.fluence);
+        for (size_t k = 0; k < got.size(); ++k) {
+            mean_regions[k] += got[k] / 10.0;
+            worst_region = std::max(worst_region, std::abs(got[k] / expected[k] - 1.0));
+        }
+        EXPECT_LT(std::abs(total), 0.01) << "seed " << seed;
+    }
+    std::printf(
+        "importance sampling, 10 seeds: worst total %.4f, worst region of a seed %.4f;"
+        " mean over seeds per region:",
+        worst_total, worst_region);
+    for (size_t k = 0; k < expected.size(); ++k) {
+        const double error = mean_regions[k] / expected[k] - 1.0;
+        std::printf(" %+.4f", error);
+        EXPECT_LT(std::abs(error), 0.01) << "region " << k;
+    }
+    std::printf("\n");
 }
 
 }  // namespace
