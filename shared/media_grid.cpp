@@ -126,6 +126,37 @@ glm::vec2 hammersley(int i, int count, glm::vec2 shift) {
     return glm::fract(p + shift);
 }
 
+bool plane_sample(PlaneSampling order, int i, int count, glm::vec2& uv) {
+    const auto unit = [](uint32_t a, uint32_t b) {
+        return float(hash_u32(hash_u32(a * 0x9E3779B9u + 0x7F4A7C15u) ^ b) >> 8) / float(1u << 24);
+    };
+    const int side = std::max(1, int(std::sqrt(double(count))));
+    switch (order) {
+        case PlaneSampling::random:
+            uv = {unit(uint32_t(i), 1u), unit(uint32_t(i), 2u)};
+            return true;
+        case PlaneSampling::halton:
+            uv = {float(radical_inverse(2, uint64_t(i) + 1)),
+                  float(radical_inverse(3, uint64_t(i) + 1))};
+            return true;
+        case PlaneSampling::hammersley:
+            uv = hammersley(i, count, glm::vec2(0.0f));
+            return true;
+        default:
+            break;
+    }
+    if (i >= side * side) return false;
+    const bool rows = order == PlaneSampling::grid_rows || order == PlaneSampling::jitter_rows;
+    const bool jitter =
+        order == PlaneSampling::jitter_rows || order == PlaneSampling::jitter_columns;
+    const int a = i % side, b = i / side;
+    const glm::vec2 cell = rows ? glm::vec2(a, b) : glm::vec2(b, a);
+    const glm::vec2 offset =
+        jitter ? glm::vec2(unit(uint32_t(i), 3u), unit(uint32_t(i), 4u)) : glm::vec2(0.5f);
+    uv = (cell + offset) / float(side);
+    return true;
+}
+
 std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, const Bounds& grid,
                                        int count) {
     PhotonSource source = photon_source(light, intensity, grid);

@@ -113,6 +113,23 @@ private:
 // shift 0 is the plain set): ((i + ½)/N, Φ₂(i)).
 glm::vec2 hammersley(int i, int count, glm::vec2 shift);
 
+// The orders of his Table 4.1 for the uniform photons on the plane: random, a square grid in
+// row-first or column-first order, the same jittered, Halton (bases 2, 3) and Hammersley (his
+// choice, and ours by default). The grids use ⌊√N⌋² points (the rest of N are dropped).
+enum class PlaneSampling {
+    random,
+    grid_rows,
+    grid_columns,
+    jitter_rows,
+    jitter_columns,
+    halton,
+    hammersley
+};
+inline constexpr const char* kPlaneSamplingNames[] = {
+    "random", "grid_rows", "grid_columns", "jitter_rows", "jitter_columns", "halton", "hammersley"};
+// Point i of `count` in `order` over the unit square; false for a grid's dropped points.
+bool plane_sample(PlaneSampling order, int i, int count, glm::vec2& uv);
+
 // Pfeuti's reconstruction (ch. 3.2.4, Listing B.3) of an adaptively sampled fluence grid: mipmap
 // pyramids of fluence and flow (each level half the last, a 4-tap [1 3 3 1]/8 filter per axis), of
 // the photon count (box) and of the mean photon weight (box over voxels with photons, Listing

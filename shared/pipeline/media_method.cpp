@@ -251,11 +251,27 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     const gpu::MediaMarcher marcher;
     gpu::MediaMarchResult marched;
     if (!settings.adaptive.enabled) {
-        const std::vector<MediaPhoton> photons =
-            light->type == LightType::quad
-                ? quad_photons(light->corners, intensity, bounds, settings.photons)
-            : inside ? sphere_photons(light->position, intensity, settings.photons)
-                     : plane_photons(light->position, intensity, bounds, settings.photons);
+        std::vector<MediaPhoton> photons;
+        if (light->type == LightType::quad) {
+            photons = quad_photons(light->corners, intensity, bounds, settings.photons);
+        } else if (settings.sampling == PlaneSampling::hammersley) {
+            photons = inside ? sphere_photons(light->position, intensity, settings.photons)
+                             : plane_photons(light->position, intensity, bounds, settings.photons);
+        } else {
+            const PhotonSource source = photon_source(light->position, intensity, bounds);
+            int count = settings.photons;
+            if (settings.sampling != PlaneSampling::random &&
+                settings.sampling != PlaneSampling::halton) {
+                const int side = std::max(1, int(std::sqrt(double(count))));
+                count = side * side;
+            }
+            glm::vec2 uv;
+            MediaPhoton photon;
+            for (int i = 0; i < count; ++i)
+                if (plane_sample(settings.sampling, i, count, uv) &&
+                    source_photon(source, uv, 1.0, count, photon))
+                    photons.push_back(photon);
+        }
         result.photons_marched = photons.size();
         result.timing.photon_generation = since(start);
         marched = marcher.march(grid, photons, march);
@@ -273,13 +289,31 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
             result.power_deposited += double(f) * double(voxel) * voxel * voxel;
     if (!with_view) {
         result.grids = std::move(grid);
-        result.fluence = marched.fluence;
+        result.fluence = std::move(marched.fluence);
+        result.flow = std::move(marched.flow);
         return result;
     }
 
+    result.grids = std::move(grid);
+    result.fluence = std::move(marched.fluence);
+    result.flow = std::move(marched.flow);
+    result.tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
+    Camera camera = scene.camera;
+    if (settings.width > 0 && settings.height > 0) {
+        camera.width = settings.width;
+        camera.height = settings.height;
+    }
+    start = Clock::now();
+    result.volume = view_media(scene, result, camera, settings);
+    result.timing.viewing = since(start);
+    return result;
+}
+
+Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                 const MediaMethodSettings& settings) {
     // The view march stops at the first surface the camera ray meets (the volume term's
     // definition; the straight ray, as the frame's other terms see it).
-    const Camera& camera = scene.camera;
+    const cpu::RayTracer rays(scene);
     std::vector<float> max_distance(size_t(camera.width) * size_t(camera.height));
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
@@ -290,18 +324,12 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
     view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
-    start = Clock::now();
-    result.volume =
-        gpu::MediaView().render(grid, marched.fluence, marched.flow, camera, view, max_distance);
-    result.timing.viewing = since(start);
-    result.grids = std::move(grid);
-    result.fluence = marched.fluence;
+    Image volume =
+        gpu::MediaView().render(media.grids, media.fluence, media.flow, camera, view, max_distance);
     // Grey to the light's colour.
-    const glm::vec3 tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
-    for (int y = 0; y < result.volume.height; ++y)
-        for (int x = 0; x < result.volume.width; ++x)
-            result.volume.set_rgb(x, y, result.volume.rgb(x, y) * tint);
-    return result;
+    for (int y = 0; y < volume.height; ++y)
+        for (int x = 0; x < volume.width; ++x) volume.set_rgb(x, y, volume.rgb(x, y) * media.tint);
+    return volume;
 }
 
 }  // namespace ag

@@ -37,12 +37,15 @@ struct MediaAdaptiveSettings {
 };
 
 struct MediaMethodSettings {
-    int grid = 64;             // voxels along the longest side of the grid's box
-    int photons = 122000;      // on the photon plane (his Table 4.1 count)
-    float march_step = 0.25f;  // photon step, voxels
-    float view_step = 0.5f;    // view-ray step, voxels
+    int grid = 64;              // voxels along the longest side of the grid's box
+    int width = 0, height = 0;  // the volume image; 0: the scene camera's resolution
+    int photons = 122000;       // on the photon plane (his Table 4.1 count)
+    float march_step = 0.25f;   // photon step, voxels
+    float view_step = 0.5f;     // view-ray step, voxels
     gpu::MediaDeposit deposit = gpu::MediaDeposit::track_length;
     MediaAdaptiveSettings adaptive;  // `photons` then counts the importance-sampled photons
+    // The order of the uniform photons of a point light (his Table 4.1); Hammersley by default.
+    PlaneSampling sampling = PlaneSampling::hammersley;
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no octree, no copy: the grids are SSBOs).
@@ -67,7 +70,9 @@ struct MediaMethodResult {
     std::vector<double> density;   // adaptive: the photon density over the plane (side², mean 1)
     std::vector<uint8_t> levels;   // adaptive: the mipmap level each voxel read
     MediaGrid grids;               // n (smoothed), σ_s, σ_t, for slice views
-    std::vector<float> fluence;    // per voxel, as deposited
+    std::vector<float> fluence;    // per voxel, as deposited (reconstructed, adaptive)
+    std::vector<glm::vec3> flow;   // per voxel, fluence × photon direction
+    glm::vec3 tint{1.0f};          // the light's colour over its grey intensity
 };
 
 // The grid covers the scene's media boxes and glass objects; light comes from the first enabled
@@ -77,5 +82,10 @@ struct MediaMethodResult {
 // `with_view` false skips the view march (the grids only; `volume` stays empty).
 MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings,
                                bool with_view = true);
+
+// The view march alone (ch. 3.1.6) through `grids` lit as `media` holds them, for `camera` at
+// its resolution: what a camera move needs (the photons stay as they are). Needs a GL context.
+Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                 const MediaMethodSettings& settings);
 
 }  // namespace ag

@@ -14,6 +14,7 @@
 #include "gpu/media_marcher.h"
 #include "gpu/media_view.h"
 #include "shared/metrics.h"
+#include "shared/pipeline/pipeline.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
 
@@ -173,6 +174,50 @@ TEST_F(MediaViewTest, ImportanceSamplingIsUnbiased) {
         EXPECT_LT(std::abs(error), 0.01) << "region " << k;
     }
     std::printf("\n");
+}
+
+// The progressive pipeline shows the media method's volume term (render, converge and view run
+// it): the frame's `volume` image is the method's for the frame's size, the frame is still the
+// sum of its five terms, and a camera move re-runs the view march for the new view. A pipeline
+// that left the term at zero, or kept the old view after the move, would fail.
+TEST_F(MediaViewTest, PipelineShowsTheVolumeTerm) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    scene.settings.gather.backend = GatherBackend::cpu;
+    MediaMethodSettings settings;
+    settings.grid = 24;
+    settings.photons = 20000;
+    PipelineOptions options{24, 20};
+    options.media = settings;
+    Pipeline pipeline(scene, options);
+    pipeline.frame();
+    ASSERT_NE(pipeline.media(), nullptr);
+    settings.width = 24;
+    settings.height = 20;
+    const auto expect_volume = [&](const char* when, Image& volume_out) {
+        const gpu::FrameImages images = pipeline.images();
+        const Image& volume = images.aov[size_t(FrameTerm::volume)];
+        const Image expected = render_media(scene, settings).volume;
+        ASSERT_EQ(volume.pixels.size(), expected.pixels.size());
+        double sum = 0.0;
+        for (size_t i = 0; i < volume.pixels.size(); ++i) {
+            ASSERT_NEAR(volume.pixels[i], expected.pixels[i], 1e-6f + 1e-5f * expected.pixels[i])
+                << when << " " << i;
+            sum += volume.pixels[i];
+        }
+        EXPECT_GT(sum, 0.0) << when;
+        for (size_t i = 0; i < images.frame.pixels.size(); ++i) {
+            float terms = 0.0f;
+            for (const Image& term : images.aov) terms += term.pixels[i];
+            ASSERT_NEAR(images.frame.pixels[i], terms, 1e-4f * (1.0f + terms)) << when << " " << i;
+        }
+        volume_out = volume;
+    };
+    Image before, after;
+    expect_volume("first frame", before);
+    scene.camera.eye += glm::vec3(0.8f, 0.3f, 0.0f);
+    pipeline.frame();
+    expect_volume("after the camera moved", after);
+    EXPECT_NE(before.pixels, after.pixels);
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 #include "shared/shapes.h"
 #include "tools/afterglow/bench_gpu_pm.h"
 #include "tools/afterglow/bench_irradiance_cache.h"
+#include "tools/afterglow/bench_media.h"
 #include "tools/afterglow/bench_soak.h"
 #include "tools/afterglow/bench_vpl.h"
 #include "tools/afterglow/commands.h"
@@ -30,7 +31,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl|irradiance_cache [SCENE...|"
+    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl|irradiance_cache|media [SCENE...|"
     "SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
@@ -90,8 +91,10 @@ const Command kBenchCommand{
         text("cache", "DIR", "'settle': reference cache", "out/reference-cache"),
         integer("ref-spp", "N", "'settle': samples per pixel of a computed reference", 1, 1000000,
                 64),
-        integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
-                400000),
+        integer("ref-photons", "N",
+                "'settle': photons of a computed pm reference; 'media': photons marched for "
+                "the reference (default 2000000)",
+                1000, 100000000, 400000),
         flag("quick", "'settle': only the cornell scene (for tests)"),
         text("modes", "LIST",
              "'settle': the modes to run, comma-separated (selective, full, full-budget); "
@@ -102,6 +105,8 @@ const Command kBenchCommand{
         text("radii", "LIST", "'gpu_pm': radii as fractions of the scene diagonal, comma-separated",
              "0.0125,0.025,0.05,0.075,0.1"),
         text("reference", "REF.exr", "'gpu_pm': reference frame for the 8-bit metrics"),
+        integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),
+        flag("full", "'media': a 128^3 grid (his) and one more photon count each"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },
@@ -517,9 +522,18 @@ int run_bench(const Args& args) {
             args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cube_in_a_box.json",
             width, height);
     }
+    if (what == "media") {
+        auto context = bench_context(args);
+        int width = 0, height = 0;
+        bench_size(args, 48, 48, width, height);
+        return bench_media(args,
+                           args.positionals().size() > 1 ? args.positionals()[1]
+                                                         : "scenes/media_glass_fog_point.json",
+                           width, height);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm, vpl "
-                   "or irradiance_cache)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm, vpl, "
+                   "irradiance_cache or media)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);
