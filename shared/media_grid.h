@@ -42,6 +42,11 @@ Image grid_slice(const MediaGrid& grid, const std::vector<float>& values, int ax
 // (odd) and standard deviation `sigma` voxels, clamping at the borders (Pfeuti: 9 taps, σ = 9/6).
 void gaussian_smooth(std::vector<float>& values, const glm::ivec3& size, int taps, float sigma);
 
+// The grids the viewer's `media` view slices (docs/viewer.md): the smoothed index, σ_s, the
+// fluence, the adaptive pipeline's mipmap level.
+enum class MediaField { n, sigma_s, fluence, level };
+inline constexpr const char* kMediaFieldNames[] = {"n", "sigma_s", "fluence", "level"};
+
 // One photon of the photon plane: where it enters the grid, its unit direction and its flux.
 struct MediaPhoton {
     glm::vec3 position{0.0f};

@@ -332,4 +332,45 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
     return volume;
 }
 
+Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,
+                       int width, int height) {
+    const MediaGrid& grid = media.grids;
+    Image out(width, height);
+    std::vector<float> values;
+    switch (field) {
+        case MediaField::n:
+            values = grid.n;
+            for (float& v : values) v -= 1.0f;
+            break;
+        case MediaField::sigma_s:
+            values = grid.sigma_s;
+            break;
+        case MediaField::fluence:
+            values = media.fluence;
+            break;
+        case MediaField::level:
+            values.assign(media.levels.begin(), media.levels.end());
+            break;
+    }
+    if (values.size() != grid.voxel_count() || grid.voxel_count() == 0) return out;
+    axis = std::clamp(axis, 0, 2);
+    const Image slice = grid_slice(grid, values, axis, std::clamp(layer, 0, grid.size[axis] - 1));
+    float peak = 0.0f;
+    for (float v : slice.pixels) peak = std::max(peak, std::abs(v));
+    const float scale = peak > 0.0f ? 1.0f / peak : 0.0f;
+    // Fit: the largest whole scale of voxels to pixels that fits, else a fraction of one.
+    const float fit =
+        std::min(float(width) / float(slice.width), float(height) / float(slice.height));
+    const int w = std::max(1, int(fit * float(slice.width))),
+              h = std::max(1, int(fit * float(slice.height)));
+    const int x0 = (width - w) / 2, y0 = (height - h) / 2;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int sx = std::min(slice.width - 1, int(float(x) / fit));
+            const int sy = std::min(slice.height - 1, int(float(y) / fit));
+            out.set_rgb(x0 + x, y0 + y, slice.rgb(sx, sy) * scale);
+        }
+    return out;
+}
+
 }  // namespace ag

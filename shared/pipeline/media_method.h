@@ -83,6 +83,14 @@ struct MediaMethodResult {
 MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings,
                                bool with_view = true);
 
+// A slice of `field` through voxel layer `layer` across `axis` (as grid_slice; a layer out of
+// range clamps) over the max of the field in the slice (levels over the highest level; n − 1
+// over its max, so air is black), fitted into a width × height image with its aspect kept,
+// nearest voxel, black around it. An empty field (no levels outside the adaptive pipeline) gives
+// black.
+Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,
+                       int width, int height);
+
 // The view march alone (ch. 3.1.6) through `grids` lit as `media` holds them, for `camera` at
 // its resolution: what a camera move needs (the photons stay as they are). Needs a GL context.
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,

@@ -220,6 +220,34 @@ TEST_F(MediaViewTest, PipelineShowsTheVolumeTerm) {
     EXPECT_NE(before.pixels, after.pixels);
 }
 
+// The viewer's `media` view (docs/viewer.md): a slice of the smoothed index through the sphere's
+// centre fitted into the frame is bright in the middle (the glass), black in air and around the
+// fitted slice; the fluence slice is lit; without the adaptive pipeline there are no levels.
+TEST_F(MediaViewTest, SliceViewShowsTheGrids) {
+    const Scene scene =
+        load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    MediaMethodSettings settings;
+    settings.grid = 24;
+    settings.photons = 20000;
+    const MediaMethodResult media = render_media(scene, settings, false);
+    // The sphere (r 0.5 at y 1.1) in the middle of a 3 × 2.5 × 3 box: the z slice through it.
+    const int layer = media.grids.size.z / 2;
+    const Image n = media_slice_view(media, MediaField::n, 2, layer, 60, 40);
+    ASSERT_EQ(n.width, 60);
+    ASSERT_EQ(n.height, 40);
+    // 24 × 20 voxels fitted into 60 × 40: 48 × 40 pixels from x = 6.
+    EXPECT_EQ(n.rgb(2, 20), glm::vec3(0.0f));   // beside the slice
+    EXPECT_EQ(n.rgb(10, 20), glm::vec3(0.0f));  // air
+    const int centre_y = int((1.0f - 1.1f / 2.5f) * 40.0f);
+    EXPECT_GT(n.rgb(30, centre_y).x, 0.9f);  // glass, over the slice's max
+    const Image fluence = media_slice_view(media, MediaField::fluence, 2, layer, 60, 40);
+    double lit = 0.0;
+    for (float v : fluence.pixels) lit += v;
+    EXPECT_GT(lit, 0.0);
+    const Image level = media_slice_view(media, MediaField::level, 2, layer, 60, 40);
+    for (float v : level.pixels) ASSERT_EQ(v, 0.0f);
+}
+
 }  // namespace
 
 }  // namespace ag::gpu

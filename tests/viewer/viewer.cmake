@@ -16,3 +16,5 @@ endfunction()
 ag_viewer_test(script)
 # Recorded clicks drag the cube: it moved, and IIM texels around it were gathered again.
 ag_viewer_test(replay)
+# The media view shows a slice of the media method's grids (docs/media.md).
+ag_viewer_test(media)

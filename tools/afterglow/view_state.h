@@ -26,7 +26,8 @@ enum class ViewMode {
     aim = 1 + kFrameTermCount,
     iim,
     surfaces,
-    records  // irradiance cache records and their zones (docs/irradiance_cache.md)
+    records,  // irradiance cache records and their zones (docs/irradiance_cache.md)
+    media     // a slice of the media method's grids (docs/media.md)
 };
 inline constexpr std::array kViewModeNames = {"frame",
                                               kFrameTermNames[0],
@@ -37,8 +38,9 @@ inline constexpr std::array kViewModeNames = {"frame",
                                               "aim",
                                               "iim",
                                               "surfaces",
-                                              "records"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::records) + 1);
+                                              "records",
+                                              "media"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::media) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
@@ -99,6 +101,9 @@ struct ViewState {
     int panel_width = 400;        // window pixels right of the viewport
     int frame_width = 0, frame_height = 0;
     bool replaying = false;
+    // The `media` view: which grid (MediaField), across which axis (0 x, 1 y, 2 z) and which
+    // voxel layer (−1: the middle).
+    int media_field = 2, media_axis = 2, media_layer = -1;
 
     void message(const std::string& text);  // to the log and stderr
 };
