@@ -140,8 +140,12 @@ TEST(MediaGrid, ReconstructionFiltersNoiseNotEdges) {
             EXPECT_EQ(r.level[i], 0) << x;
             EXPECT_EQ(r.fluence[i], step[i]) << x;
         }
-        if (distance >= 12) EXPECT_EQ(r.level[i], 2) << x;
-        if (distance >= 1) EXPECT_NEAR(r.fluence[i], step[i], 1e-5f) << x;
+        if (distance >= 12) {
+            EXPECT_EQ(r.level[i], 2) << x;
+        }
+        if (distance >= 1) {
+            EXPECT_NEAR(r.fluence[i], step[i], 1e-5f) << x;
+        }
     }
 }
 
