@@ -1,6 +1,7 @@
-// Pfeuti's reference pipeline (2009, ch. 3.1) end to end: voxelisation through the ray tracer,
+// Pfeuti's reference pipeline (2009, ch. 3.1) end to end — voxelisation through the ray tracer,
 // the smoothed index grid, the photon plane of the scene's point light, curved photon marching
-// and the view march on the GPU. Joins cpu/ (voxeliser) and gpu/ (marchers), so it lives here.
+// and the view march on the GPU — and his adaptive pipeline (ch. 3.2). Joins cpu/ (voxeliser) and
+// gpu/ (marchers), so it lives here.
 #pragma once
 
 #include <string>
