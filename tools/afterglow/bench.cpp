@@ -65,7 +65,12 @@ const Command kBenchCommand{
     "over --frames (default 400): temporal radiance caching as the scene sets it against a new "
     "cache every frame and records kept forever; records made, record, splat and scan time, "
     "flicker over static pixels, indirect relMSE against pt references (--ref-spp) at four frames, "
-    "the reprojection error (docs/irradiance_cache.md).",
+    "the reprojection error (docs/irradiance_cache.md). 'media [SCENE]' (default "
+    "scenes/media_glass_fog_point.json): Pfeuti 2009 at --size (default 48x48) and --grid "
+    "(default 64): the reference and adaptive pipelines' RMSE against a --ref-photons (default "
+    "2M marched) reference at doubling photon counts and the photons each needs at equal RMSE, "
+    "Table 4.2's passes, Table 4.1's sampling orders; --full: 128^3, one more count each and "
+    "Tables 4.3/4.4 on our cube and bunny scenes (docs/media.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -106,7 +111,7 @@ const Command kBenchCommand{
              "0.0125,0.025,0.05,0.075,0.1"),
         text("reference", "REF.exr", "'gpu_pm': reference frame for the 8-bit metrics"),
         integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),
-        flag("full", "'media': a 128^3 grid (his) and one more photon count each"),
+        flag("full", "'media': a 128^3 grid (his), one more photon count each, Tables 4.3/4.4"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },

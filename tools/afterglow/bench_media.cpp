@@ -55,31 +55,97 @@ double photons_at(const std::vector<Row>& curve, double rmse, bool& extrapolated
                     t * (std::log(double(b.marched)) - std::log(double(a.marched))));
 }
 
-void print_passes(const Row& reference, const Row& adaptive) {
+// His numbers for one of Tables 4.2–4.4 (ms; the photon counts marched).
+struct HisPasses {
+    const char* table;
+    int voxelisation, pilot_marching, distribution, march_reference, march_adaptive, mipmap,
+        filtering, copy, viewing, total_reference, total_adaptive, photons_reference,
+        photons_adaptive;
+};
+constexpr HisPasses kSphere{"4.2 (sphere)", 25,   10, 5, 110, 85, 16, 14, 44, 189, 373, 395,
+                            122000,         50000};
+constexpr HisPasses kCube{"4.3 (cube)", 43, 11,  5,   144, 100,    17,
+                          13,           48, 212, 452, 456, 125000, 46000};
+constexpr HisPasses kArmadillo{"4.4 (Armadillo; ours: the Stanford bunny)",
+                               68,
+                               11,
+                               6,
+                               163,
+                               134,
+                               16,
+                               13,
+                               44,
+                               179,
+                               459,
+                               478,
+                               106000,
+                               49000};
+
+void print_passes(const HisPasses& his, const Row& reference, const Row& adaptive) {
     const MediaMethodTiming &r = reference.timing, &a = adaptive.timing;
     std::printf("| pass | Pfeuti ref. | Pfeuti adaptive | ours ref. | ours adaptive |\n");
     std::printf("|---|---|---|---|---|\n");
-    const auto line = [](const char* pass, const char* his_r, const char* his_a, double ours_r,
-                         double ours_a) {
-        std::printf("| %s | %s | %s | %.0f ms | %.0f ms |\n", pass, his_r, his_a, 1e3 * ours_r,
-                    1e3 * ours_a);
+    const auto line = [](const char* pass, const std::string& his_r, const std::string& his_a,
+                         double ours_r, double ours_a) {
+        std::printf("| %s | %s | %s | %.0f ms | %.0f ms |\n", pass, his_r.c_str(), his_a.c_str(),
+                    1e3 * ours_r, 1e3 * ours_a);
     };
-    line("voxelisation (+ smoothing)", "25 ms", "25 ms", r.voxelisation + r.smoothing,
-         a.voxelisation + a.smoothing);
+    const auto ms = [](int v) { return std::to_string(v) + " ms"; };
+    line("voxelisation (+ smoothing)", ms(his.voxelisation), ms(his.voxelisation),
+         r.voxelisation + r.smoothing, a.voxelisation + a.smoothing);
     std::printf("| octree | 5 ms | 5 ms | — | — |\n");
     line("pilot photon generation", "-", "< 1 ms", 0.0, a.pilot_generation);
-    line("pilot photon marching", "-", "10 ms", 0.0, a.pilot_marching);
-    line("photon distribution", "-", "5 ms", 0.0, a.distribution);
+    line("pilot photon marching", "-", ms(his.pilot_marching), 0.0, a.pilot_marching);
+    line("photon distribution", "-", ms(his.distribution), 0.0, a.distribution);
     line("photon generation", "< 1 ms", "2 ms", r.photon_generation, a.photon_generation);
-    line("photon marching", "110 ms", "85 ms", r.photon_marching, a.photon_marching);
-    line("mipmap generation + filtering", "-", "30 ms", 0.0, a.reconstruction);
-    std::printf("| copy | 44 ms | 44 ms | — | — |\n");
-    line("viewing pass", "189 ms", "189 ms", r.viewing, a.viewing);
-    line("total", "373 ms", "395 ms", r.total(), a.total());
-    std::printf("| photons marched | 122,000 | 50,000 | %zu | %zu |\n", reference.marched,
-                adaptive.marched);
+    line("photon marching", ms(his.march_reference), ms(his.march_adaptive), r.photon_marching,
+         a.photon_marching);
+    line("mipmap generation + filtering", "-", ms(his.mipmap + his.filtering), 0.0,
+         a.reconstruction);
+    std::printf("| copy | %d ms | %d ms | — | — |\n", his.copy, his.copy);
+    line("viewing pass", ms(his.viewing), ms(his.viewing), r.viewing, a.viewing);
+    line("total", ms(his.total_reference), ms(his.total_adaptive), r.total(), a.total());
+    std::printf("| photons marched | %d | %d | %zu | %zu |\n", his.photons_reference,
+                his.photons_adaptive, reference.marched, adaptive.marched);
     std::printf("| RMSE (relative) against the reference | — | — | %.5f (%.4f) | %.5f (%.4f) |\n",
                 reference.rmse, reference.rel, adaptive.rmse, adaptive.rel);
+}
+
+// Uniform photons generated per photon marched (those that miss the grid are dropped).
+double hit_fraction(const Scene& scene, const MediaMethodSettings& base) {
+    MediaMethodSettings probe = base;
+    probe.photons = 20000;
+    return std::max(1e-3,
+                    double(render_media(scene, probe, false).photons_marched) / probe.photons);
+}
+
+// A uniform reference of `target` marched photons.
+Image reference_image(const Scene& scene, const MediaMethodSettings& base, double hit, int target) {
+    MediaMethodSettings settings = base;
+    settings.photons = int(std::ceil(target / hit));
+    const MediaMethodResult ref = render_media(scene, settings);
+    std::printf("reference: %d photons generated, %zu marched (%.1f s marching)\n\n",
+                settings.photons, ref.photons_marched, ref.timing.photon_marching);
+    return ref.volume;
+}
+
+// One of his Tables 4.2–4.4: the passes of both pipelines at his photon counts (marched; the
+// adaptive count with its pilots).
+void passes_table(const Scene& scene, const MediaMethodSettings& base, double hit,
+                  const Image& reference, const HisPasses& his) {
+    std::printf("\nTable %s: passes at his photon counts\n\n", his.table);
+    MediaMethodSettings s = base;
+    s.photons = int(his.photons_reference / hit);
+    const Row table_reference = run(scene, s, reference, "reference");
+    // The adaptive photons meet the grid more often than uniform ones: their share from a probe.
+    s.adaptive.enabled = true;
+    s.photons = his.photons_adaptive;
+    const MediaMethodResult probe = render_media(scene, s, false);
+    s.photons = int(double(his.photons_adaptive) *
+                    (double(his.photons_adaptive) - double(probe.pilots_marched)) /
+                    double(std::max<size_t>(probe.photons_marched, 1)));
+    const Row table_adaptive = run(scene, s, reference, "adaptive");
+    print_passes(his, table_reference, table_adaptive);
 }
 
 }  // namespace
@@ -98,15 +164,8 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
 
     // The reference: uniform Hammersley photons until --ref-photons (default 2M) are marched.
     const int target = args.get_int("ref-photons", 2000000);
-    MediaMethodSettings probe = base;
-    probe.photons = 20000;
-    const double hit = double(render_media(scene, probe, false).photons_marched) / probe.photons;
-    MediaMethodSettings ref_settings = base;
-    ref_settings.photons = int(std::ceil(target / std::max(hit, 1e-3)));
-    const MediaMethodResult ref = render_media(scene, ref_settings);
-    std::printf("reference: %d photons generated, %zu marched (%.1f s marching)\n\n",
-                ref_settings.photons, ref.photons_marched, ref.timing.photon_marching);
-    const Image& reference = ref.volume;
+    const double hit = hit_fraction(scene, base);
+    const Image reference = reference_image(scene, base, hit, target);
 
     // Equal-RMSE curve: the reference pipeline at doubling photon counts against the adaptive
     // one (his 64² pilots), each against the reference image.
@@ -147,19 +206,7 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
                     1e3 * r.timing.total());
     }
 
-    // Table 4.2: his photon counts, 122,000 photons marched against 50,000 (pilots included).
-    std::printf("\nTable 4.2 (sphere): passes at his photon counts\n\n");
-    MediaMethodSettings s = base;
-    s.photons = int(122000 / std::max(hit, 1e-3));
-    const Row table_reference = run(scene, s, reference, "reference");
-    // The adaptive photons meet the grid more often than uniform ones: their share from a probe.
-    s.adaptive.enabled = true;
-    s.photons = 50000;
-    const MediaMethodResult adaptive_probe = render_media(scene, s, false);
-    s.photons = int(50000.0 * (50000.0 - double(adaptive_probe.pilots_marched)) /
-                    double(std::max<size_t>(adaptive_probe.photons_marched, 1)));
-    const Row table_adaptive = run(scene, s, reference, "adaptive");
-    print_passes(table_reference, table_adaptive);
+    passes_table(scene, base, hit, reference, kSphere);
 
     // Table 4.1: the order of 122,000 marched photons on the plane.
     std::printf("\nTable 4.1: photon marching time by sampling order (122,000 photons)\n\n");
@@ -173,6 +220,20 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
         std::printf("| %s | %s | %.0f ms | %.5f | %.4f |\n", kPlaneSamplingNames[k], his[k],
                     1e3 * r.timing.photon_marching, r.rmse, r.rel);
     }
+    // Tables 4.3 and 4.4 on our cube (perturbed index and scattering) and bunny scenes, each
+    // against its own reference.
+    if (full)
+        for (const auto& [path, his_table] :
+             {std::pair{"scenes/media_noise_cube_point.json", kCube},
+              std::pair{"scenes/media_bunny_fog.json", kArmadillo}}) {
+            Scene other = load_scene(path);
+            other.camera.width = width;
+            other.camera.height = height;
+            std::printf("\n%s:\n", path);
+            const double other_hit = hit_fraction(other, base);
+            const Image other_reference = reference_image(other, base, other_hit, target);
+            passes_table(other, base, other_hit, other_reference, his_table);
+        }
     return 0;
 }
 
