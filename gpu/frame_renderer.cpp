@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <stdexcept>
 
 #include "shared/camera.h"
 #include "shared/qmc.h"
@@ -738,7 +739,25 @@ void FrameRenderer::accumulate_direct(bool fresh) {
     gl::Enable(GL_DEPTH_TEST);
 }
 
+void FrameRenderer::set_volume(const Image& volume) {
+    volume_rgba_.clear();
+    if (volume.pixels.empty()) return;
+    if (volume.width != width_ || volume.height != height_)
+        throw std::invalid_argument("FrameRenderer::set_volume: the image is not frame-sized");
+    volume_rgba_.resize(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x)
+            volume_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
+                glm::vec4(volume.rgb(x, y), 1.0f);
+}
+
 void FrameRenderer::compose() {
+    // The G-buffer pass wrote a zero volume term; a media method's replaces it.
+    if (!volume_rgba_.empty()) {
+        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
+        gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
+                          volume_rgba_.data());
+    }
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &draw);

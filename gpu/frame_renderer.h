@@ -68,6 +68,9 @@ public:
     // The same with the indirect term in lightmap or screen space.
     void render(const IndirectTerm& indirect, GLuint caustics = 0);
     FrameImages read_back() const;  // rows top-first, linear radiance
+    // The `volume` term from a media method (rows top-first, width × height), composed into
+    // every later frame; an empty image sets it back to zero (the frame has no media of its own).
+    void set_volume(const Image& volume);
 
     int width() const { return width_; }
     int height() const { return height_; }
@@ -111,6 +114,7 @@ private:
     void compose();
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
+    std::vector<glm::vec4> volume_rgba_;        // set_volume's term, rows bottom-first
     Texture frame_;
     Framebuffer compose_fbo_;
     VertexArray empty_vao_;

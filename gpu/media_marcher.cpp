@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 
 namespace ag::gpu {
 
@@ -21,6 +22,15 @@ layout(std430, binding = 2) readonly buffer Extinction { float sigma_t_grid[]; }
 // Per voxel: fluence and fluence × photon direction (his luminance-weighted mean direction), each
 // a 64-bit two's-complement fixed-point sum in two 32-bit words (low, high).
 layout(std430, binding = 3) buffer Fluence { uint fluence[]; };
+// Optional per-voxel statistics for the adaptive pipeline (ch. 3.2): stat_count sums per voxel,
+// Σ crossing and Σ crossing × attribute k − 1 of each photon (its weight, or its origin on the
+// photon plane and its square), a crossing being the chord length in voxel edges (track length)
+// or 1 per voxel credited (walk). Fixed point like the fluence, with their own scale.
+layout(std430, binding = 4) readonly buffer Attributes { vec4 attributes[]; };
+layout(std430, binding = 5) buffer Stats { uint stats[]; };
+uniform int stat_count;
+uniform float stat_scale;
+vec4 photon_attribute = vec4(0.0);
 uniform float fixed_scale;  // fixed-point units per unit of deposit
 uniform int photon_count;
 uniform ivec3 size;
@@ -70,6 +80,18 @@ void add_fixed(int slot, float v) {
     int high = (sum < old ? 1 : 0) + (q < 0 ? -1 : 0);
     if (high != 0) atomicAdd(fluence[2 * slot + 1], uint(high));
 }
+void add_stat(int slot, float v) {
+    int q = int(clamp(round(v * stat_scale), -2147483647.0, 2147483647.0));
+    if (q == 0) return;
+    uint old = atomicAdd(stats[2 * slot], uint(q));
+    uint sum = old + uint(q);
+    int high = (sum < old ? 1 : 0) + (q < 0 ? -1 : 0);
+    if (high != 0) atomicAdd(stats[2 * slot + 1], uint(high));
+}
+void add_stats(int cell, float crossing) {
+    for (int k = 0; k < stat_count; ++k)
+        add_stat(stat_count * cell + k, crossing * (k == 0 ? 1.0 : photon_attribute[k - 1]));
+}
 void add(int cell, float v, vec3 dir) {
     add_fixed(4 * cell, v);
     add_fixed(4 * cell + 1, v * dir.x);
@@ -112,7 +134,10 @@ void deposit_track(vec3 a, vec3 b, float power) {
     for (int guard = 0; guard < 4 * (size.x + size.y + size.z); ++guard) {
         float tn = min(min(tmax.x, tmax.y), tmax.z);
         float te = min(tn, t1);
-        if (te > t) add(cell_index(cell), scale * (te - t), dir);
+        if (te > t) {
+            add(cell_index(cell), scale * (te - t), dir);
+            if (stat_count > 0) add_stats(cell_index(cell), (te - t) * length(d));
+        }
         if (tn >= t1) break;
         t = tn;
         if (tmax.x == tn) {
@@ -143,7 +168,10 @@ void deposit_walk(vec3 a, vec3 b, float power) {
     for (int k = int(ceil(lo - 0.5)); float(k) + 0.5 < hi; ++k) {
         vec3 p = a + ((float(k) + 0.5 - a[m]) / d[m]) * d;
         ivec3 c = ivec3(floor(p));
-        if (in_grid(c)) add(cell_index(c), scale, dir);
+        if (in_grid(c)) {
+            add(cell_index(c), scale, dir);
+            if (stat_count > 0) add_stats(cell_index(c), 1.0);
+        }
     }
 }
 
@@ -152,6 +180,7 @@ void main() {
     if (id >= photon_count) return;
     vec3 x = photons[id].position.xyz;
     float power = photons[id].position.w;
+    if (stat_count > 0) photon_attribute = attributes[id];
     vec3 g = (x - grid_min) / voxel;
     // A photon on the box's face starts just inside it.
     g = clamp(g, vec3(1e-4), vec3(size) - 1e-4);
@@ -200,7 +229,12 @@ void main() {
 MediaMarcher::MediaMarcher() : program_("media photon march", kMarchCompute) {}
 
 MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<MediaPhoton>& photons,
-                                     const MediaMarchSettings& settings) const {
+                                     const MediaMarchSettings& settings,
+                                     const std::vector<glm::vec4>& attributes,
+                                     int stat_count) const {
+    if (stat_count < 0 || stat_count > 5 || (stat_count > 0 && attributes.size() != photons.size()))
+        throw std::invalid_argument(
+            "MediaMarcher::march: 0 to 5 statistics, with one attribute vector per photon");
     MediaMarchResult result;
     const size_t voxels = grid.voxel_count();
     std::vector<glm::vec4> packed(2 * photons.size());
@@ -222,6 +256,10 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     const Buffer sigma_buffer = upload(grid.sigma_t.data(), voxels * sizeof(float), 2);
     const std::vector<uint32_t> zeros(8 * voxels, 0u);
     const Buffer fluence_buffer = upload(zeros.data(), zeros.size() * sizeof(uint32_t), 3);
+    const Buffer attribute_buffer =
+        upload(attributes.data(), stat_count > 0 ? attributes.size() * sizeof(glm::vec4) : 0, 4);
+    const std::vector<uint32_t> stat_zeros(2 * size_t(stat_count) * voxels, 0u);
+    const Buffer stat_buffer = upload(stat_zeros.data(), stat_zeros.size() * sizeof(uint32_t), 5);
 
     const glm::vec3 voxel = grid.voxel_size();
     const float ds = settings.step * std::min({voxel.x, voxel.y, voxel.z});
@@ -246,6 +284,17 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
         double(max_power) * double(longest) / (double(voxel.x) * double(voxel.y) * voxel.z);
     const float fixed_scale = max_deposit > 0.0 ? float(1073741824.0 / max_deposit) : 1.0f;
     program_.set("fixed_scale", fixed_scale);
+    // The largest single statistic (the longest crossing, √3 voxels, times the largest
+    // attribute) maps to 2^30 units too.
+    float max_attribute = 1.0f;
+    if (stat_count > 1)
+        for (const glm::vec4& a : attributes)
+            for (int k = 0; k < stat_count - 1; ++k)
+                max_attribute = std::max(max_attribute, std::abs(a[k]));
+    const float longest_crossing = std::max(std::sqrt(3.0f), settings.step);
+    const float stat_scale = float(1073741824.0 / (double(max_attribute) * longest_crossing));
+    program_.set("stat_count", stat_count);
+    program_.set("stat_scale", stat_scale);
     gl::Finish();
     const auto start = std::chrono::steady_clock::now();
     gl::DispatchCompute(GLuint((photons.size() + 63) / 64), 1, 1);
@@ -267,6 +316,17 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     for (size_t i = 0; i < voxels; ++i) {
         result.fluence[i] = value(4 * i);
         result.flow[i] = glm::vec3(value(4 * i + 1), value(4 * i + 2), value(4 * i + 3));
+    }
+    if (stat_count > 0) {
+        std::vector<uint32_t> stat_words(stat_zeros.size());
+        gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, stat_buffer.get());
+        gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0,
+                             GLsizeiptr(stat_words.size() * sizeof(uint32_t)), stat_words.data());
+        result.stats.resize(size_t(stat_count) * voxels);
+        for (size_t i = 0; i < result.stats.size(); ++i) {
+            const uint64_t bits = (uint64_t(stat_words[2 * i + 1]) << 32) | stat_words[2 * i];
+            result.stats[i] = float(double(static_cast<int64_t>(bits)) / double(stat_scale));
+        }
     }
     gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, photon_buffer.get());
     gl::GetBufferSubData(GL_SHADER_STORAGE_BUFFER, 0, GLsizeiptr(packed.size() * sizeof(glm::vec4)),

@@ -28,14 +28,21 @@ struct MediaMarchResult {
     double entered = 0.0;                  // Σ power of the photons marched
     double absorbed = 0.0, escaped = 0.0;  // extinguished in the grid; left it
     double seconds = 0.0;                  // the dispatch, to glFinish
+    // With statistics: `stat_count` per voxel (voxel-major): Σ crossings (chord lengths in voxel
+    // edges; 1 per voxel credited by the walk), then Σ crossing × attribute k of each photon.
+    std::vector<float> stats;
 };
 
 class MediaMarcher {
 public:
     MediaMarcher();
     // Marches `photons` (each on or in the grid's box) through `grid` (n already smoothed).
+    // With `stat_count` > 0 (at most 5) it also sums per voxel the crossings and the crossings
+    // times the first stat_count − 1 components of each photon's `attributes` entry (his photon
+    // counts, weights and origins, ch. 3.2).
     MediaMarchResult march(const MediaGrid& grid, const std::vector<MediaPhoton>& photons,
-                           const MediaMarchSettings& settings) const;
+                           const MediaMarchSettings& settings,
+                           const std::vector<glm::vec4>& attributes = {}, int stat_count = 0) const;
 
 private:
     Program program_;

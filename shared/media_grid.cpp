@@ -65,15 +65,23 @@ void gaussian_smooth(std::vector<float>& values, const glm::ivec3& size, int tap
     }
 }
 
-std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, const Bounds& grid,
-                                       int count) {
-    const glm::vec3 axis = glm::normalize(grid.center() - light);
-    glm::vec3 u =
-        glm::cross(axis, std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0));
-    u = glm::normalize(u);
-    const glm::vec3 v = glm::cross(axis, u);
+PhotonSource photon_source(const glm::vec3& light, float intensity, const Bounds& grid) {
+    PhotonSource source;
+    source.light = light;
+    source.intensity = intensity;
+    source.grid = grid;
+    const bool inside =
+        glm::all(glm::greaterThan(light, grid.min)) && glm::all(glm::lessThan(light, grid.max));
+    if (inside) {
+        source.kind = PhotonSource::Kind::sphere;
+        return source;
+    }
+    source.axis = glm::normalize(grid.center() - light);
+    const glm::vec3 axis = source.axis;
+    source.u = glm::normalize(
+        glm::cross(axis, std::abs(axis.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0)));
+    source.v = glm::cross(axis, source.u);
     // The plane at distance 1 along the axis; its half-size covers every corner's projection.
-    float half = 0.0f;
     for (int c = 0; c < 8; ++c) {
         const glm::vec3 corner((c & 1) ? grid.max.x : grid.min.x, (c & 2) ? grid.max.y : grid.min.y,
                                (c & 4) ? grid.max.z : grid.min.z);
@@ -83,37 +91,298 @@ std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, 
             throw std::invalid_argument(
                 "plane_photons: the light must lie outside the grid, "
                 "every corner in front of it");
-        half = std::max({half, std::abs(glm::dot(q, u)) / t, std::abs(glm::dot(q, v)) / t});
+        source.half = std::max({source.half, std::abs(glm::dot(q, source.u)) / t,
+                                std::abs(glm::dot(q, source.v)) / t});
     }
-    const double cell = double(2.0f * half) * double(2.0f * half) / double(count);
+    return source;
+}
+
+bool source_photon(const PhotonSource& source, glm::vec2 uv, double pdf, int count,
+                   MediaPhoton& photon) {
+    if (source.kind == PhotonSource::Kind::sphere) {
+        const float z = 1.0f - 2.0f * uv.x;
+        const float phi = float(2.0 * std::numbers::pi) * uv.y;
+        const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
+        photon = {source.light,
+                  {r * std::cos(phi), r * std::sin(phi), z},
+                  float(4.0 * std::numbers::pi * source.intensity / (count * pdf))};
+        return true;
+    }
+    const float half = source.half;
+    const glm::vec3 q = source.axis + (2.0f * uv.x - 1.0f) * half * source.u +
+                        (2.0f * uv.y - 1.0f) * half * source.v;
+    const float r = glm::length(q);
+    const glm::vec3 dir = q / r;
+    float enter = 0.0f, exit = 0.0f;
+    if (!ray_box(source.grid, source.light, dir, 0.0f, 1e30f, enter, exit)) return false;
+    // Solid angle of the cell: ΔA cosθ / r² with cosθ = 1/r at distance 1.
+    const double cell = double(2.0f * half) * double(2.0f * half) / (double(count) * pdf);
+    photon = {source.light + enter * dir, dir, float(source.intensity * cell / double(r * r * r))};
+    return true;
+}
+
+glm::vec2 hammersley(int i, int count, glm::vec2 shift) {
+    const glm::vec2 p((float(i) + 0.5f) / float(count), float(radical_inverse(2, uint64_t(i))));
+    return glm::fract(p + shift);
+}
+
+bool plane_sample(PlaneSampling order, int i, int count, glm::vec2& uv) {
+    const auto unit = [](uint32_t a, uint32_t b) {
+        return float(hash_u32(hash_u32(a * 0x9E3779B9u + 0x7F4A7C15u) ^ b) >> 8) / float(1u << 24);
+    };
+    const int side = std::max(1, int(std::sqrt(double(count))));
+    switch (order) {
+        case PlaneSampling::random:
+            uv = {unit(uint32_t(i), 1u), unit(uint32_t(i), 2u)};
+            return true;
+        case PlaneSampling::halton:
+            uv = {float(radical_inverse(2, uint64_t(i) + 1)),
+                  float(radical_inverse(3, uint64_t(i) + 1))};
+            return true;
+        case PlaneSampling::hammersley:
+            uv = hammersley(i, count, glm::vec2(0.0f));
+            return true;
+        default:
+            break;
+    }
+    if (i >= side * side) return false;
+    const bool rows = order == PlaneSampling::grid_rows || order == PlaneSampling::jitter_rows;
+    const bool jitter =
+        order == PlaneSampling::jitter_rows || order == PlaneSampling::jitter_columns;
+    const int a = i % side, b = i / side;
+    const glm::vec2 cell = rows ? glm::vec2(a, b) : glm::vec2(b, a);
+    const glm::vec2 offset =
+        jitter ? glm::vec2(unit(uint32_t(i), 3u), unit(uint32_t(i), 4u)) : glm::vec2(0.5f);
+    uv = (cell + offset) / float(side);
+    return true;
+}
+
+std::vector<MediaPhoton> plane_photons(const glm::vec3& light, float intensity, const Bounds& grid,
+                                       int count) {
+    PhotonSource source = photon_source(light, intensity, grid);
+    if (source.kind != PhotonSource::Kind::plane)
+        throw std::invalid_argument(
+            "plane_photons: the light must lie outside the grid, every corner in front of it");
     std::vector<MediaPhoton> photons;
     photons.reserve(size_t(count));
-    for (int i = 0; i < count; ++i) {
-        // 2D Hammersley: (i + ½)/N and the base-2 radical inverse.
-        const float a = (float(i) + 0.5f) / float(count);
-        const float b = float(radical_inverse(2, uint64_t(i)));
-        const glm::vec3 q = axis + (2.0f * a - 1.0f) * half * u + (2.0f * b - 1.0f) * half * v;
-        const float r = glm::length(q);
-        const glm::vec3 dir = q / r;
-        float enter = 0.0f, exit = 0.0f;
-        if (!ray_box(grid, light, dir, 0.0f, 1e30f, enter, exit)) continue;
-        // Solid angle of the cell: ΔA cosθ / r² with cosθ = 1/r at distance 1.
-        photons.push_back({light + enter * dir, dir, float(intensity * cell / double(r * r * r))});
-    }
+    MediaPhoton photon;
+    for (int i = 0; i < count; ++i)
+        if (source_photon(source, hammersley(i, count, glm::vec2(0.0f)), 1.0, count, photon))
+            photons.push_back(photon);
     return photons;
 }
 
 std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity, int count) {
-    std::vector<MediaPhoton> photons;
-    photons.reserve(size_t(count));
-    const float power = float(4.0 * std::numbers::pi * intensity / count);
-    for (int i = 0; i < count; ++i) {
-        const float z = 1.0f - 2.0f * (float(i) + 0.5f) / float(count);
-        const float phi = float(2.0 * std::numbers::pi * radical_inverse(2, uint64_t(i)));
-        const float r = std::sqrt(std::max(0.0f, 1.0f - z * z));
-        photons.push_back({light, {r * std::cos(phi), r * std::sin(phi), z}, power});
-    }
+    PhotonSource source;
+    source.kind = PhotonSource::Kind::sphere;
+    source.light = light;
+    source.intensity = intensity;
+    std::vector<MediaPhoton> photons(static_cast<size_t>(count));
+    for (int i = 0; i < count; ++i)
+        source_photon(source, hammersley(i, count, glm::vec2(0.0f)), 1.0, count,
+                      photons[size_t(i)]);
     return photons;
+}
+
+PhotonDensity::PhotonDensity(int side, const std::vector<float>& cells) : side_(side) {
+    if (side < 1 || cells.size() != size_t(side) * size_t(side))
+        throw std::invalid_argument("PhotonDensity: expected side² cells");
+    double total = 0.0;
+    for (float c : cells) {
+        if (!(c >= 0.0f)) throw std::invalid_argument("PhotonDensity: a negative cell");
+        total += c;
+    }
+    if (!(total > 0.0)) throw std::invalid_argument("PhotonDensity: all cells are zero");
+    const double cells_count = double(side) * side;
+    pdf_.resize(cells.size());
+    for (size_t i = 0; i < cells.size(); ++i) pdf_[i] = double(cells[i]) * cells_count / total;
+    marginal_.assign(size_t(side) + 1, 0.0);
+    rows_.assign(size_t(side) * (size_t(side) + 1), 0.0);
+    for (int y = 0; y < side; ++y) {
+        double* row = &rows_[size_t(y) * (size_t(side) + 1)];
+        for (int x = 0; x < side; ++x) row[x + 1] = row[x] + pdf_[size_t(y) * size_t(side) + x];
+        marginal_[size_t(y) + 1] = marginal_[size_t(y)] + row[side];
+    }
+}
+
+double PhotonDensity::pdf(glm::vec2 uv) const {
+    const int x = std::clamp(int(uv.x * float(side_)), 0, side_ - 1);
+    const int y = std::clamp(int(uv.y * float(side_)), 0, side_ - 1);
+    return pdf_[size_t(y) * size_t(side_) + size_t(x)];
+}
+
+glm::vec2 PhotonDensity::sample(glm::vec2 uniform) const {
+    // Inverts a cumulative sum `c` (n + 1 entries, c[0] = 0) at u ∈ [0, 1): the cell and the
+    // position inside it, linear within the cell.
+    const auto invert = [](const double* c, int n, double u) {
+        const double target = u * c[n];
+        int lo = 0, hi = n;  // c[lo] ≤ target < c[hi]
+        while (hi - lo > 1) {
+            const int mid = (lo + hi) / 2;
+            if (c[mid] <= target)
+                lo = mid;
+            else
+                hi = mid;
+        }
+        while (lo + 1 < n && c[lo + 1] <= target) ++lo;  // skip empty cells
+        const double width = c[lo + 1] - c[lo];
+        const double t = width > 0.0 ? std::clamp((target - c[lo]) / width, 0.0, 1.0) : 0.5;
+        return std::min((double(lo) + t) / double(n), std::nextafter(1.0, 0.0));
+    };
+    const double y = invert(marginal_.data(), side_, double(uniform.y));
+    const int row = std::clamp(int(y * side_), 0, side_ - 1);
+    const double x = invert(&rows_[size_t(row) * (size_t(side_) + 1)], side_, double(uniform.x));
+    return {float(x), float(y)};
+}
+
+namespace {
+
+glm::ivec3 half_size(const glm::ivec3& s) { return glm::max((s + 1) / 2, glm::ivec3(1)); }
+
+size_t at(const glm::ivec3& size, const glm::ivec3& p) {
+    return (size_t(p.z) * size_t(size.y) + size_t(p.y)) * size_t(size.x) + size_t(p.x);
+}
+
+// One level down: the [1 3 3 1]/8 filter along each axis in turn, coarse cell i over fine cells
+// 2i − 1 … 2i + 2 (clamped at the border).
+template <class T>
+std::vector<T> downsample(const std::vector<T>& values, const glm::ivec3& size) {
+    static const float taps[4] = {0.125f, 0.375f, 0.375f, 0.125f};
+    std::vector<T> current = values;
+    glm::ivec3 current_size = size;
+    for (int axis = 0; axis < 3; ++axis) {
+        glm::ivec3 next_size = current_size;
+        next_size[axis] = std::max((current_size[axis] + 1) / 2, 1);
+        std::vector<T> next(size_t(next_size.x) * size_t(next_size.y) * size_t(next_size.z));
+        for (int z = 0; z < next_size.z; ++z)
+            for (int y = 0; y < next_size.y; ++y)
+                for (int x = 0; x < next_size.x; ++x) {
+                    const glm::ivec3 p(x, y, z);
+                    T sum{};
+                    for (int k = 0; k < 4; ++k) {
+                        glm::ivec3 q = p;
+                        q[axis] = std::clamp(2 * p[axis] - 1 + k, 0, current_size[axis] - 1);
+                        sum += taps[k] * current[at(current_size, q)];
+                    }
+                    next[at(next_size, p)] = sum;
+                }
+        current.swap(next);
+        current_size = next_size;
+    }
+    return current;
+}
+
+// Box filters over 2 × 2 × 2 children: photon crossings (the sum over the children / 2: a photon
+// crossing a voxel twice the size crosses about two of its children) and the mean weight over the
+// children with photons (Listing B.2).
+void downsample_counts(const std::vector<float>& count, const std::vector<float>& weight,
+                       const glm::ivec3& size, std::vector<float>& count_out,
+                       std::vector<float>& weight_out) {
+    const glm::ivec3 next = half_size(size);
+    count_out.assign(size_t(next.x) * size_t(next.y) * size_t(next.z), 0.0f);
+    weight_out.assign(count_out.size(), 0.0f);
+    for (int z = 0; z < next.z; ++z)
+        for (int y = 0; y < next.y; ++y)
+            for (int x = 0; x < next.x; ++x) {
+                float c = 0.0f, w = 0.0f;
+                int with = 0;
+                for (int k = 0; k < 8; ++k) {
+                    const glm::ivec3 q =
+                        2 * glm::ivec3(x, y, z) + glm::ivec3(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+                    if (glm::any(glm::greaterThanEqual(q, size))) continue;
+                    c += count[at(size, q)];
+                    if (weight[at(size, q)] > 0.0f) {
+                        w += weight[at(size, q)];
+                        ++with;
+                    }
+                }
+                count_out[at(next, {x, y, z})] = 0.5f * c;
+                weight_out[at(next, {x, y, z})] = with > 0 ? w / float(with) : 0.0f;
+            }
+}
+
+// Trilinear read of a level (voxel centres at i + ½) at `g`, in that level's voxel coordinates.
+template <class T>
+T trilinear(const std::vector<T>& values, const glm::ivec3& size, glm::vec3 g) {
+    const glm::vec3 p = g - 0.5f;
+    const glm::ivec3 i0 = glm::ivec3(glm::floor(p));
+    const glm::vec3 f = p - glm::vec3(i0);
+    T r{};
+    for (int k = 0; k < 8; ++k) {
+        const glm::ivec3 o(k & 1, (k >> 1) & 1, (k >> 2) & 1);
+        const glm::ivec3 c = glm::clamp(i0 + o, glm::ivec3(0), size - 1);
+        const glm::vec3 w = glm::mix(1.0f - f, f, glm::vec3(o));
+        r += (w.x * w.y * w.z) * values[at(size, c)];
+    }
+    return r;
+}
+
+}  // namespace
+
+MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vector<float>& fluence,
+                                         const std::vector<glm::vec3>& flow,
+                                         const std::vector<float>& count,
+                                         const std::vector<float>& weight, float delta_weight,
+                                         int max_level) {
+    std::vector<glm::ivec3> sizes{size};
+    std::vector<std::vector<float>> fluence_levels{fluence}, count_levels{count},
+        weight_levels{weight};
+    std::vector<std::vector<glm::vec3>> flow_levels{flow};
+    while (int(sizes.size()) <= max_level &&
+           glm::any(glm::greaterThan(sizes.back(), glm::ivec3(1)))) {
+        const glm::ivec3 s = sizes.back();
+        fluence_levels.push_back(downsample(fluence_levels.back(), s));
+        flow_levels.push_back(downsample(flow_levels.back(), s));
+        std::vector<float> c, w;
+        downsample_counts(count_levels.back(), weight_levels.back(), s, c, w);
+        count_levels.push_back(std::move(c));
+        weight_levels.push_back(std::move(w));
+        sizes.push_back(half_size(s));
+    }
+    MediaReconstruction out;
+    out.max_level = int(sizes.size()) - 1;
+    const int top = out.max_level;
+    out.fluence.resize(fluence.size());
+    out.flow.resize(fluence.size());
+    out.level.resize(fluence.size());
+    for (int z = 0; z < size.z; ++z)
+        for (int y = 0; y < size.y; ++y)
+            for (int x = 0; x < size.x; ++x) {
+                const glm::vec3 centre = glm::vec3(x, y, z) + 0.5f;
+                const auto read = [&](const auto& levels, int l) {
+                    return trilinear(levels[size_t(l)], sizes[size_t(l)], centre / float(1 << l));
+                };
+                // Photon weight filter: the mean weight where at least one photon passed, from
+                // the first level that has one.
+                int w_level = 0;
+                while (w_level < top && read(count_levels, w_level) < 1.0f) ++w_level;
+                const float w = read(weight_levels, w_level);
+                const int weight_level = std::clamp(int(std::floor(w / delta_weight)), 0, top);
+                // Centre-surround filter (Listing B.3): up a level while the difference between
+                // successive levels does not grow.
+                int level = 0;
+                if (top >= 2) {
+                    float centre_value = read(fluence_levels, 0);
+                    float surround = read(fluence_levels, 1);
+                    float diff = std::abs(centre_value - surround);
+                    centre_value = surround;
+                    surround = read(fluence_levels, 2);
+                    float next_diff = std::abs(centre_value - surround);
+                    while (next_diff <= diff && level + 2 < top) {
+                        ++level;
+                        centre_value = surround;
+                        surround = read(fluence_levels, level + 2);
+                        diff = next_diff;
+                        next_diff = std::abs(centre_value - surround);
+                    }
+                }
+                level = std::min(level, weight_level);
+                const size_t i = at(size, {x, y, z});
+                out.level[i] = uint8_t(level);
+                out.fluence[i] = read(fluence_levels, level);
+                out.flow[i] = read(flow_levels, level);
+            }
+    return out;
 }
 
 std::vector<MediaPhoton> quad_photons(const std::array<glm::vec3, 4>& corners, float radiance,

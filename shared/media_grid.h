@@ -42,6 +42,11 @@ Image grid_slice(const MediaGrid& grid, const std::vector<float>& values, int ax
 // (odd) and standard deviation `sigma` voxels, clamping at the borders (Pfeuti: 9 taps, σ = 9/6).
 void gaussian_smooth(std::vector<float>& values, const glm::ivec3& size, int taps, float sigma);
 
+// The grids the viewer's `media` view slices (docs/viewer.md): the smoothed index, σ_s, the
+// fluence, the adaptive pipeline's mipmap level.
+enum class MediaField { n, sigma_s, fluence, level };
+inline constexpr const char* kMediaFieldNames[] = {"n", "sigma_s", "fluence", "level"};
+
 // One photon of the photon plane: where it enters the grid, its unit direction and its flux.
 struct MediaPhoton {
     glm::vec3 position{0.0f};
@@ -66,6 +71,87 @@ std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity,
 // moved to where they enter the grid's box (those that miss it are dropped).
 std::vector<MediaPhoton> quad_photons(const std::array<glm::vec3, 4>& corners, float radiance,
                                       const Bounds& grid, int count);
+
+// The photons of a point light as a map from the unit square: his photon plane (ch. 3.1.4) for a
+// light outside the grid, the sphere of directions (z and φ, equal-area) for one inside it. A
+// point (u, v) drawn with density p over the square (p = 1: uniform) gives one of `count` photons
+// carrying total / (count · p) times the flux density there, so any p > 0 keeps the sum unbiased
+// (the weighting of his importance-distributed photons, ch. 3.2.3).
+struct PhotonSource {
+    enum class Kind { plane, sphere } kind = Kind::plane;
+    glm::vec3 light{0.0f};
+    float intensity = 0.0f;  // W/sr
+    Bounds grid;
+    glm::vec3 axis{0.0f}, u{0.0f}, v{0.0f};  // the plane at distance 1 along `axis`
+    float half = 0.0f;                       // its half-size
+};
+// The source for a point light and grid: the plane when the light lies outside the grid (every
+// corner in front of it), else the sphere.
+PhotonSource photon_source(const glm::vec3& light, float intensity, const Bounds& grid);
+// The photon at (u, v) drawn with density `pdf` among `count`; false where it misses the grid.
+bool source_photon(const PhotonSource& source, glm::vec2 uv, double pdf, int count,
+                   MediaPhoton& photon);
+
+// A piecewise-constant density over the unit square on a `side` × `side` grid of cells, sampled
+// by Pharr and Humphreys' two-stage inversion (his ch. 3.2.3: the marginal along y, then the row's
+// conditional along x, by binary search on the cumulative sums).
+class PhotonDensity {
+public:
+    PhotonDensity() = default;
+    // `cells` (side², row-major, y rows) ≥ 0 with a positive sum; normalised here.
+    PhotonDensity(int side, const std::vector<float>& cells);
+    int side() const { return side_; }
+    // The density (mean 1 over the square) of the cell holding `uv`.
+    double pdf(glm::vec2 uv) const;
+    // Maps a uniform point to one distributed by the density.
+    glm::vec2 sample(glm::vec2 uniform) const;
+    const std::vector<double>& cells() const { return pdf_; }
+
+private:
+    int side_ = 0;
+    std::vector<double> pdf_;       // per cell, mean 1
+    std::vector<double> marginal_;  // side + 1 cumulative sums over rows
+    std::vector<double> rows_;      // side × (side + 1) cumulative sums within each row
+};
+
+// 2D Hammersley point i of `count`, shifted by `shift` modulo 1 (a Cranley–Patterson rotation;
+// shift 0 is the plain set): ((i + ½)/N, Φ₂(i)).
+glm::vec2 hammersley(int i, int count, glm::vec2 shift);
+
+// The orders of his Table 4.1 for the uniform photons on the plane: random, a square grid in
+// row-first or column-first order, the same jittered, Halton (bases 2, 3) and Hammersley (his
+// choice, and ours by default). The grids use ⌊√N⌋² points (the rest of N are dropped).
+enum class PlaneSampling {
+    random,
+    grid_rows,
+    grid_columns,
+    jitter_rows,
+    jitter_columns,
+    halton,
+    hammersley
+};
+inline constexpr const char* kPlaneSamplingNames[] = {
+    "random", "grid_rows", "grid_columns", "jitter_rows", "jitter_columns", "halton", "hammersley"};
+// Point i of `count` in `order` over the unit square; false for a grid's dropped points.
+bool plane_sample(PlaneSampling order, int i, int count, glm::vec2& uv);
+
+// Pfeuti's reconstruction (ch. 3.2.4, Listing B.3) of an adaptively sampled fluence grid: mipmap
+// pyramids of fluence and flow (each level half the last, a 4-tap [1 3 3 1]/8 filter per axis), of
+// the photon count (box) and of the mean photon weight (box over voxels with photons, Listing
+// B.2); each voxel then reads the pyramid, trilinearly at its centre, at level
+// min(centre-surround level, ⌊weight / Δweight⌋).
+struct MediaReconstruction {
+    std::vector<float> fluence;
+    std::vector<glm::vec3> flow;
+    std::vector<uint8_t> level;  // per voxel, the level read
+    int max_level = 0;
+};
+// `count` per voxel: photon crossings; `weight`: their mean weight (0 where none).
+MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vector<float>& fluence,
+                                         const std::vector<glm::vec3>& flow,
+                                         const std::vector<float>& count,
+                                         const std::vector<float>& weight, float delta_weight,
+                                         int max_level);
 
 // Solid angle (sr) of box `b` seen from a point outside it: the sum over its faces turned to the
 // point of the rectangle formula.

@@ -183,3 +183,11 @@ ag_cli_test(media_no_light 1 "needs an enabled point, spot or quad light"
 ag_cli_test(media_point_fog 0 "photon marching [0-9.]+ ms"
             media scenes/media_point_fog.json -o ${CMAKE_CURRENT_BINARY_DIR}/media_fog.exr
             --size 16x16 --grid 16 --photons 4000 --slices)
+# The adaptive pipeline runs its passes (and writes the level slice); it needs a point light.
+ag_cli_test(media_adaptive 0 "adaptive, [0-9]+ pilots marched; pilot generation"
+            media scenes/media_glass_fog_point.json
+            -o ${CMAKE_CURRENT_BINARY_DIR}/media_adaptive.exr --size 16x16 --grid 16
+            --photons 4000 --adaptive --pilots 16 --slices)
+ag_cli_test(media_adaptive_quad 1 "the adaptive media pipeline needs a point or spot light"
+            media scenes/media_glass_fog.json -o media_adaptive_quad.exr --size 8x8 --grid 8
+            --adaptive)

@@ -1,6 +1,7 @@
 #include "shared/pipeline/media_method.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
@@ -8,6 +9,7 @@
 #include "cpu/media_voxelizer.h"
 #include "gpu/media_view.h"
 #include "shared/media_grid.h"
+#include "shared/qmc.h"
 
 namespace ag {
 
@@ -19,9 +21,186 @@ double since(Clock::time_point start) {
     return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
+// A number in [0, 1) from a seed and two indices.
+float hash_unit(uint32_t seed, uint32_t a, uint32_t b) {
+    return float(hash_u32(hash_u32(seed * 0x9E3779B9u + a) ^ (b * 0x85EBCA6Bu))) *
+           (1.0f / 4294967296.0f);
+}
+
+// Phase 1 (ch. 3.2.2): the density over the photon plane from the pilots' statistics, summed
+// over blocks of the grid into a coarse grid.
+std::vector<float> pilot_density(const MediaGrid& grid, const gpu::MediaMarchResult& pilots,
+                                 const MediaAdaptiveSettings& a) {
+    const int longest = std::max({grid.size.x, grid.size.y, grid.size.z});
+    const int block = std::max(1, longest / std::max(1, a.coarse));
+    const glm::ivec3 coarse = (grid.size + block - 1) / block;
+    const size_t cells = size_t(coarse.x) * size_t(coarse.y) * size_t(coarse.z);
+    // Per coarse voxel: fluence, crossings, Σ origin x, y, Σ origin² x, y (crossing-weighted).
+    std::vector<std::array<double, 6>> sums(cells, std::array<double, 6>{});
+    const auto coarse_index = [&](const glm::ivec3& c) {
+        return (size_t(c.z) * size_t(coarse.y) + size_t(c.y)) * size_t(coarse.x) + size_t(c.x);
+    };
+    for (int z = 0; z < grid.size.z; ++z)
+        for (int y = 0; y < grid.size.y; ++y)
+            for (int x = 0; x < grid.size.x; ++x) {
+                const size_t i = grid.index(x, y, z);
+                std::array<double, 6>& s = sums[coarse_index(glm::ivec3(x, y, z) / block)];
+                s[0] += pilots.fluence[i];
+                for (int k = 0; k < 5; ++k) s[size_t(k) + 1] += pilots.stats[5 * i + size_t(k)];
+            }
+    double mean = 0.0;
+    int lit = 0;
+    for (const auto& s : sums)
+        if (s[1] > 0.0) {
+            mean += s[0];
+            ++lit;
+        }
+    const int side = a.pilot_side;
+    std::vector<float> density(size_t(side) * size_t(side), 0.0f);
+    if (lit > 0) {
+        mean /= lit;
+        const auto fluence_at = [&](glm::ivec3 c) {
+            return sums[coarse_index(glm::clamp(c, glm::ivec3(0), coarse - 1))][0];
+        };
+        for (int z = 0; z < coarse.z; ++z)
+            for (int y = 0; y < coarse.y; ++y)
+                for (int x = 0; x < coarse.x; ++x) {
+                    const glm::ivec3 c(x, y, z);
+                    const std::array<double, 6>& s = sums[coarse_index(c)];
+                    if (!(s[1] > 0.0)) continue;
+                    // Central differences (one-sided at the border), per coarse voxel.
+                    glm::dvec3 gradient;
+                    for (int k = 0; k < 3; ++k) {
+                        glm::ivec3 lo = c, hi = c;
+                        lo[k] = std::max(c[k] - 1, 0);
+                        hi[k] = std::min(c[k] + 1, coarse[k] - 1);
+                        gradient[k] = hi[k] > lo[k]
+                                          ? (fluence_at(hi) - fluence_at(lo)) / (hi[k] - lo[k])
+                                          : 0.0;
+                    }
+                    const bool edge = glm::length(gradient) >= a.gradient * mean;
+                    const bool dark = s[0] > 0.0 && s[0] <= a.shadow * mean;
+                    if (!edge && !dark) continue;
+                    // His circle (Listing B.1): the mean origin, the spread σx + σy as diameter.
+                    const double mx = s[2] / s[1], my = s[3] / s[1];
+                    const double sx = std::sqrt(std::max(0.0, s[4] / s[1] - mx * mx));
+                    const double sy = std::sqrt(std::max(0.0, s[5] / s[1] - my * my));
+                    const double r = 0.5 * std::max(1.0, sx + sy);
+                    const int x0 = std::max(0, int(std::floor(mx - r))),
+                              x1 = std::min(side - 1, int(std::floor(mx + r)));
+                    const int y0 = std::max(0, int(std::floor(my - r))),
+                              y1 = std::min(side - 1, int(std::floor(my + r)));
+                    for (int cy = y0; cy <= y1; ++cy)
+                        for (int cx = x0; cx <= x1; ++cx) {
+                            const double dx = cx + 0.5 - mx, dy = cy + 0.5 - my;
+                            if (dx * dx + dy * dy <= r * r || (cx == int(mx) && cy == int(my)))
+                                density[size_t(cy) * size_t(side) + size_t(cx)] += 1.0f;
+                        }
+                }
+    }
+    // Relative to the densest cell, plus the background, then his 5 × 5 Gaussian (variance 2).
+    const float peak = *std::max_element(density.begin(), density.end());
+    for (float& d : density) d = (peak > 0.0f ? d / peak : 0.0f) + a.background;
+    std::vector<float> smooth(density.size(), 0.0f);
+    for (int y = 0; y < side; ++y)
+        for (int x = 0; x < side; ++x) {
+            float sum = 0.0f, weight = 0.0f;
+            for (int dy = -2; dy <= 2; ++dy)
+                for (int dx = -2; dx <= 2; ++dx) {
+                    const int qx = x + dx, qy = y + dy;
+                    if (qx < 0 || qy < 0 || qx >= side || qy >= side) continue;
+                    const float w = std::exp(-float(dx * dx + dy * dy) / 4.0f);
+                    sum += w * density[size_t(qy) * size_t(side) + size_t(qx)];
+                    weight += w;
+                }
+            smooth[size_t(y) * size_t(side) + size_t(x)] = sum / weight;
+        }
+    return smooth;
+}
+
+gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& source,
+                                     const MediaMethodSettings& settings,
+                                     const gpu::MediaMarchSettings& march,
+                                     const gpu::MediaMarcher& marcher, MediaMethodResult& result) {
+    const MediaAdaptiveSettings& a = settings.adaptive;
+    if (a.pilot_side < 1 || a.coarse < 1 || !(a.background > 0.0f) || !(a.delta_weight > 0.0f))
+        throw std::invalid_argument(
+            "adaptive media pipeline: pilot_side, coarse, background and delta_weight must be "
+            "positive");
+    // Phase 1: pilots on a jittered side × side grid, each knowing its cell (ch. 3.2.2).
+    Clock::time_point start = Clock::now();
+    const int side = a.pilot_side;
+    std::vector<MediaPhoton> pilots;
+    std::vector<glm::vec4> origins;
+    pilots.reserve(size_t(side) * size_t(side));
+    MediaPhoton photon;
+    for (int cy = 0; cy < side; ++cy)
+        for (int cx = 0; cx < side; ++cx) {
+            const uint32_t cell = uint32_t(cy * side + cx);
+            const glm::vec2 jitter(hash_unit(a.seed, cell, 1) - 0.5f,
+                                   hash_unit(a.seed, cell, 2) - 0.5f);
+            const glm::vec2 uv = (glm::vec2(cx, cy) + 0.5f + 0.5f * jitter) / float(side);
+            if (!source_photon(source, uv, 1.0, side * side, photon)) continue;
+            pilots.push_back(photon);
+            const float ox = float(cx) + 0.5f, oy = float(cy) + 0.5f;
+            origins.emplace_back(ox, oy, ox * ox, oy * oy);
+        }
+    result.pilots_marched = pilots.size();
+    result.timing.pilot_generation = since(start);
+    const gpu::MediaMarchResult piloted = marcher.march(grid, pilots, march, origins, 5);
+    result.timing.pilot_marching = piloted.seconds;
+
+    start = Clock::now();
+    const PhotonDensity density(side, pilot_density(grid, piloted, a));
+    result.density = density.cells();
+    result.timing.distribution = since(start);
+
+    // Phase 2: Hammersley points through the density, each weighted by 1/(N p) (ch. 3.2.3).
+    start = Clock::now();
+    const int count = settings.photons;
+    const glm::vec2 shift =
+        a.seed == 0 ? glm::vec2(0.0f) : glm::vec2(hash_unit(a.seed, 0, 3), hash_unit(a.seed, 0, 4));
+    std::vector<MediaPhoton> photons;
+    std::vector<glm::vec4> inverse_density;
+    photons.reserve(size_t(count));
+    for (int i = 0; i < count; ++i) {
+        const glm::vec2 uv = density.sample(hammersley(i, count, shift));
+        const double p = density.pdf(uv);
+        if (!source_photon(source, uv, p, count, photon)) continue;
+        photons.push_back(photon);
+        inverse_density.emplace_back(float(1.0 / p), 0.0f, 0.0f, 0.0f);
+    }
+    result.photons_marched = photons.size();
+    result.timing.photon_generation = since(start);
+    gpu::MediaMarchResult marched = marcher.march(grid, photons, march, inverse_density, 2);
+    result.timing.photon_marching = marched.seconds;
+    const glm::vec3 voxel = grid.voxel_size();
+    for (float f : marched.fluence)
+        result.power_deposited += double(f) * voxel.x * voxel.y * voxel.z;
+    if (!a.reconstruct) return marched;
+
+    // Reconstruction (ch. 3.2.4): his photon count and mean weight 1/(N p) per voxel.
+    start = Clock::now();
+    const size_t voxels = grid.voxel_count();
+    std::vector<float> crossings(voxels), weight(voxels);
+    for (size_t i = 0; i < voxels; ++i) {
+        crossings[i] = marched.stats[2 * i];
+        weight[i] =
+            crossings[i] > 0.0f ? marched.stats[2 * i + 1] / crossings[i] / float(count) : 0.0f;
+    }
+    MediaReconstruction filtered = reconstruct_adaptive(
+        grid.size, marched.fluence, marched.flow, crossings, weight, a.delta_weight, a.max_level);
+    result.timing.reconstruction = since(start);
+    result.levels = std::move(filtered.level);
+    marched.fluence = std::move(filtered.fluence);
+    marched.flow = std::move(filtered.flow);
+    return marched;
+}
+
 }  // namespace
 
-MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings) {
+MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings,
+                               bool with_view) {
     Bounds bounds;
     for (const Medium& m : scene.media) {
         bounds.add(m.bounds.min);
@@ -59,30 +238,82 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     start = Clock::now();
     gaussian_smooth(grid.n, grid.size, 9, 1.5f);  // his 9³ Gaussian, σ = 9/6
     result.timing.smoothing = since(start);
-    start = Clock::now();
     // The mean of the light's RGB value: the method is grey (Medium is grey).
     const float intensity = glm::dot(light->value(), glm::vec3(1.0f / 3.0f));
     // His photon plane for a point light outside the grid; from the light itself where it is
     // inside; from its surface for a quad light.
     const bool inside = glm::all(glm::greaterThan(light->position, bounds.min)) &&
                         glm::all(glm::lessThan(light->position, bounds.max));
-    const std::vector<MediaPhoton> photons =
-        light->type == LightType::quad
-            ? quad_photons(light->corners, intensity, bounds, settings.photons)
-        : inside ? sphere_photons(light->position, intensity, settings.photons)
-                 : plane_photons(light->position, intensity, bounds, settings.photons);
-    result.photons_marched = photons.size();
-    result.timing.photon_generation = since(start);
-
+    start = Clock::now();
     gpu::MediaMarchSettings march;
     march.step = settings.march_step;
     march.deposit = settings.deposit;
-    const gpu::MediaMarchResult marched = gpu::MediaMarcher().march(grid, photons, march);
-    result.timing.photon_marching = marched.seconds;
+    const gpu::MediaMarcher marcher;
+    gpu::MediaMarchResult marched;
+    if (!settings.adaptive.enabled) {
+        std::vector<MediaPhoton> photons;
+        if (light->type == LightType::quad) {
+            photons = quad_photons(light->corners, intensity, bounds, settings.photons);
+        } else if (settings.sampling == PlaneSampling::hammersley) {
+            photons = inside ? sphere_photons(light->position, intensity, settings.photons)
+                             : plane_photons(light->position, intensity, bounds, settings.photons);
+        } else {
+            const PhotonSource source = photon_source(light->position, intensity, bounds);
+            int count = settings.photons;
+            if (settings.sampling != PlaneSampling::random &&
+                settings.sampling != PlaneSampling::halton) {
+                const int side = std::max(1, int(std::sqrt(double(count))));
+                count = side * side;
+            }
+            glm::vec2 uv;
+            MediaPhoton photon;
+            for (int i = 0; i < count; ++i)
+                if (plane_sample(settings.sampling, i, count, uv) &&
+                    source_photon(source, uv, 1.0, count, photon))
+                    photons.push_back(photon);
+        }
+        result.photons_marched = photons.size();
+        result.timing.photon_generation = since(start);
+        marched = marcher.march(grid, photons, march);
+        result.timing.photon_marching = marched.seconds;
+    } else {
+        if (light->type == LightType::quad)
+            throw std::invalid_argument(
+                scene.path +
+                ": the adaptive media pipeline needs a point or spot light (a photon plane)");
+        marched = march_adaptive(grid, photon_source(light->position, intensity, bounds), settings,
+                                 march, marcher, result);
+    }
+    if (!settings.adaptive.enabled)
+        for (float f : marched.fluence)
+            result.power_deposited += double(f) * double(voxel) * voxel * voxel;
+    if (!with_view) {
+        result.grids = std::move(grid);
+        result.fluence = std::move(marched.fluence);
+        result.flow = std::move(marched.flow);
+        return result;
+    }
 
+    result.grids = std::move(grid);
+    result.fluence = std::move(marched.fluence);
+    result.flow = std::move(marched.flow);
+    result.tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
+    Camera camera = scene.camera;
+    if (settings.width > 0 && settings.height > 0) {
+        camera.width = settings.width;
+        camera.height = settings.height;
+    }
+    start = Clock::now();
+    result.volume = view_media(scene, result, camera, settings);
+    result.timing.viewing = since(start);
+    return result;
+}
+
+Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                 const MediaMethodSettings& settings) {
     // The view march stops at the first surface the camera ray meets (the volume term's
     // definition; the straight ray, as the frame's other terms see it).
-    const Camera& camera = scene.camera;
+    const cpu::RayTracer rays(scene);
     std::vector<float> max_distance(size_t(camera.width) * size_t(camera.height));
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
@@ -93,18 +324,53 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
     view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
-    start = Clock::now();
-    result.volume =
-        gpu::MediaView().render(grid, marched.fluence, marched.flow, camera, view, max_distance);
-    result.timing.viewing = since(start);
-    result.grids = std::move(grid);
-    result.fluence = marched.fluence;
+    Image volume =
+        gpu::MediaView().render(media.grids, media.fluence, media.flow, camera, view, max_distance);
     // Grey to the light's colour.
-    const glm::vec3 tint = intensity > 0.0f ? light->value() / intensity : glm::vec3(0.0f);
-    for (int y = 0; y < result.volume.height; ++y)
-        for (int x = 0; x < result.volume.width; ++x)
-            result.volume.set_rgb(x, y, result.volume.rgb(x, y) * tint);
-    return result;
+    for (int y = 0; y < volume.height; ++y)
+        for (int x = 0; x < volume.width; ++x) volume.set_rgb(x, y, volume.rgb(x, y) * media.tint);
+    return volume;
+}
+
+Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,
+                       int width, int height) {
+    const MediaGrid& grid = media.grids;
+    Image out(width, height);
+    std::vector<float> values;
+    switch (field) {
+        case MediaField::n:
+            values = grid.n;
+            for (float& v : values) v -= 1.0f;
+            break;
+        case MediaField::sigma_s:
+            values = grid.sigma_s;
+            break;
+        case MediaField::fluence:
+            values = media.fluence;
+            break;
+        case MediaField::level:
+            values.assign(media.levels.begin(), media.levels.end());
+            break;
+    }
+    if (values.size() != grid.voxel_count() || grid.voxel_count() == 0) return out;
+    axis = std::clamp(axis, 0, 2);
+    const Image slice = grid_slice(grid, values, axis, std::clamp(layer, 0, grid.size[axis] - 1));
+    float peak = 0.0f;
+    for (float v : slice.pixels) peak = std::max(peak, std::abs(v));
+    const float scale = peak > 0.0f ? 1.0f / peak : 0.0f;
+    // Fit: the largest whole scale of voxels to pixels that fits, else a fraction of one.
+    const float fit =
+        std::min(float(width) / float(slice.width), float(height) / float(slice.height));
+    const int w = std::max(1, int(fit * float(slice.width))),
+              h = std::max(1, int(fit * float(slice.height)));
+    const int x0 = (width - w) / 2, y0 = (height - h) / 2;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x) {
+            const int sx = std::min(slice.width - 1, int(float(x) / fit));
+            const int sy = std::min(slice.height - 1, int(float(y) / fit));
+            out.set_rgb(x0 + x, y0 + y, slice.rgb(sx, sy) * scale);
+        }
+    return out;
 }
 
 }  // namespace ag

@@ -1,6 +1,7 @@
-// Pfeuti's reference pipeline (2009, ch. 3.1) end to end: voxelisation through the ray tracer,
+// Pfeuti's reference pipeline (2009, ch. 3.1) end to end — voxelisation through the ray tracer,
 // the smoothed index grid, the photon plane of the scene's point light, curved photon marching
-// and the view march on the GPU. Joins cpu/ (voxeliser) and gpu/ (marchers), so it lives here.
+// and the view march on the GPU — and his adaptive pipeline (ch. 3.2). Joins cpu/ (voxeliser) and
+// gpu/ (marchers), so it lives here.
 #pragma once
 
 #include <string>
@@ -11,20 +12,52 @@
 
 namespace ag {
 
+// His adaptive pipeline (ch. 3.2): pilot photons on a jittered square grid of the photon plane,
+// marched into a coarse grid that keeps where on the plane each voxel's photons came from;
+// voxels of high gradient or low fluence mark circles on a 2D density over the plane; the
+// photons follow that density (each weighted by 1/density, so the sum stays unbiased); the
+// deposits are reconstructed per voxel from a mipmap pyramid at min(centre-surround, weight)
+// level. Point and spot lights only (the photon plane, or the sphere of directions).
+struct MediaAdaptiveSettings {
+    bool enabled = false;
+    int pilot_side = 64;  // pilots = side², the density's cells side × side (his 64² = 4096)
+    int coarse = 16;      // region-detection grid along the longest side (his 16³)
+    // Region selection on the coarse grid (his two thresholds, Listing B.1), relative to the mean
+    // fluence F̄ of the coarse voxels photons reached, so that they hold for any light: a voxel
+    // is sampled tightly where |∇F| × coarse voxel ≥ gradient × F̄, or where 0 < F ≤ shadow × F̄.
+    float gradient = 0.5f;
+    float shadow = 0.2f;
+    float background = 0.1f;  // density of unselected cells, relative to the densest cell
+    // Photon-weight filter: level ⌊w / Δweight⌋ with w = 1/(N p) his photon weight (N photons,
+    // p the density at the photon's origin, mean 1): level k where the photons are as sparse as
+    // 1/(k Δweight) uniform ones or sparser (2e-5: level 1 below 50,000-photon density).
+    float delta_weight = 2e-5f;
+    int max_level = 4;        // highest mipmap level read
+    bool reconstruct = true;  // false: the raw importance-sampled deposits (for the bias tests)
+    uint32_t seed = 0;        // pilot jitter and the rotation of the Hammersley points
+};
+
 struct MediaMethodSettings {
-    int grid = 64;             // voxels along the longest side of the grid's box
-    int photons = 122000;      // on the photon plane (his Table 4.1 count)
-    float march_step = 0.25f;  // photon step, voxels
-    float view_step = 0.5f;    // view-ray step, voxels
+    int grid = 64;              // voxels along the longest side of the grid's box
+    int width = 0, height = 0;  // the volume image; 0: the scene camera's resolution
+    int photons = 122000;       // on the photon plane (his Table 4.1 count)
+    float march_step = 0.25f;   // photon step, voxels
+    float view_step = 0.5f;     // view-ray step, voxels
     gpu::MediaDeposit deposit = gpu::MediaDeposit::track_length;
+    MediaAdaptiveSettings adaptive;  // `photons` then counts the importance-sampled photons
+    // The order of the uniform photons of a point light (his Table 4.1); Hammersley by default.
+    PlaneSampling sampling = PlaneSampling::hammersley;
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no octree, no copy: the grids are SSBOs).
 struct MediaMethodTiming {
     double voxelisation = 0.0, smoothing = 0.0, photon_generation = 0.0, photon_marching = 0.0,
            viewing = 0.0;
+    // The adaptive pipeline's passes (zero for the reference pipeline).
+    double pilot_generation = 0.0, pilot_marching = 0.0, distribution = 0.0, reconstruction = 0.0;
     double total() const {
-        return voxelisation + smoothing + photon_generation + photon_marching + viewing;
+        return voxelisation + smoothing + photon_generation + photon_marching + viewing +
+               pilot_generation + pilot_marching + distribution + reconstruction;
     }
 };
 
@@ -32,15 +65,36 @@ struct MediaMethodResult {
     Image volume;  // the `volume` frame term: single scattering before the first surface
     MediaMethodTiming timing;
     glm::ivec3 grid{0};
-    size_t photons_marched = 0;  // photons of the plane that meet the grid
-    MediaGrid grids;             // n (smoothed), σ_s, σ_t, for slice views
-    std::vector<float> fluence;  // per voxel, as deposited
+    size_t photons_marched = 0;    // photons of the plane that meet the grid
+    size_t pilots_marched = 0;     // adaptive: pilot photons that meet the grid
+    double power_deposited = 0.0;  // Σ over voxels of fluence × voxel volume (before filtering)
+    std::vector<double> density;   // adaptive: the photon density over the plane (side², mean 1)
+    std::vector<uint8_t> levels;   // adaptive: the mipmap level each voxel read
+    MediaGrid grids;               // n (smoothed), σ_s, σ_t, for slice views
+    std::vector<float> fluence;    // per voxel, as deposited (reconstructed, adaptive)
+    std::vector<glm::vec3> flow;   // per voxel, fluence × photon direction
+    glm::vec3 tint{1.0f};          // the light's colour over its grey intensity
 };
 
 // The grid covers the scene's media boxes and glass objects; light comes from the first enabled
 // point or spot light (spot cones ignored), else the first quad light. Needs a current GL
 // context. Throws std::invalid_argument naming scene.path where the scene has no media or glass,
 // or no such light.
-MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings);
+// `with_view` false skips the view march (the grids only; `volume` stays empty).
+MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& settings,
+                               bool with_view = true);
+
+// A slice of `field` through voxel layer `layer` across `axis` (as grid_slice; a layer out of
+// range clamps) over the max of the field in the slice (levels over the highest level; n − 1
+// over its max, so air is black), fitted into a width × height image with its aspect kept,
+// nearest voxel, black around it. An empty field (no levels outside the adaptive pipeline) gives
+// black.
+Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,
+                       int width, int height);
+
+// The view march alone (ch. 3.1.6) through `grids` lit as `media` holds them, for `camera` at
+// its resolution: what a camera move needs (the photons stay as they are). Needs a GL context.
+Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                 const MediaMethodSettings& settings);
 
 }  // namespace ag

@@ -1,6 +1,7 @@
 #include "shared/pipeline/pipeline.h"
 
 #include <algorithm>
+#include <stdexcept>
 
 #include "gpu/gl.h"
 #include "shared/pipeline/vpl_method.h"
@@ -47,6 +48,9 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
       aim_texture_(scene.atlas) {
     const int width = options.width > 0 ? options.width : scene_.camera.width;
     const int height = options.height > 0 ? options.height : scene_.camera.height;
+    media_settings_ = options.media;
+    media_settings_.width = width;
+    media_settings_.height = height;
     photons_ = std::make_unique<cpu::PhotonSimulation>(scene_, pool_);
     aim_ = std::make_unique<cpu::Aim>(scene_, pool_);
     caustic_tracer_ = std::make_unique<cpu::CausticTracer>(scene_, pool_);
@@ -64,6 +68,35 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
 }
 
 Pipeline::~Pipeline() { sync(); }
+
+void Pipeline::update_media() {
+    const bool scene_changed = !media_ || scene_.version != media_version_;
+    if (scene_changed && media_failed_ && scene_.version == media_version_) return;
+    const Camera& c = media_camera_;
+    const Camera& now = scene_.camera;
+    const bool camera_moved =
+        c.eye != now.eye || c.target != now.target || c.up != now.up || c.fov_y != now.fov_y;
+    if (!scene_changed && !camera_moved) return;
+    media_version_ = scene_.version;
+    media_camera_ = now;
+    Camera camera = now;
+    camera.width = media_settings_.width;
+    camera.height = media_settings_.height;
+    try {
+        if (scene_changed)
+            media_ = std::make_unique<MediaMethodResult>(render_media(scene_, media_settings_));
+        else
+            media_->volume = view_media(scene_, *media_, camera, media_settings_);
+        media_failed_ = false;
+        renderer_->set_volume(media_->volume);
+    } catch (const std::invalid_argument& e) {
+        // Media without a light the method can use (a light switched off in the viewer): no
+        // volume term until the scene changes again.
+        media_.reset();
+        media_failed_ = true;
+        renderer_->set_volume(Image());
+    }
+}
 
 void Pipeline::sync() {
     if (cpu_work_.valid()) cpu_work_.wait();
@@ -148,6 +181,7 @@ PipelineStats Pipeline::frame() {
     t = Clock::now();
     caustics_->render(caustic_positions_, caustic_powers_);
     stats.caustic_tiles_filtered = caustics_->tiles_filtered();
+    if (!scene_.media.empty()) update_media();
     renderer_->render(indirect_->term(), caustics_->texture());
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);

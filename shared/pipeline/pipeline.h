@@ -25,6 +25,7 @@
 #include "shared/pipeline/iim_method.h"
 #include "shared/pipeline/indirect_method.h"
 #include "shared/pipeline/irradiance_cache_method.h"
+#include "shared/pipeline/media_method.h"
 #include "shared/pipeline/pipeline_stats.h"
 #include "shared/pipeline/scheduler.h"
 #include "shared/scene.h"
@@ -39,6 +40,9 @@ struct PipelineOptions {
     // Instrumentation (tracing, tests): called on the worker when a frame's CPU work starts, and
     // on the GL thread once the frame is drawn, before the hand-over.
     std::function<void()> on_cpu_work_start, on_gl_drawn;
+    // Pfeuti's method for the volume term of scenes with media (its width and height are the
+    // frame's).
+    MediaMethodSettings media;
 };
 
 // Makes the indirect method named by settings.indirect.method (screen-space methods render at
@@ -96,10 +100,16 @@ public:
     const gpu::SceneMeshes& meshes() const { return *meshes_; }
     const std::vector<char>& texel_pending() const;  // per texel record; empty without IIM
     const std::vector<int>& last_gathered() const;   // texel records gathered last frame
+    // Pfeuti's media method behind the `volume` term (grids, fluence) where the scene has media
+    // and a light it can use; null otherwise.
+    const MediaMethodResult* media() const { return media_.get(); }
 
 private:
     void start_cpu_work(const FrameBudgets& budgets);
     void hand_over(PipelineStats& stats);
+    // The volume term: the media method again when the scene changed, the view march alone when
+    // only the camera moved (docs/media.md).
+    void update_media();
 
     Scene& scene_;
     PipelineMode mode_;
@@ -136,6 +146,11 @@ private:
     uint64_t seen_version_ = 0;
     bool last_frame_edited_ = false;  // the last frame() saw a scene edit
     int caustic_frames_since_edit_ = 0;
+    std::unique_ptr<MediaMethodResult> media_;
+    MediaMethodSettings media_settings_;
+    uint64_t media_version_ = 0;
+    Camera media_camera_;
+    bool media_failed_ = false;  // the scene's media had no light the method can use
 };
 
 }  // namespace ag

@@ -85,7 +85,8 @@ struct LensFocus {
     float peak_gain = 0.0f;  // largest axis fluence below the ball over the beam's above it
 };
 
-LensFocus ball_lens_focus(const MediaMarcher& marcher, int resolution, float ior) {
+LensFocus ball_lens_focus(const MediaMarcher& marcher, int resolution, float ior,
+                          float step = MediaMarchSettings{}.step, float sigma = 1.5f) {
     Scene s;
     s.path = "ball_lens";
     Object ball;
@@ -99,7 +100,7 @@ LensFocus ball_lens_focus(const MediaMarcher& marcher, int resolution, float ior
     b.min = glm::vec3(-1.0f);
     b.max = glm::vec3(1.0f);
     MediaGrid grid = cpu::voxelize_media(s, rays, b, glm::ivec3(resolution));
-    gaussian_smooth(grid.n, grid.size, 9, 1.5f);
+    gaussian_smooth(grid.n, grid.size, 2 * int(std::ceil(3.0f * sigma)) + 1, sigma);
     // A beam of radius 0.1 (0.2 R): Hammersley points on the disc, equal power.
     std::vector<MediaPhoton> beam;
     constexpr int kPhotons = 4000;
@@ -108,7 +109,9 @@ LensFocus ball_lens_focus(const MediaMarcher& marcher, int resolution, float ior
         const float phi = 2.0f * kPi * float(radical_inverse(2, uint64_t(i)));
         beam.push_back({{r * std::cos(phi), 1.0f, r * std::sin(phi)}, {0, -1, 0}, 1.0f});
     }
-    const MediaMarchResult result = marcher.march(grid, beam, MediaMarchSettings{});
+    MediaMarchSettings settings;
+    settings.step = step;
+    const MediaMarchResult result = marcher.march(grid, beam, settings);
     LensFocus focus;
     double sum = 0.0;
     int count = 0;
@@ -147,6 +150,21 @@ TEST_F(MediaMarcherTest, BallLensFocusesWithinTwoVoxels) {
     EXPECT_GT(at64.peak_gain, 5.0f) << "a marcher that does not bend rays has no focus";
     const LensFocus flat = ball_lens_focus(marcher, 64, 1.0f);
     EXPECT_LT(flat.peak_gain, 1.5f);
+}
+
+// A measurement, not a test (docs/media.md, "The ball lens across resolutions"): the focus by
+// grid resolution and photon step, and by the index blur. Run with
+// --gtest_also_run_disabled_tests --gtest_filter='*BallLensFocusByStepAndBlur*'.
+TEST_F(MediaMarcherTest, DISABLED_BallLensFocusByStepAndBlur) {
+    const MediaMarcher marcher;
+    for (int res : {32, 64, 128})
+        for (float step : {0.25f, 0.125f, 0.0625f})
+            std::printf("res %d step %.4f: focus %.5f\n", res, step,
+                        ball_lens_focus(marcher, res, 1.5f, step).focus_y);
+    for (int res : {64, 128})
+        for (float sigma : {1.5f, 1.0f, 0.75f})
+            std::printf("res %d sigma %.2f: focus %.5f\n", res, sigma,
+                        ball_lens_focus(marcher, res, 1.5f, 0.125f, sigma).focus_y);
 }
 
 // A parallel beam of unit irradiance through an empty 16³ grid along `d`: every voxel's fluence
@@ -229,6 +247,44 @@ TEST_F(MediaMarcherTest, PhotonPlanePowerIsTheGridsSolidAngle) {
     const MediaMarchResult again = marcher.march(grid, photons, MediaMarchSettings{});
     EXPECT_EQ(again.fluence, r.fluence);
     EXPECT_EQ(again.flow, r.flow);
+}
+
+// The adaptive pipeline's statistics (ch. 3.2): photons along +x through an n = 1 grid, one per
+// (y, z) column of voxels, each carrying attributes (y, z, 7, 0): every voxel counts one crossing
+// of one voxel, and the crossing-weighted attributes give back its photon's; the walk counts 1
+// per voxel. A marcher that counted segments (4 a voxel at ¼-voxel steps) or mixed up the photon
+// a voxel's sums come from would fail.
+TEST_F(MediaMarcherTest, CountsCrossingsAndPhotonAttributes) {
+    const MediaMarcher marcher;
+    Bounds b;
+    b.min = glm::vec3(0.0f);
+    b.max = glm::vec3(1.0f);
+    const MediaGrid grid = make_media_grid(b, glm::ivec3(8));
+    std::vector<MediaPhoton> photons;
+    std::vector<glm::vec4> attributes;
+    for (int z = 0; z < 8; ++z)
+        for (int y = 0; y < 8; ++y) {
+            photons.push_back({{0.0f, (y + 0.3f) / 8.0f, (z + 0.6f) / 8.0f}, {1, 0, 0}, 1.0f});
+            attributes.emplace_back(float(y), float(z), 7.0f, 0.0f);
+        }
+    for (MediaDeposit deposit : {MediaDeposit::track_length, MediaDeposit::voxel_walk}) {
+        MediaMarchSettings settings;
+        settings.deposit = deposit;
+        const MediaMarchResult r = marcher.march(grid, photons, settings, attributes, 4);
+        ASSERT_EQ(r.stats.size(), 4 * grid.voxel_count());
+        for (int z = 0; z < 8; ++z)
+            for (int y = 0; y < 8; ++y)
+                for (int x = 0; x < 8; ++x) {
+                    const size_t i = grid.index(x, y, z);
+                    ASSERT_NEAR(r.stats[4 * i], 1.0f, 2e-3f) << x << " " << y << " " << z;
+                    ASSERT_NEAR(r.stats[4 * i + 1] / r.stats[4 * i], float(y), 1e-3f);
+                    ASSERT_NEAR(r.stats[4 * i + 2] / r.stats[4 * i], float(z), 1e-3f);
+                    ASSERT_NEAR(r.stats[4 * i + 3] / r.stats[4 * i], 7.0f, 1e-3f);
+                }
+        // The statistics leave the fluence as it was.
+        EXPECT_EQ(r.fluence, marcher.march(grid, photons, settings).fluence);
+    }
+    EXPECT_THROW(marcher.march(grid, photons, MediaMarchSettings{}, {}, 2), std::invalid_argument);
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 
 #include "../gpu/gl_fixture.h"
@@ -13,6 +14,7 @@
 #include "gpu/media_marcher.h"
 #include "gpu/media_view.h"
 #include "shared/metrics.h"
+#include "shared/pipeline/pipeline.h"
 #include "shared/scene_file.h"
 #include "shared/shapes.h"
 
@@ -106,6 +108,144 @@ TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
         compare_images(result.volume, pt.components[size_t(FrameTerm::volume)]).rel_mse;
     std::printf("glass sphere in fog: relMSE %.5f against pt\n", rel_mse);
     EXPECT_LT(rel_mse, 0.05);
+}
+
+// His importance sampling (ch. 3.2.3) is unbiased: photons drawn by the pilots' density and
+// weighted by 1/(N p) deposit, seed by seed (pilot jitter and Hammersley rotation), what uniform
+// photons deposit, in total and in each octant of the grid and in the caustic (the voxels over
+// twice the mean fluence) — `media_glass_fog_point.json`, 32³. Photons not weighted by 1/p
+// would pile their power into the selected regions and fail every region.
+TEST_F(MediaViewTest, ImportanceSamplingIsUnbiased) {
+    const Scene scene =
+        load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    MediaMethodSettings uniform;
+    uniform.grid = 32;
+    uniform.photons = 200000;
+    const MediaMethodResult reference = render_media(scene, uniform, false);
+    const glm::ivec3 size = reference.grid;
+    double mean = 0.0;
+    for (float f : reference.fluence) mean += f;
+    mean /= double(reference.fluence.size());
+    // Regions: the eight octants, then the caustic.
+    const auto regions = [&](const std::vector<float>& fluence) {
+        std::vector<double> sums(9, 0.0);
+        for (int z = 0; z < size.z; ++z)
+            for (int y = 0; y < size.y; ++y)
+                for (int x = 0; x < size.x; ++x) {
+                    const size_t i = (size_t(z) * size.y + y) * size.x + x;
+                    const int octant =
+                        (x * 2 / size.x) + 2 * (y * 2 / size.y) + 4 * (z * 2 / size.z);
+                    sums[size_t(octant)] += fluence[i];
+                    if (reference.fluence[i] > 2.0 * mean) sums[8] += fluence[i];
+                }
+        return sums;
+    };
+    const std::vector<double> expected = regions(reference.fluence);
+    MediaMethodSettings adaptive = uniform;
+    adaptive.photons = 10000;
+    adaptive.adaptive.enabled = true;
+    adaptive.adaptive.pilot_side = 32;
+    adaptive.adaptive.reconstruct = false;
+    std::vector<double> mean_regions(9, 0.0);
+    double worst_total = 0.0, worst_region = 0.0;
+    for (uint32_t seed = 1; seed <= 10; ++seed) {
+        adaptive.adaptive.seed = seed;
+        const MediaMethodResult r = render_media(scene, adaptive, false);
+        // The density is far from uniform (else this would test nothing).
+        const auto [low, high] = std::minmax_element(r.density.begin(), r.density.end());
+        EXPECT_GT(*high, 4.0 * *low);
+        if (seed == 1) std::printf("density: %.3f to %.3f\n", *low, *high);
+        const double total = r.power_deposited / reference.power_deposited - 1.0;
+        worst_total = std::max(worst_total, std::abs(total));
+        const std::vector<double> got = regions(r.fluence);
+        for (size_t k = 0; k < got.size(); ++k) {
+            mean_regions[k] += got[k] / 10.0;
+            worst_region = std::max(worst_region, std::abs(got[k] / expected[k] - 1.0));
+        }
+        EXPECT_LT(std::abs(total), 0.01) << "seed " << seed;
+    }
+    std::printf(
+        "importance sampling, 10 seeds: worst total %.4f, worst region of a seed %.4f;"
+        " mean over seeds per region:",
+        worst_total, worst_region);
+    for (size_t k = 0; k < expected.size(); ++k) {
+        const double error = mean_regions[k] / expected[k] - 1.0;
+        std::printf(" %+.4f", error);
+        EXPECT_LT(std::abs(error), 0.01) << "region " << k;
+    }
+    std::printf("\n");
+}
+
+// The progressive pipeline shows the media method's volume term (render, converge and view run
+// it): the frame's `volume` image is the method's for the frame's size, the frame is still the
+// sum of its five terms, and a camera move re-runs the view march for the new view. A pipeline
+// that left the term at zero, or kept the old view after the move, would fail.
+TEST_F(MediaViewTest, PipelineShowsTheVolumeTerm) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    scene.settings.gather.backend = GatherBackend::cpu;
+    MediaMethodSettings settings;
+    settings.grid = 24;
+    settings.photons = 20000;
+    PipelineOptions options{24, 20};
+    options.media = settings;
+    Pipeline pipeline(scene, options);
+    pipeline.frame();
+    ASSERT_NE(pipeline.media(), nullptr);
+    settings.width = 24;
+    settings.height = 20;
+    const auto expect_volume = [&](const char* when, Image& volume_out) {
+        const gpu::FrameImages images = pipeline.images();
+        const Image& volume = images.aov[size_t(FrameTerm::volume)];
+        const Image expected = render_media(scene, settings).volume;
+        ASSERT_EQ(volume.pixels.size(), expected.pixels.size());
+        double sum = 0.0;
+        for (size_t i = 0; i < volume.pixels.size(); ++i) {
+            ASSERT_NEAR(volume.pixels[i], expected.pixels[i], 1e-6f + 1e-5f * expected.pixels[i])
+                << when << " " << i;
+            sum += volume.pixels[i];
+        }
+        EXPECT_GT(sum, 0.0) << when;
+        for (size_t i = 0; i < images.frame.pixels.size(); ++i) {
+            float terms = 0.0f;
+            for (const Image& term : images.aov) terms += term.pixels[i];
+            ASSERT_NEAR(images.frame.pixels[i], terms, 1e-4f * (1.0f + terms)) << when << " " << i;
+        }
+        volume_out = volume;
+    };
+    Image before, after;
+    expect_volume("first frame", before);
+    scene.camera.eye += glm::vec3(0.8f, 0.3f, 0.0f);
+    pipeline.frame();
+    expect_volume("after the camera moved", after);
+    EXPECT_NE(before.pixels, after.pixels);
+}
+
+// The viewer's `media` view (docs/viewer.md): a slice of the smoothed index through the sphere's
+// centre fitted into the frame is bright in the middle (the glass), black in air and around the
+// fitted slice; the fluence slice is lit; without the adaptive pipeline there are no levels.
+TEST_F(MediaViewTest, SliceViewShowsTheGrids) {
+    const Scene scene =
+        load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_fog_point.json");
+    MediaMethodSettings settings;
+    settings.grid = 24;
+    settings.photons = 20000;
+    const MediaMethodResult media = render_media(scene, settings, false);
+    // The sphere (r 0.5 at y 1.1) in the middle of a 3 × 2.5 × 3 box: the z slice through it.
+    const int layer = media.grids.size.z / 2;
+    const Image n = media_slice_view(media, MediaField::n, 2, layer, 60, 40);
+    ASSERT_EQ(n.width, 60);
+    ASSERT_EQ(n.height, 40);
+    // 24 × 20 voxels fitted into 60 × 40: 48 × 40 pixels from x = 6.
+    EXPECT_EQ(n.rgb(2, 20), glm::vec3(0.0f));   // beside the slice
+    EXPECT_EQ(n.rgb(10, 20), glm::vec3(0.0f));  // air
+    const int centre_y = int((1.0f - 1.1f / 2.5f) * 40.0f);
+    EXPECT_GT(n.rgb(30, centre_y).x, 0.9f);  // glass, over the slice's max
+    const Image fluence = media_slice_view(media, MediaField::fluence, 2, layer, 60, 40);
+    double lit = 0.0;
+    for (float v : fluence.pixels) lit += v;
+    EXPECT_GT(lit, 0.0);
+    const Image level = media_slice_view(media, MediaField::level, 2, layer, 60, 40);
+    for (float v : level.pixels) ASSERT_EQ(v, 0.0f);
 }
 
 }  // namespace

@@ -4,7 +4,10 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
+
+#include "shared/qmc.h"
 
 namespace ag {
 namespace {
@@ -40,6 +43,110 @@ TEST(MediaGrid, BoxSolidAngle) {
     EXPECT_NEAR(box_solid_angle(b, {0.5f, 1000.5f, 0.5f}), 1.0 / (999.5 * 999.5), 1e-11);
     EXPECT_NEAR(box_solid_angle(b, glm::vec3(500.5f)), std::sqrt(3.0) / (3.0 * 500.0 * 500.0),
                 1e-3 * std::sqrt(3.0) / (3.0 * 500.0 * 500.0));
+}
+
+// His importance-distributed photons (ch. 3.2.3): Hammersley points through the two-stage
+// inversion land in each cell in proportion to its density, and the weights 1/(N p) sum to the
+// area where p > 0 (what keeps the importance-sampled photons' power unbiased; 63/64 here, one
+// cell being empty, which is why the pipeline adds a background density everywhere). A sampler that
+// ignored the rows' conditionals or a pdf off by a cell would fail both.
+TEST(MediaGrid, PhotonDensitySamplesItsCells) {
+    const int side = 8;
+    std::vector<float> cells(size_t(side * side), 0.2f);
+    cells[size_t(3 * side + 5)] = 6.0f;  // a hot cell
+    cells[size_t(6 * side + 1)] = 2.0f;
+    cells[size_t(0)] = 0.0f;  // an empty one: never sampled
+    const PhotonDensity density(side, cells);
+    double mean = 0.0;
+    for (double p : density.cells()) mean += p;
+    EXPECT_NEAR(mean / (side * side), 1.0, 1e-12);
+    const int count = 1 << 16;
+    std::vector<int> hits(cells.size(), 0);
+    double weight = 0.0;
+    for (int i = 0; i < count; ++i) {
+        const glm::vec2 uv = density.sample(hammersley(i, count, glm::vec2(0.0f)));
+        ASSERT_TRUE(uv.x >= 0.0f && uv.x < 1.0f && uv.y >= 0.0f && uv.y < 1.0f);
+        const int x = int(uv.x * side), y = int(uv.y * side);
+        ++hits[size_t(y * side + x)];
+        weight += 1.0 / (double(count) * density.pdf(uv));
+    }
+    EXPECT_NEAR(weight, 63.0 / 64.0, 1e-3);
+    EXPECT_EQ(hits[0], 0);
+    for (size_t c = 0; c < cells.size(); ++c) {
+        const double expected = density.cells()[c] * count / double(side * side);
+        EXPECT_NEAR(hits[c], expected, 0.02 * expected + 2.0) << "cell " << c;
+    }
+    // A Cranley–Patterson rotation keeps the points uniform: the weights still sum to 1.
+    weight = 0.0;
+    for (int i = 0; i < count; ++i) {
+        const glm::vec2 uv = density.sample(hammersley(i, count, glm::vec2(0.37f, 0.81f)));
+        weight += 1.0 / (double(count) * density.pdf(uv));
+    }
+    EXPECT_NEAR(weight, 63.0 / 64.0, 1e-3);
+    EXPECT_THROW(PhotonDensity(2, {0.0f, 0.0f, 0.0f, 0.0f}), std::invalid_argument);
+    EXPECT_THROW(PhotonDensity(2, {1.0f}), std::invalid_argument);
+}
+
+// Pfeuti's reconstruction (ch. 3.2.4): a constant field comes back unchanged at any level; light
+// weights (dense photons) keep level 0 and the field exactly; heavy weights over noise pick higher
+// levels and cut the noise, but the centre-surround filter picks lower levels beside an edge than
+// away from it (a weight-only filter would read the top level everywhere).
+TEST(MediaGrid, ReconstructionFiltersNoiseNotEdges) {
+    const glm::ivec3 size(32, 32, 32);
+    const size_t voxels = size_t(size.x) * size.y * size.z;
+    std::vector<float> constant(voxels, 2.5f), ones(voxels, 1.0f);
+    std::vector<glm::vec3> flow(voxels, glm::vec3(0.0f, -2.5f, 0.0f));
+    const std::vector<float> heavy(voxels, 1.0f), light(voxels, 1e-6f);
+    MediaReconstruction r = reconstruct_adaptive(size, constant, flow, ones, heavy, 0.1f, 4);
+    EXPECT_EQ(r.max_level, 4);
+    for (size_t i = 0; i < voxels; ++i) ASSERT_NEAR(r.fluence[i], 2.5f, 1e-4f);
+    // Noise: a step along x (1 | 3) with ±50% hashed noise on every voxel.
+    std::vector<float> noisy(voxels);
+    for (int z = 0; z < size.z; ++z)
+        for (int y = 0; y < size.y; ++y)
+            for (int x = 0; x < size.x; ++x) {
+                const size_t i = (size_t(z) * size.y + y) * size.x + x;
+                const float u = float(hash_u32(uint32_t(i)) >> 8) / float(1 << 24);
+                noisy[i] = (x < 16 ? 1.0f : 3.0f) * (0.5f + u);
+            }
+    r = reconstruct_adaptive(size, noisy, flow, ones, light, 0.1f, 4);
+    for (size_t i = 0; i < voxels; ++i) {
+        ASSERT_EQ(r.level[i], 0);
+        ASSERT_EQ(r.fluence[i], noisy[i]);
+    }
+    r = reconstruct_adaptive(size, noisy, flow, ones, heavy, 0.1f, 4);
+    double error_in = 0.0, error_out = 0.0;
+    for (int z = 0; z < size.z; ++z)
+        for (int y = 0; y < size.y; ++y)
+            for (int x = 0; x < size.x; ++x) {
+                const size_t i = (size_t(z) * size.y + y) * size.x + x;
+                const float truth = x < 16 ? 1.0f : 3.0f;
+                error_in += (noisy[i] - truth) * (noisy[i] - truth);
+                error_out += (r.fluence[i] - truth) * (r.fluence[i] - truth);
+            }
+    std::printf("reconstruction: squared error %.1f -> %.1f\n", error_in, error_out);
+    EXPECT_LT(error_out, 0.25 * error_in);
+    // The step without noise: the centre-surround filter climbs while the levels agree and stops
+    // before the filter reaches the edge, so levels rise with the distance from it and nothing
+    // beside it blurs. The two voxels at the edge itself climb (their first difference is the
+    // largest, Listing B.3): there the weight filter has to hold the level down.
+    std::vector<float> step(voxels);
+    for (size_t i = 0; i < voxels; ++i) step[i] = i % size_t(size.x) < 16 ? 1.0f : 3.0f;
+    r = reconstruct_adaptive(size, step, flow, ones, heavy, 0.1f, 4);
+    for (int x = 0; x < size.x; ++x) {
+        const size_t i = (size_t(16) * size.y + 16) * size.x + size_t(x);
+        const int distance = x < 16 ? 15 - x : x - 16;  // voxels between x and the edge
+        if (distance >= 1 && distance <= 5) {
+            EXPECT_EQ(r.level[i], 0) << x;
+            EXPECT_EQ(r.fluence[i], step[i]) << x;
+        }
+        if (distance >= 12) {
+            EXPECT_EQ(r.level[i], 2) << x;
+        }
+        if (distance >= 1) {
+            EXPECT_NEAR(r.fluence[i], step[i], 1e-5f) << x;
+        }
+    }
 }
 
 }  // namespace

@@ -18,3 +18,5 @@ ag_viewer_test(script)
 ag_viewer_test(replay)
 # gpu_pm's photon-tile view draws a picture.
 ag_viewer_test(photon_tiles)
+# The media view shows a slice of the media method's grids (docs/media.md).
+ag_viewer_test(media)

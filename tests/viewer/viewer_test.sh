@@ -69,6 +69,13 @@ case $test_name in
         expect "$check" not-blank "$out/first.png"
         expect "$check" not-blank "$out/last.png"
         ;;
+    media)
+        # The media view: a slice of the media method's fluence grid through the glass sphere in
+        # fog (docs/media.md); black if the pipeline ran no media method or the slice is empty.
+        view scenes/media_glass_fog_point.json --view media --frames 2 --size 64x64 \
+            --shots "$out"
+        expect "$check" not-blank "$out/last.png"
+        ;;
     *)
         echo "unknown viewer test '$test_name'"
         exit 2

@@ -21,6 +21,7 @@
 #include "shared/shapes.h"
 #include "tools/afterglow/bench_gpu_pm.h"
 #include "tools/afterglow/bench_irradiance_cache.h"
+#include "tools/afterglow/bench_media.h"
 #include "tools/afterglow/bench_soak.h"
 #include "tools/afterglow/bench_vpl.h"
 #include "tools/afterglow/commands.h"
@@ -30,7 +31,7 @@ namespace ag::cli {
 
 const Command kBenchCommand{
     "bench",
-    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl|irradiance_cache [SCENE...|"
+    "photons|knn|gather|frame|caustics|settle|soak|gpu_pm|vpl|irradiance_cache|media [SCENE...|"
     "SCENE:SCRIPT...] [options]",
     "Benchmarks. 'photons SCENE': photon throughput with all bookkeeping against raw Embree rays "
     "for the same paths, on one thread, and memory per stored hit. 'knn': Larsen Table 8.1 "
@@ -66,7 +67,12 @@ const Command kBenchCommand{
     "over --frames (default 400): temporal radiance caching as the scene sets it against a new "
     "cache every frame and records kept forever; records made, record, splat and scan time, "
     "flicker over static pixels, indirect relMSE against pt references (--ref-spp) at four frames, "
-    "the reprojection error (docs/irradiance_cache.md).",
+    "the reprojection error (docs/irradiance_cache.md). 'media [SCENE]' (default "
+    "scenes/media_glass_fog_point.json): Pfeuti 2009 at --size (default 48x48) and --grid "
+    "(default 64): the reference and adaptive pipelines' RMSE against a --ref-photons (default "
+    "2M marched) reference at doubling photon counts and the photons each needs at equal RMSE, "
+    "Table 4.2's passes, Table 4.1's sampling orders; --full: 128^3, one more count each and "
+    "Tables 4.3/4.4 on our cube and bunny scenes (docs/media.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),
         integer("queries", "N", "kNN queries per measurement", 1, 100000000, 2000),
@@ -92,8 +98,10 @@ const Command kBenchCommand{
         text("cache", "DIR", "'settle': reference cache", "out/reference-cache"),
         integer("ref-spp", "N", "'settle': samples per pixel of a computed reference", 1, 1000000,
                 64),
-        integer("ref-photons", "N", "'settle': photons of a computed pm reference", 1000, 100000000,
-                400000),
+        integer("ref-photons", "N",
+                "'settle': photons of a computed pm reference; 'media': photons marched for "
+                "the reference (default 2000000)",
+                1000, 100000000, 400000),
         flag("quick", "'settle': only the cornell scene (for tests)"),
         integer("phases", "K",
                 "'settle': run each entry K times, the script starting 0, S, 2S, ... untimed "
@@ -116,6 +124,8 @@ const Command kBenchCommand{
                0.001, 1e6),
         flag("no-direct",
              "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
+        integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),
+        flag("full", "'media': a 128^3 grid (his), one more photon count each, Tables 4.3/4.4"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },
@@ -531,9 +541,18 @@ int run_bench(const Args& args) {
             args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cube_in_a_box.json",
             width, height);
     }
+    if (what == "media") {
+        auto context = bench_context(args);
+        int width = 0, height = 0;
+        bench_size(args, 48, 48, width, height);
+        return bench_media(args,
+                           args.positionals().size() > 1 ? args.positionals()[1]
+                                                         : "scenes/media_glass_fog_point.json",
+                           width, height);
+    }
     throw CliError("afterglow bench: unknown benchmark '" + what +
-                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm, vpl "
-                   "or irradiance_cache)");
+                   "' (expected photons, knn, gather, frame, caustics, settle, soak, gpu_pm, vpl, "
+                   "irradiance_cache or media)");
 }
 
 static const Registration kRegistration(kBenchCommand, run_bench, 90);

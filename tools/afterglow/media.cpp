@@ -29,6 +29,16 @@ const Command kMediaCommand{
                 MediaMethodSettings{}.photons),
         choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
         number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
+        flag("adaptive",
+             "his adaptive pipeline (ch. 3.2): pilot photons, importance-sampled photons "
+             "(--photons of them), per-voxel mipmap filtering"),
+        integer("pilots", "SIDE", "adaptive: pilot photons per side of the plane's grid", 2, 1024,
+                MediaAdaptiveSettings{}.pilot_side),
+        number("background", "X", "adaptive: density of unselected cells, relative to the peak",
+               1e-4, 1.0, MediaAdaptiveSettings{}.background),
+        number("delta-weight", "W", "adaptive: photon weight per mipmap level", 1e-12, 1.0,
+               MediaAdaptiveSettings{}.delta_weight),
+        integer("seed", "N", "adaptive: pilot jitter and Hammersley rotation", 0, 1 << 30, 0),
         size_option("image size (default: the scene camera's resolution)"),
         flag("slices",
              "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre"),
@@ -54,6 +64,11 @@ int run_media(const Args& args) {
     settings.march_step = float(args.get_double("step"));
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
+    settings.adaptive.enabled = args.has("adaptive");
+    settings.adaptive.pilot_side = args.get_int("pilots");
+    settings.adaptive.background = float(args.get_double("background"));
+    settings.adaptive.delta_weight = float(args.get_double("delta-weight"));
+    settings.adaptive.seed = uint32_t(args.get_int("seed"));
     auto context = gpu::make_gl_context(args.gl_backend());
     // A scene without media or a point light is bad input: exit 1 with its message.
     const MediaMethodResult result = render_media(scene, settings);
@@ -70,6 +85,12 @@ int run_media(const Args& args) {
         write_image(grid_slice(result.grids, result.fluence, 2, layer), stem + ".fluence.exr");
     }
     const MediaMethodTiming& t = result.timing;
+    if (settings.adaptive.enabled)
+        std::printf(
+            "media: adaptive, %zu pilots marched; pilot generation %.1f ms, pilot marching %.1f "
+            "ms, distribution %.1f ms, reconstruction %.1f ms\n",
+            result.pilots_marched, 1e3 * t.pilot_generation, 1e3 * t.pilot_marching,
+            1e3 * t.distribution, 1e3 * t.reconstruction);
     std::printf(
         "media: grid %dx%dx%d, %zu photons marched, %dx%d pixels on %s\n"
         "  voxelisation %.1f ms, smoothing %.1f ms, photon generation %.1f ms, photon marching "
@@ -77,6 +98,11 @@ int run_media(const Args& args) {
         result.grid.x, result.grid.y, result.grid.z, result.photons_marched, scene.camera.width,
         scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation, 1e3 * t.smoothing,
         1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing, 1e3 * t.total());
+    if (!result.levels.empty() && args.has("slices")) {
+        std::vector<float> levels(result.levels.begin(), result.levels.end());
+        write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),
+                    out.substr(0, out.size() - 4) + ".level.exr");
+    }
     std::cerr << where << ": wrote " << out << " and " << png << "\n";
     return 0;
 }

@@ -317,6 +317,8 @@ private:
     const Args& args_;
     Scene& scene_;
     int width_ = 0, height_ = 0;
+    gpu::Texture media_texture_;  // the `media` view's slice, frame-sized
+    GLuint media_slice_texture();
     std::unique_ptr<gpu::GlContext> context_;
     GLFWwindow* window_ = nullptr;
     std::unique_ptr<Pipeline> pipeline_;
@@ -365,6 +367,23 @@ void Viewer::copy_camera() {
     std::cout << text << std::endl;
     glfwSetClipboardString(window_, text.c_str());
     state_.message("camera copied to the clipboard (and printed on stdout)");
+}
+
+GLuint Viewer::media_slice_texture() {
+    Image slice(width_, height_);
+    if (const MediaMethodResult* media = pipeline_->media()) {
+        const int axis = std::clamp(state_.media_axis, 0, 2);
+        const int layer = state_.media_layer < 0 ? media->grids.size[axis] / 2 : state_.media_layer;
+        slice =
+            media_slice_view(*media, MediaField(state_.media_field), axis, layer, width_, height_);
+    }
+    std::vector<glm::vec4> rgba(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x)  // GL rows bottom-first
+            rgba[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
+                glm::vec4(slice.rgb(x, y), 1.0f);
+    media_texture_ = gpu::make_float_texture(width_, height_, false, &rgba[0].x);
+    return media_texture_.get();
 }
 
 bool Viewer::handle_key(const InputEvent& e) {
@@ -858,6 +877,9 @@ int Viewer::run() {
             case ViewMode::photon_tiles:
                 if (auto* pm = dynamic_cast<GpuPmMethod*>(&pipeline_->indirect()))
                     source = pm->mapper().render_tile_view();
+                break;
+            case ViewMode::media:
+                source = media_slice_texture();
                 break;
         }
         const int highlight =

@@ -26,8 +26,9 @@ enum class ViewMode {
     aim = 1 + kFrameTermCount,
     iim,
     surfaces,
-    records,      // irradiance cache records and their zones (docs/irradiance_cache.md)
-    photon_tiles  // gpu_pm's photons per 8×8 screen tile (docs/gpu_pm.md)
+    records,       // irradiance cache records and their zones (docs/irradiance_cache.md)
+    photon_tiles,  // gpu_pm's photons per 8×8 screen tile (docs/gpu_pm.md)
+    media          // a slice of the media method's grids (docs/media.md)
 };
 inline constexpr std::array kViewModeNames = {"frame",
                                               kFrameTermNames[0],
@@ -39,8 +40,9 @@ inline constexpr std::array kViewModeNames = {"frame",
                                               "iim",
                                               "surfaces",
                                               "records",
-                                              "photon_tiles"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::photon_tiles) + 1);
+                                              "photon_tiles",
+                                              "media"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::media) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
@@ -101,6 +103,9 @@ struct ViewState {
     int panel_width = 400;        // window pixels right of the viewport
     int frame_width = 0, frame_height = 0;
     bool replaying = false;
+    // The `media` view: which grid (MediaField), across which axis (0 x, 1 y, 2 z) and which
+    // voxel layer (−1: the middle).
+    int media_field = 2, media_axis = 2, media_layer = -1;
 
     void message(const std::string& text);  // to the log and stderr
 };

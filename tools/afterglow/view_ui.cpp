@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "shared/media_grid.h"
+
 namespace ag::cli {
 
 namespace {
@@ -72,6 +74,16 @@ void view_section(ViewState& state, const Scene& scene) {
         if (m % 4 != 3) ImGui::SameLine();
     }
     ImGui::SliderFloat("exposure", &state.exposure, -8.0f, 8.0f, "%+.1f EV");
+    if (state.mode == ViewMode::media) {
+        ImGui::Combo("grid", &state.media_field, kMediaFieldNames,
+                     int(std::size(kMediaFieldNames)));
+        ImGui::RadioButton("x", &state.media_axis, 0);
+        ImGui::SameLine();
+        ImGui::RadioButton("y", &state.media_axis, 1);
+        ImGui::SameLine();
+        ImGui::RadioButton("z", &state.media_axis, 2);
+        ImGui::SliderInt("layer (-1 middle)", &state.media_layer, -1, 511);
+    }
     Overlays& o = state.overlays;
     ImGui::Checkbox("lights", &o.lights);
     ImGui::SameLine();
