@@ -148,7 +148,7 @@ PipelineStats Pipeline::frame() {
     t = Clock::now();
     caustics_->render(caustic_positions_, caustic_powers_);
     stats.caustic_tiles_filtered = caustics_->tiles_filtered();
-    renderer_->render(indirect_->term(), caustics_->texture());
+    renderer_->render(indirect_->term(), caustics_->texture(), caustics_->revision());
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
     if (on_gl_drawn_) on_gl_drawn_();
