@@ -648,29 +648,43 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     // (progressive antialiasing), so the displayed frame converges to the box-filtered image.
     const Settings& settings = scene_.settings;
     const DirectSettings& direct = settings.direct;
-    // A term whose changes are not tracked (revision 0) may change any frame: then the frame is
-    // not accumulated (the direct term's light samples still are).
+    // Everything the frame shows besides the direct term: the camera, the indirect term, the
+    // caustics and the cube maps (a face rendered this frame, or faces still behind).
+    MeanKey shown{scene_.version,           direct.area_light_samples,
+                  direct.accumulate_frames, settings.frame.accumulate_frames,
+                  direct.shadows,           true};
+    shown.eye = scene_.camera.eye;
+    shown.target = scene_.camera.target;
+    shown.up = scene_.camera.up;
+    shown.fov_y = scene_.camera.fov_y;
+    shown.indirect = indirect.texture;
+    shown.space = indirect.space;
+    shown.indirect_revision = indirect.revision;
+    shown.caustics = caustics;
+    shown.caustics_revision = caustics_revision;
+    shown.cube_generation = generation_;
+    shown.cube_current = cube_maps_current();
+    const bool shown_still = shown == shown_key_ && faces.empty();
+    shown_key_ = shown;
+    // Every term is accumulated (with sub-pixel offsets) only while all of it stands still since
+    // the frame before; while anything changes (an IIM converging, caustics re-traced, cube maps
+    // catching up), frames are drawn at the pixel centres and only the direct term averages its
+    // light samples, as without frame accumulation, so area lights' penumbrae converge even
+    // while the indirect term does not. A term whose changes are not tracked (revision 0) may
+    // change any frame: then the frame is never accumulated.
     const bool all_terms = settings.frame.accumulate_frames > 1 && indirect.revision != 0 &&
-                           (!caustics || caustics_revision != 0);
-    MeanKey key{scene_.version,           direct.area_light_samples,
-                direct.accumulate_frames, settings.frame.accumulate_frames,
-                direct.shadows,           all_terms};
-    if (all_terms) {
-        key.eye = scene_.camera.eye;
-        key.target = scene_.camera.target;
-        key.up = scene_.camera.up;
-        key.fov_y = scene_.camera.fov_y;
-        key.indirect = indirect.texture;
-        key.space = indirect.space;
-        key.indirect_revision = indirect.revision;
-        key.caustics = caustics;
-        key.caustics_revision = caustics_revision;
-        key.cube_generation = generation_;
-        key.cube_current = cube_maps_current();
+                           (!caustics || caustics_revision != 0) && shown_still;
+    MeanKey key = shown;
+    if (!all_terms) {  // the direct term alone: its inputs (and the view, which edits may skip)
+        key = MeanKey{scene_.version,           direct.area_light_samples,
+                      direct.accumulate_frames, settings.frame.accumulate_frames,
+                      direct.shadows,           false};
+        key.eye = shown.eye;
+        key.target = shown.target;
+        key.up = shown.up;
+        key.fov_y = shown.fov_y;
     }
-    // Cube-map faces rendered this frame (catching up with the generation) change the specular
-    // term as well.
-    if (!(key == mean_key_) || (all_terms && !faces.empty())) {
+    if (!(key == mean_key_)) {
         mean_key_ = key;
         mean_frames_ = 0;
     }
@@ -682,7 +696,11 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
         all_terms ? std::max(settings.frame.accumulate_frames, direct_limit) : direct_limit;
     const bool accumulating = all_terms || direct.accumulate_frames > 1;
     const bool fresh = !accumulating || mean_frames_ < limit;
-    mean_complete_ = !accumulating || !fresh || mean_frames_ + 1 >= limit;
+    // While frame accumulation waits for the frame to stand still, the mean is not complete.
+    const bool frame_accumulation = settings.frame.accumulate_frames > 1 &&
+                                    indirect.revision != 0 && (!caustics || caustics_revision != 0);
+    mean_complete_ = (!accumulating || !fresh || mean_frames_ + 1 >= limit) &&
+                     (all_terms || !frame_accumulation);
     // Every term is kept as it is: the term attachments and the frame already hold the mean.
     if (all_terms && !fresh) return;
 

@@ -158,9 +158,10 @@ private:
     Program mean_program_;
     // What restarts the mean. Always: the scene version (every edit: objects, materials, lights,
     // camera, settings through the edit API) and the settings read here. With all terms
-    // accumulated (frame.accumulate_frames > 1) also the camera, the indirect term (texture,
-    // space, revision), the caustic texture and its revision, and the cube maps (a face
-    // rendered, or faces still behind): whatever changes the frame's content.
+    // accumulated (frame.accumulate_frames > 1, and only from the second frame in which all of
+    // `shown_key_` stood still) also the camera, the indirect term (texture, space, revision),
+    // the caustic texture and its revision, and the cube maps (a face rendered, or faces still
+    // behind): whatever changes the frame's content.
     struct MeanKey {
         uint64_t scene_version = 0;
         int area_light_samples = 0, direct_frames = 0, frame_frames = 0;
@@ -172,7 +173,7 @@ private:
         uint64_t indirect_revision = 0, caustics_revision = 0, cube_generation = 0;
         bool cube_current = false;
         bool operator==(const MeanKey&) const = default;
-    } mean_key_;
+    } mean_key_, shown_key_;
     int mean_frames_ = 0;  // frames in the mean
     bool mean_complete_ = false;
 };

@@ -145,6 +145,35 @@ TEST_F(FrameTest, AreaLightSamplesMoveOverFramesAndRestartAfterAnEdit) {
     EXPECT_EQ(direct(), first);
 }
 
+// While the indirect term changes every frame (an IIM converging), the frame is not accumulated,
+// but the direct term still averages its area-light samples: penumbrae converge before the
+// indirect term settles. Fails if any change of the frame restarts the direct term's mean.
+TEST_F(FrameTest, AreaLightSamplesAccumulateWhileTheIndirectTermChanges) {
+    Scene scene = occluder_scene();
+    scene.lights[0].type = LightType::quad;
+    scene.lights[0].corners = {glm::vec3(-1, 5, -1), glm::vec3(1, 5, -1), glm::vec3(1, 5, 1),
+                               glm::vec3(-1, 5, 1)};  // facing down
+    scene.lights[0].radiance = glm::vec3(10.0f);
+    scene.settings.direct.area_light_samples = 4;
+    scene.settings.direct.accumulate_frames = 3;
+    scene.settings.frame.accumulate_frames = 64;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, 48, 48);
+    uint64_t revision = 0;
+    auto direct = [&] {
+        renderer.render(IndirectTerm{iim.id(), IndirectSpace::lightmap, ++revision});
+        return renderer.read_back().aov[size_t(FrameTerm::direct)].pixels;
+    };
+    const std::vector<float> first = direct();
+    const std::vector<float> second = direct();
+    EXPECT_NE(second, first);
+    const std::vector<float> third = direct();
+    EXPECT_NE(third, second);
+    EXPECT_EQ(direct(), third) << "3 frames are in: the direct term's mean is kept";
+    EXPECT_FALSE(renderer.accumulation_complete()) << "the frame itself never stood still";
+}
+
 // Point lights give every frame the same samples: the first frame's direct term is kept (no light
 // pass drawn) until an edit, and equals what drawing it again gives.
 TEST_F(FrameTest, PointLightDirectTermIsKeptWhileNothingChanges) {
@@ -183,7 +212,8 @@ TEST_F(FrameTest, AccumulatedFrameConvergesToTheBoxFilteredOne) {
     renderer.render(term);
     const FrameImages first = renderer.read_back();
     EXPECT_EQ(renderer.accumulated_frames(), 1);
-    for (int f = 1; f < 64; ++f) renderer.render(term);
+    // Frame 1 is the first of the mean (the first after a change is drawn at the centres alone).
+    for (int f = 1; f <= 64; ++f) renderer.render(term);
     EXPECT_EQ(renderer.accumulated_frames(), 64);
     EXPECT_TRUE(renderer.accumulation_complete());
     const FrameImages mean = renderer.read_back();
@@ -219,7 +249,7 @@ TEST_F(FrameTest, AccumulatedFrameConvergesToTheBoxFilteredOne) {
 
     // Deterministic: another renderer given the same frames shows the same mean.
     FrameRenderer again(scene, meshes, size, size);
-    for (int f = 0; f < 64; ++f) again.render(term);
+    for (int f = 0; f <= 64; ++f) again.render(term);
     const FrameImages repeated = again.read_back();
     EXPECT_EQ(repeated.frame.pixels, mean.frame.pixels);
     for (FrameTerm t : kFrameTerms)
@@ -241,7 +271,11 @@ TEST_F(FrameTest, AccumulationRestartsWhenAnythingTheFrameShowsChanges) {
                         caustics_revision);
         return renderer.read_back().frame.pixels;
     };
+    // The first frame after a change is drawn at the pixel centres; accumulation starts with the
+    // next one, if nothing changed (its frame 0: the centres again).
     const std::vector<float> first = frame(1);
+    EXPECT_EQ(frame(1), first);
+    EXPECT_EQ(renderer.accumulated_frames(), 1);
     const std::vector<float> second = frame(1);
     EXPECT_NE(second, first);
     EXPECT_EQ(renderer.accumulated_frames(), 2);
@@ -253,8 +287,10 @@ TEST_F(FrameTest, AccumulationRestartsWhenAnythingTheFrameShowsChanges) {
     EXPECT_EQ(renderer.accumulated_frames(), 4);
 
     EXPECT_EQ(frame(2), first) << "a new revision of the indirect term";
+    EXPECT_EQ(frame(2), first);
     EXPECT_NE(frame(2), first);
     set_camera(scene, scene.camera);  // an edit, even one that moves nothing
+    EXPECT_EQ(frame(2), first);
     EXPECT_EQ(frame(2), first);
     EXPECT_NE(frame(2), first);
     const glm::vec3 eye = scene.camera.eye;
@@ -266,6 +302,7 @@ TEST_F(FrameTest, AccumulationRestartsWhenAnythingTheFrameShowsChanges) {
     EXPECT_EQ(frame(2), first);
     Texture caustics = make_float_texture(32, 32);
     const std::vector<float> with_caustics = frame(2, caustics.get(), 1);
+    frame(2, caustics.get(), 1);
     EXPECT_EQ(renderer.accumulated_frames(), 1);
     frame(2, caustics.get(), 1);
     EXPECT_EQ(renderer.accumulated_frames(), 2);
