@@ -196,6 +196,14 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     for (size_t i = 0; i < positions.size(); ++i)
         data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x,
                                  powers[i].y, powers[i].z});
+    {
+        const CausticSettings& cs = scene_.settings.caustics;
+        Inputs inputs{data, vp, scene_.version, cs.kernel_k, cs.kernel_photons, cull};
+        if (revision_ == 0 || !(inputs == last_inputs_)) {
+            ++revision_;
+            last_inputs_ = std::move(inputs);
+        }
+    }
     gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
     const GLenum one = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &one);

@@ -33,6 +33,9 @@ public:
                 bool cull = true);
 
     GLuint texture() const { return result_.get(); }  // caustic radiance, screen-sized RGBA32F
+    // Changes whenever a render may have changed the texture's contents (other photons, view,
+    // scene version or filter settings than the render before); never 0.
+    uint64_t revision() const { return revision_; }
     int tiles_total() const { return tiles_x_ * tiles_y_; }
     int tiles_filtered() const { return tiles_filtered_; }
     // Times of the last render's passes (ms, after glFinish): the filter alone and the queries.
@@ -55,6 +58,16 @@ private:
     VertexArray photon_vao_, empty_vao_;
     std::vector<GLuint> queries_;
     int tiles_filtered_ = 0;
+    // What the last render drew from, for revision().
+    struct Inputs {
+        std::vector<float> photons;  // position and power per photon
+        glm::mat4 view_projection{0.0f};
+        uint64_t scene_version = 0;
+        int kernel_k = -1, kernel_photons = -1;
+        bool cull = false;
+        bool operator==(const Inputs&) const = default;
+    } last_inputs_;
+    uint64_t revision_ = 0;
     double filter_ms_ = 0.0, query_ms_ = 0.0;
 };
 

@@ -252,14 +252,28 @@ void main() {
 }
 )";
 
-// The running mean of the direct term: mix(mean, current, weight), weight = 1/frames.
-const char* kDirectMeanFragment = R"(
-uniform sampler2D mean, current;
+// The running mean of the terms: mix(mean, current, weight) per term, weight = 1/frames (the
+// draw buffers choose which terms are written).
+const char* kMeanFragment = R"(
+uniform sampler2D mean_direct, mean_indirect, mean_caustics, mean_specular, mean_volume;
+uniform sampler2D current_direct, current_indirect, current_caustics, current_specular,
+    current_volume;
 uniform float weight;
-out vec4 color;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+layout(location = kFrameTermVolume) out vec4 out_volume;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy);
-    color = mix(texelFetch(mean, p, 0), texelFetch(current, p, 0), weight);
+    out_direct = mix(texelFetch(mean_direct, p, 0), texelFetch(current_direct, p, 0), weight);
+    out_indirect =
+        mix(texelFetch(mean_indirect, p, 0), texelFetch(current_indirect, p, 0), weight);
+    out_caustics =
+        mix(texelFetch(mean_caustics, p, 0), texelFetch(current_caustics, p, 0), weight);
+    out_specular =
+        mix(texelFetch(mean_specular, p, 0), texelFetch(current_specular, p, 0), weight);
+    out_volume = mix(texelFetch(mean_volume, p, 0), texelFetch(current_volume, p, 0), weight);
 }
 )";
 
@@ -270,6 +284,14 @@ glm::vec2 light_sample_jitter(int frame) {
     const auto k = uint64_t(frame);
     return glm::fract(glm::vec2(0.5f) +
                       glm::vec2(float(radical_inverse(2, k)), float(radical_inverse(3, k))));
+}
+
+glm::vec2 pixel_jitter(int frame) {
+    if (frame <= 0) return glm::vec2(0.0f);
+    const auto k = uint64_t(frame);
+    return glm::fract(glm::vec2(0.5f) +
+                      glm::vec2(float(radical_inverse(5, k)), float(radical_inverse(7, k)))) -
+           glm::vec2(0.5f);
 }
 
 std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter) {
@@ -398,16 +420,17 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     cube_fbo_ = make_framebuffer();
     near_ = 1e-3f * scene.diagonal();
 
-    direct_mean_program_ =
-        Program("direct term running mean", kFullScreenTriangleVertex, kDirectMeanFragment);
-    for (size_t i = 0; i < direct_mean_.size(); ++i) {
-        direct_mean_[i] = make_float_texture(width, height);
-        direct_mean_fbo_[i] = make_framebuffer();
-        gl::BindFramebuffer(GL_FRAMEBUFFER, direct_mean_fbo_[i].get());
-        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
-                                 direct_mean_[i].get(), 0);
+    mean_program_ = Program("frame running mean", kFullScreenTriangleVertex, kMeanFragment);
+    for (size_t i = 0; i < mean_.size(); ++i) {
+        mean_fbo_[i] = make_framebuffer();
+        gl::BindFramebuffer(GL_FRAMEBUFFER, mean_fbo_[i].get());
+        for (size_t t = 0; t < kFrameTermCount; ++t) {
+            mean_[i][t] = make_float_texture(width, height);
+            gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + t),
+                                     GL_TEXTURE_2D, mean_[i][t].get(), 0);
+        }
         if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
-            throw GlError("frame: direct mean framebuffer incomplete");
+            throw GlError("frame: running mean framebuffer incomplete");
     }
     gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
     check_gl("FrameRenderer");
@@ -551,7 +574,7 @@ void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
 }
 
 void FrameRenderer::render(GLuint iim, GLuint caustics) {
-    render(IndirectTerm{iim, IndirectSpace::lightmap}, caustics);
+    render(IndirectTerm{iim, IndirectSpace::lightmap}, caustics, 0);
 }
 
 std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirect,
@@ -610,7 +633,8 @@ bool FrameRenderer::cube_maps_current() const {
     return cube_key_.valid;
 }
 
-void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
+void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
+                           uint64_t caustics_revision) {
     const std::vector<LightSample> lights = light_samples(scene_);
     // Cube maps see the scene by its lightmaps; a screen-space term has none to give them. They
     // are kept while the scene, the term and the light samples stay as they were.
@@ -619,12 +643,87 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     const std::vector<int> faces = cube_faces_to_render(indirect, lights);
     if (!faces.empty()) render_cube_maps(in_screen ? 0 : iim, lights, faces);
 
+    // The running mean (progressive refinement while nothing changes). The direct term always
+    // averages frames of moved area-light samples (direct.accumulate_frames); with
+    // frame.accumulate_frames > 1 every term does, each frame also moved by a sub-pixel offset
+    // (progressive antialiasing), so the displayed frame converges to the box-filtered image.
+    const Settings& settings = scene_.settings;
+    const DirectSettings& direct = settings.direct;
+    // Everything the frame shows besides the direct term: the camera, the indirect term, the
+    // caustics and the cube maps (a face rendered this frame, or faces still behind).
+    MeanKey shown{scene_.version,           direct.area_light_samples,
+                  direct.accumulate_frames, settings.frame.accumulate_frames,
+                  direct.shadows,           true};
+    shown.eye = scene_.camera.eye;
+    shown.target = scene_.camera.target;
+    shown.up = scene_.camera.up;
+    shown.fov_y = scene_.camera.fov_y;
+    shown.indirect = indirect.texture;
+    shown.space = indirect.space;
+    shown.indirect_revision = indirect.revision;
+    shown.caustics = caustics;
+    shown.caustics_revision = caustics_revision;
+    shown.cube_generation = generation_;
+    shown.cube_current = cube_maps_current();
+    const bool shown_still = shown == shown_key_ && faces.empty();
+    shown_key_ = shown;
+    // Every term is accumulated (with sub-pixel offsets) only while all of it stands still since
+    // the frame before; while anything changes (an IIM converging, caustics re-traced, cube maps
+    // catching up), frames are drawn at the pixel centres and only the direct term averages its
+    // light samples, as without frame accumulation, so area lights' penumbrae converge even
+    // while the indirect term does not. A term whose changes are not tracked (revision 0) may
+    // change any frame: then the frame is never accumulated.
+    const bool all_terms = settings.frame.accumulate_frames > 1 && indirect.revision != 0 &&
+                           (!caustics || caustics_revision != 0) && shown_still;
+    MeanKey key = shown;
+    if (!all_terms) {  // the direct term alone: its inputs (and the view, which edits may skip)
+        key = MeanKey{scene_.version,           direct.area_light_samples,
+                      direct.accumulate_frames, settings.frame.accumulate_frames,
+                      direct.shadows,           false};
+        key.eye = shown.eye;
+        key.target = shown.target;
+        key.up = shown.up;
+        key.fov_y = shown.fov_y;
+    }
+    if (!(key == mean_key_)) {
+        mean_key_ = key;
+        mean_frames_ = 0;
+    }
+    // Without an enabled quad or mesh light every frame would draw the same light samples.
+    const bool area = std::any_of(scene_.lights.begin(), scene_.lights.end(),
+                                  [](const Light& l) { return l.enabled && l.is_area(); });
+    const int direct_limit = area && direct.accumulate_frames > 1 ? direct.accumulate_frames : 1;
+    const int limit =
+        all_terms ? std::max(settings.frame.accumulate_frames, direct_limit) : direct_limit;
+    const bool accumulating = all_terms || direct.accumulate_frames > 1;
+    const bool fresh = !accumulating || mean_frames_ < limit;
+    // While frame accumulation waits for the frame to stand still, the mean is not complete.
+    const bool frame_accumulation = settings.frame.accumulate_frames > 1 &&
+                                    indirect.revision != 0 && (!caustics || caustics_revision != 0);
+    mean_complete_ = (!accumulating || !fresh || mean_frames_ + 1 >= limit) &&
+                     (all_terms || !frame_accumulation);
+    // Every term is kept as it is: the term attachments and the frame already hold the mean.
+    if (all_terms && !fresh) return;
+
+    // Frame k of the mean: the light samples at jitter k (frame 0 at their centres) and, with all
+    // terms accumulated, the pixels sampled at offset k (frame 0 at their centres). The offset
+    // moves the projection, so every term (rasterised coverage, shading, shadows) is sampled at
+    // the same point of the pixel; screen-space images (caustics, a screen-space indirect term)
+    // are read at the pixel they were made for.
+    const int k = mean_frames_;
     Camera camera = scene_.camera;
     camera.width = width_;
     camera.height = height_;
     // Infinite far plane: shadow volumes extruded to w = 0 are never clipped.
-    const glm::mat4 projection =
+    glm::mat4 projection =
         glm::infinitePerspective(glm::radians(camera.fov_y), float(width_) / float(height_), near_);
+    if (all_terms) {
+        const glm::vec2 offset = pixel_jitter(k);
+        projection =
+            glm::translate(glm::mat4(1.0f), glm::vec3(2.0f * offset.x / float(width_),
+                                                      2.0f * offset.y / float(height_), 0.0f)) *
+            projection;
+    }
     const glm::mat4 view_projection = projection * view_matrix(camera);
 
     const GLenum all[kFrameTermCount] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
@@ -677,25 +776,17 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     // 2. Per light: shadow volumes into the stencil (depth-fail), then add its light where the
     //    count is zero (eq. 13.2). While the scene stands still, each frame moves the area
     //    lights' samples within their strata and the direct term is the mean over the frames:
-    //    n² samples a frame, n²·k after k frames; once accumulate_frames are in, it is kept.
-    const DirectSettings& direct = scene_.settings.direct;
-    const DirectKey key{scene_.version, direct.area_light_samples, direct.accumulate_frames,
-                        direct.shadows};
-    if (!(key == direct_key_)) {
-        direct_key_ = key;
-        direct_frames_ = 0;
-    }
-    // Without an enabled quad or mesh light every frame would draw the same samples: one is kept.
-    const bool area = std::any_of(scene_.lights.begin(), scene_.lights.end(),
-                                  [](const Light& l) { return l.enabled && l.is_area(); });
-    const bool accumulate = direct.accumulate_frames > 1;
-    const bool fresh = !accumulate || direct_frames_ < (area ? direct.accumulate_frames : 1);
-    if (fresh)
-        add_direct_light(direct_frames_ == 0
-                             ? lights
-                             : light_samples(scene_, light_sample_jitter(direct_frames_)),
+    //    n² samples a frame, n²·k after k frames; once the mean is complete, it is kept.
+    if (fresh) {
+        const bool move_lights = area && direct.accumulate_frames > 1 && k > 0;
+        add_direct_light(move_lights ? light_samples(scene_, light_sample_jitter(k)) : lights,
                          view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
-    if (accumulate) accumulate_direct(fresh);
+    }
+    if (accumulating)
+        accumulate(fresh, all_terms);
+    else
+        mean_frames_ = 1;
+    gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     gl::DrawBuffers(kFrameTermCount, all);
     compose();
     gl::BindVertexArray(0);
@@ -703,38 +794,61 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics) {
     check_gl("FrameRenderer::render");
 }
 
-void FrameRenderer::accumulate_direct(bool fresh) {
+void FrameRenderer::accumulate(bool fresh, bool all_terms) {
     gl::Disable(GL_DEPTH_TEST);
     gl::Disable(GL_BLEND);
+    gl::Disable(GL_STENCIL_TEST);
     gl::Viewport(0, 0, width_, height_);
-    direct_mean_program_.use();
-    direct_mean_program_.set("mean", 0);
-    direct_mean_program_.set("current", 1);
+    mean_program_.use();
+    for (FrameTerm t : kFrameTerms) {
+        mean_program_.set((std::string("mean_") + frame_term_name(t)).c_str(), int(t));
+        mean_program_.set((std::string("current_") + frame_term_name(t)).c_str(),
+                          int(kFrameTermCount) + int(t));
+    }
     gl::BindVertexArray(empty_vao_.get());
-    const GLenum draw = GL_COLOR_ATTACHMENT0;
-    auto pass = [&](GLuint framebuffer, GLenum buffer, GLuint mean, GLuint current, float weight) {
+    // Which terms are written: all of them, or the direct term alone (the others stay as drawn).
+    GLenum buffers[kFrameTermCount];
+    for (size_t t = 0; t < kFrameTermCount; ++t)
+        buffers[t] = all_terms || t == size_t(FrameTerm::direct) ? GLenum(GL_COLOR_ATTACHMENT0 + t)
+                                                                 : GLenum(GL_NONE);
+    using Textures = std::array<GLuint, kFrameTermCount>;
+    auto pass = [&](GLuint framebuffer, const Textures& mean, const Textures& current,
+                    float weight) {
         gl::BindFramebuffer(GL_FRAMEBUFFER, framebuffer);
-        gl::DrawBuffers(1, &buffer);
-        gl::ActiveTexture(GL_TEXTURE0);
-        gl::BindTexture(GL_TEXTURE_2D, mean);
-        gl::ActiveTexture(GL_TEXTURE1);
-        gl::BindTexture(GL_TEXTURE_2D, current);
-        direct_mean_program_.set("weight", weight);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
+        for (size_t t = 0; t < kFrameTermCount; ++t) {
+            gl::ActiveTexture(GLenum(GL_TEXTURE0 + t));
+            gl::BindTexture(GL_TEXTURE_2D, mean[t]);
+            gl::ActiveTexture(GLenum(GL_TEXTURE0 + kFrameTermCount + t));
+            gl::BindTexture(GL_TEXTURE_2D, current[t]);
+        }
+        mean_program_.set("weight", weight);
         gl::DrawArrays(GL_TRIANGLES, 0, 3);
     };
-    const GLuint this_frame = aov_[size_t(FrameTerm::direct)].get();
+    auto textures = [](const std::array<Texture, kFrameTermCount>& from) {
+        Textures out;
+        for (size_t t = 0; t < kFrameTermCount; ++t) out[t] = from[t].get();
+        return out;
+    };
+    const Textures this_frame = textures(aov_);
     if (fresh) {
-        ++direct_frames_;
-        const int next = 1 - direct_mean_current_;
-        // The first frame replaces the mean (never read: it may hold an older scene's).
-        const GLuint mean =
-            direct_frames_ == 1 ? this_frame : direct_mean_[size_t(direct_mean_current_)].get();
-        pass(direct_mean_fbo_[size_t(next)].get(), draw, mean, this_frame,
-             1.0f / float(direct_frames_));
-        direct_mean_current_ = next;
+        ++mean_frames_;
+        const int next = 1 - mean_current_;
+        // The first frame replaces the mean (never read: it may hold an older scene's), and the
+        // term attachments already hold it.
+        const Textures mean =
+            mean_frames_ == 1 ? this_frame : textures(mean_[size_t(mean_current_)]);
+        pass(mean_fbo_[size_t(next)].get(), mean, this_frame, 1.0f / float(mean_frames_));
+        mean_current_ = next;
     }
-    const GLuint mean = direct_mean_[size_t(direct_mean_current_)].get();
-    pass(fbo_.get(), GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect), mean, mean, 0.0f);
+    if (!fresh || mean_frames_ > 1) {
+        const Textures mean = textures(mean_[size_t(mean_current_)]);
+        pass(fbo_.get(), mean, mean, 0.0f);
+    }
+    for (size_t t = 0; t < 2 * kFrameTermCount; ++t) {
+        gl::ActiveTexture(GLenum(GL_TEXTURE0 + t));
+        gl::BindTexture(GL_TEXTURE_2D, 0);
+    }
     gl::ActiveTexture(GL_TEXTURE0);
     gl::Enable(GL_DEPTH_TEST);
 }

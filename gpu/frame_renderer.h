@@ -40,6 +40,11 @@ std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter = gl
 // Where frame k of an accumulation puts its samples within their strata: the centres for k = 0,
 // then the Halton points (bases 2, 3) shifted by one half, so the frames fill each stratum evenly.
 glm::vec2 light_sample_jitter(int frame);
+// Where frame k of an accumulation samples each pixel, in pixels from its centre, in
+// [−0.5, 0.5)²: the centre for k = 0, then the Halton points in bases 5 and 7 shifted by one
+// half (other bases than the light samples', so the pair of offsets fills pixel × light
+// jointly, not along a diagonal). Their mean is a box filter over the pixel, the references'.
+glm::vec2 pixel_jitter(int frame);
 
 // Where an indirect method's term lives (DESIGN.md "Indirect methods on one scene graph"): an
 // atlas-sized lightmap read at each surface point (the IIM), or a frame-sized image read at each
@@ -65,8 +70,9 @@ public:
     // Renders the current scene. `iim` and `caustics` are GL textures (atlas-sized IIM;
     // screen-sized caustic radiance, or 0 for none).
     void render(GLuint iim, GLuint caustics = 0);
-    // The same with the indirect term in lightmap or screen space.
-    void render(const IndirectTerm& indirect, GLuint caustics = 0);
+    // The same with the indirect term in lightmap or screen space. `caustics_revision` changes
+    // whenever the caustic texture's contents do; 0 = not tracked (changed every frame).
+    void render(const IndirectTerm& indirect, GLuint caustics = 0, uint64_t caustics_revision = 0);
     FrameImages read_back() const;  // rows top-first, linear radiance
     // The `volume` term from a media method (rows top-first, width × height), composed into
     // every later frame; an empty image sets it back to zero (the frame has no media of its own).
@@ -86,6 +92,10 @@ public:
     // per mirror or glass object cost more than the frame itself. A new term texture is
     // rendered whole at once.
     static constexpr size_t kIndirectRefreshFrames = 4;
+    // Frames in the running mean the last render showed (1: that frame alone), and whether the
+    // mean is complete (as many frames as the settings ask; later renders keep it as it is).
+    int accumulated_frames() const { return mean_frames_; }
+    bool accumulation_complete() const { return mean_complete_; }
 
 private:
     // Renders the listed faces (object × 6 + face, GL face order).
@@ -102,10 +112,11 @@ private:
                           GLenum draw_buffer);
     void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
     void set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const;
-    // Progressive direct light: this frame's direct term (in the direct attachment) averaged
-    // into the running mean of the frames since the scene last changed, which then replaces it.
-    // With `fresh` false no new samples were drawn and the mean is copied back as it is.
-    void accumulate_direct(bool fresh);
+    // Progressive accumulation: this frame's terms (the direct one alone, or all of them)
+    // averaged into the running mean of the frames since the last restart, which then replaces
+    // them in the term attachments. With `fresh` false nothing new was drawn and the mean is
+    // copied back as it is.
+    void accumulate(bool fresh, bool all_terms);
 
     const Scene& scene_;
     const SceneMeshes& meshes_;
@@ -143,19 +154,32 @@ private:
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
 
-    // The running mean of the direct term (ping-pong: one read, one written) and what it is the
-    // mean of: the frames drawn since the scene version or the direct settings last changed.
-    std::array<Texture, 2> direct_mean_;
-    std::array<Framebuffer, 2> direct_mean_fbo_;
-    int direct_mean_current_ = 0;
-    Program direct_mean_program_;
-    struct DirectKey {
+    // The running mean of the terms (ping-pong: one read, one written; one texture per term) and
+    // what it is the mean of: the frames drawn since anything in MeanKey last changed.
+    std::array<std::array<Texture, kFrameTermCount>, 2> mean_;
+    std::array<Framebuffer, 2> mean_fbo_;
+    int mean_current_ = 0;
+    Program mean_program_;
+    // What restarts the mean. Always: the scene version (every edit: objects, materials, lights,
+    // camera, settings through the edit API) and the settings read here. With all terms
+    // accumulated (frame.accumulate_frames > 1, and only from the second frame in which all of
+    // `shown_key_` stood still) also the camera, the indirect term (texture, space, revision),
+    // the caustic texture and its revision, and the cube maps (a face rendered, or faces still
+    // behind): whatever changes the frame's content.
+    struct MeanKey {
         uint64_t scene_version = 0;
-        int area_light_samples = 0, accumulate_frames = 0;
-        bool shadows = false;
-        bool operator==(const DirectKey&) const = default;
-    } direct_key_;
-    int direct_frames_ = 0;  // frames in the mean
+        int area_light_samples = 0, direct_frames = 0, frame_frames = 0;
+        bool shadows = false, all_terms = false;
+        glm::vec3 eye{0.0f}, target{0.0f}, up{0.0f};
+        float fov_y = 0.0f;
+        GLuint indirect = 0, caustics = 0;
+        IndirectSpace space = IndirectSpace::lightmap;
+        uint64_t indirect_revision = 0, caustics_revision = 0, cube_generation = 0;
+        bool cube_current = false;
+        bool operator==(const MeanKey&) const = default;
+    } mean_key_, shown_key_;
+    int mean_frames_ = 0;  // frames in the mean
+    bool mean_complete_ = false;
 };
 
 }  // namespace ag::gpu

@@ -188,6 +188,14 @@ struct SpecularSettings {
     int cube_map_size = 128;  // per face (thesis: 128²)
 };
 
+struct FrameSettings {
+    // Progressive antialiasing: while nothing the frame depends on changes, each frame moves the
+    // projection by a sub-pixel offset (a box filter over the pixel) and the displayed frame and
+    // its terms are the running mean of this many frames (then kept); 1 = one sample at each
+    // pixel's centre, every frame drawn anew.
+    int accumulate_frames = 64;
+};
+
 struct Settings {
     PhotonSettings photons;
     LightmapSettings lightmap;
@@ -201,6 +209,7 @@ struct Settings {
     CausticSettings caustics;
     DirectSettings direct;
     SpecularSettings specular;
+    FrameSettings frame;
     uint32_t seed = 1;  // scrambling seed; same seed and settings give the same result
     int threads = 0;    // worker threads; 0 = all cores. Results never depend on it.
 };
@@ -368,6 +377,10 @@ void visit_settings(Settings& s, Visitor& v) {
     v.end_section();
     v.section("specular", "cube-map reflection and refraction, Larsen ch. 13");
     v.field(Field<int>{"cube_map_size", s.specular.cube_map_size, 8, 4096, "cube map face size"});
+    v.end_section();
+    v.section("frame", "the composed frame, Larsen ch. 13");
+    v.field(Field<int>{"accumulate_frames", s.frame.accumulate_frames, 1, 65536,
+                       "frames of sub-pixel offsets the displayed frame averages (antialiasing)"});
     v.end_section();
     v.section("", "");
     v.field(Field<uint32_t>{"seed", s.seed, 0, 4294967295.0, "scrambling seed"});

@@ -182,7 +182,7 @@ PipelineStats Pipeline::frame() {
     caustics_->render(caustic_positions_, caustic_powers_);
     stats.caustic_tiles_filtered = caustics_->tiles_filtered();
     if (!scene_.media.empty()) update_media();
-    renderer_->render(indirect_->term(), caustics_->texture());
+    renderer_->render(indirect_->term(), caustics_->texture(), caustics_->revision());
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
     if (on_gl_drawn_) on_gl_drawn_();

@@ -145,6 +145,35 @@ TEST_F(FrameTest, AreaLightSamplesMoveOverFramesAndRestartAfterAnEdit) {
     EXPECT_EQ(direct(), first);
 }
 
+// While the indirect term changes every frame (an IIM converging), the frame is not accumulated,
+// but the direct term still averages its area-light samples: penumbrae converge before the
+// indirect term settles. Fails if any change of the frame restarts the direct term's mean.
+TEST_F(FrameTest, AreaLightSamplesAccumulateWhileTheIndirectTermChanges) {
+    Scene scene = occluder_scene();
+    scene.lights[0].type = LightType::quad;
+    scene.lights[0].corners = {glm::vec3(-1, 5, -1), glm::vec3(1, 5, -1), glm::vec3(1, 5, 1),
+                               glm::vec3(-1, 5, 1)};  // facing down
+    scene.lights[0].radiance = glm::vec3(10.0f);
+    scene.settings.direct.area_light_samples = 4;
+    scene.settings.direct.accumulate_frames = 3;
+    scene.settings.frame.accumulate_frames = 64;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, 48, 48);
+    uint64_t revision = 0;
+    auto direct = [&] {
+        renderer.render(IndirectTerm{iim.id(), IndirectSpace::lightmap, ++revision});
+        return renderer.read_back().aov[size_t(FrameTerm::direct)].pixels;
+    };
+    const std::vector<float> first = direct();
+    const std::vector<float> second = direct();
+    EXPECT_NE(second, first);
+    const std::vector<float> third = direct();
+    EXPECT_NE(third, second);
+    EXPECT_EQ(direct(), third) << "3 frames are in: the direct term's mean is kept";
+    EXPECT_FALSE(renderer.accumulation_complete()) << "the frame itself never stood still";
+}
+
 // Point lights give every frame the same samples: the first frame's direct term is kept (no light
 // pass drawn) until an edit, and equals what drawing it again gives.
 TEST_F(FrameTest, PointLightDirectTermIsKeptWhileNothingChanges) {
@@ -163,6 +192,130 @@ TEST_F(FrameTest, PointLightDirectTermIsKeptWhileNothingChanges) {
     const std::vector<float> moved = direct();
     EXPECT_NE(moved, first);
     EXPECT_EQ(direct(), moved);
+}
+
+// Progressive antialiasing: while nothing changes, each frame samples the pixels at another
+// sub-pixel offset and every term is the running mean. An outline (the box against the floor,
+// the shadow's edge) then converges to the box-filtered value that 8×8 samples per pixel give,
+// where one sample at each centre is off by the whole contrast across the edge. Fails if the
+// projection does not move, if a term is left out of the mean, or if the mean is not kept.
+TEST_F(FrameTest, AccumulatedFrameConvergesToTheBoxFilteredOne) {
+    Scene scene = occluder_scene();
+    scene.settings.frame.accumulate_frames = 64;
+    const int size = 48, factor = 8;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    iim.update_all(std::vector<glm::vec3>(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                          glm::vec3(0.02f, 0.01f, 0.005f)));
+    const IndirectTerm term{iim.id(), IndirectSpace::lightmap, 1};
+    FrameRenderer renderer(scene, meshes, size, size);
+    renderer.render(term);
+    const FrameImages first = renderer.read_back();
+    EXPECT_EQ(renderer.accumulated_frames(), 1);
+    // Frame 1 is the first of the mean (the first after a change is drawn at the centres alone).
+    for (int f = 1; f <= 64; ++f) renderer.render(term);
+    EXPECT_EQ(renderer.accumulated_frames(), 64);
+    EXPECT_TRUE(renderer.accumulation_complete());
+    const FrameImages mean = renderer.read_back();
+
+    // The references' pixel filter: 8×8 centre samples per pixel, box-filtered.
+    Scene fine_scene = scene;
+    fine_scene.settings.frame.accumulate_frames = 1;
+    FrameRenderer fine(fine_scene, meshes, size * factor, size * factor);
+    fine.render(term);
+    FrameImages box = fine.read_back();
+    box.frame = box_downsample(box.frame, factor);
+
+    double error_first = 0.0, error_mean = 0.0, total = 0.0;
+    for (size_t i = 0; i < box.frame.pixels.size(); ++i) {
+        error_first += std::abs(first.frame.pixels[i] - box.frame.pixels[i]);
+        error_mean += std::abs(mean.frame.pixels[i] - box.frame.pixels[i]);
+        total += box.frame.pixels[i];
+    }
+    std::printf("mean |frame - box filter| / mean value: one sample %.4f, 64 frames %.4f\n",
+                error_first / total, error_mean / total);
+    EXPECT_GT(error_first / total, 0.01);  // the outlines are there to be filtered
+    EXPECT_LT(error_mean, 0.15 * error_first);
+
+    // The terms of the mean still sum to the displayed frame.
+    for (size_t i = 0; i < mean.frame.pixels.size(); ++i) {
+        float sum = 0.0f;
+        for (FrameTerm t : kFrameTerms) sum += mean.aov[size_t(t)].pixels[i];
+        ASSERT_NEAR(mean.frame.pixels[i], sum, 1e-6f * std::max(1.0f, sum)) << "value " << i;
+    }
+    // Kept: a later frame draws nothing and changes nothing.
+    renderer.render(term);
+    EXPECT_EQ(renderer.read_back().frame.pixels, mean.frame.pixels);
+
+    // Deterministic: another renderer given the same frames shows the same mean.
+    FrameRenderer again(scene, meshes, size, size);
+    for (int f = 0; f <= 64; ++f) again.render(term);
+    const FrameImages repeated = again.read_back();
+    EXPECT_EQ(repeated.frame.pixels, mean.frame.pixels);
+    for (FrameTerm t : kFrameTerms)
+        EXPECT_EQ(repeated.aov[size_t(t)].pixels, mean.aov[size_t(t)].pixels) << frame_term_name(t);
+}
+
+// What restarts the mean: an edit (any: the scene version), a camera that moved without one, a
+// new revision of the indirect term or of the caustics. After a restart the frame is frame 0
+// again (one sample at each pixel's centre), exactly. An untracked term (revision 0) is never
+// accumulated.
+TEST_F(FrameTest, AccumulationRestartsWhenAnythingTheFrameShowsChanges) {
+    Scene scene = occluder_scene();
+    scene.settings.frame.accumulate_frames = 4;
+    SceneMeshes meshes(scene);
+    LightmapTexture iim(scene.atlas);
+    FrameRenderer renderer(scene, meshes, 32, 32);
+    auto frame = [&](uint64_t revision, GLuint caustics = 0, uint64_t caustics_revision = 0) {
+        renderer.render(IndirectTerm{iim.id(), IndirectSpace::lightmap, revision}, caustics,
+                        caustics_revision);
+        return renderer.read_back().frame.pixels;
+    };
+    // The first frame after a change is drawn at the pixel centres; accumulation starts with the
+    // next one, if nothing changed (its frame 0: the centres again).
+    const std::vector<float> first = frame(1);
+    EXPECT_EQ(frame(1), first);
+    EXPECT_EQ(renderer.accumulated_frames(), 1);
+    const std::vector<float> second = frame(1);
+    EXPECT_NE(second, first);
+    EXPECT_EQ(renderer.accumulated_frames(), 2);
+    EXPECT_FALSE(renderer.accumulation_complete());
+    frame(1);
+    const std::vector<float> fourth = frame(1);
+    EXPECT_TRUE(renderer.accumulation_complete());
+    EXPECT_EQ(frame(1), fourth);
+    EXPECT_EQ(renderer.accumulated_frames(), 4);
+
+    EXPECT_EQ(frame(2), first) << "a new revision of the indirect term";
+    EXPECT_EQ(frame(2), first);
+    EXPECT_NE(frame(2), first);
+    set_camera(scene, scene.camera);  // an edit, even one that moves nothing
+    EXPECT_EQ(frame(2), first);
+    EXPECT_EQ(frame(2), first);
+    EXPECT_NE(frame(2), first);
+    const glm::vec3 eye = scene.camera.eye;
+    scene.camera.eye.x += 0.5f;  // moved without an edit (no version)
+    const std::vector<float> moved = frame(2);
+    EXPECT_NE(moved, first);
+    EXPECT_EQ(renderer.accumulated_frames(), 1);
+    scene.camera.eye = eye;
+    EXPECT_EQ(frame(2), first);
+    Texture caustics = make_float_texture(32, 32);
+    const std::vector<float> with_caustics = frame(2, caustics.get(), 1);
+    frame(2, caustics.get(), 1);
+    EXPECT_EQ(renderer.accumulated_frames(), 1);
+    frame(2, caustics.get(), 1);
+    EXPECT_EQ(renderer.accumulated_frames(), 2);
+    EXPECT_EQ(frame(2, caustics.get(), 2), with_caustics) << "new caustics";
+    // Untracked: every frame is frame 0.
+    EXPECT_EQ(frame(0), first);
+    EXPECT_EQ(frame(0), first);
+    EXPECT_EQ(frame(2, caustics.get(), 0), with_caustics);
+    EXPECT_EQ(frame(2, caustics.get(), 0), with_caustics);
+    // Off: every frame is frame 0.
+    scene.settings.frame.accumulate_frames = 1;
+    EXPECT_EQ(frame(3), first);
+    EXPECT_EQ(frame(3), first);
 }
 
 // Settings changed after loading (flags, the viewer) may ask for more light samples than the frame

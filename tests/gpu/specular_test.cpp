@@ -207,6 +207,8 @@ TEST_F(SpecularTest, MirrorBallShowsItsOwnContactShadow) {
 // give exactly what a fresh renderer gives.
 TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     Scene scene = mirror_scene(32);
+    // One sample per pixel centre: the frames compared are single frames, not running means.
+    scene.settings.frame.accumulate_frames = 1;
     SceneMeshes meshes(scene);
     LightmapTexture iim(scene.atlas);
     FrameRenderer renderer(scene, meshes, 32, 32);

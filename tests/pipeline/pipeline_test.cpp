@@ -43,6 +43,10 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     Pipeline pipeline(scene, PipelineOptions{48, 48});
     FrameLoop loop(pipeline);
     ASSERT_GT(settle(loop), 0);
+    // Once settled, the frame accumulates sub-pixel offsets (antialiasing) until its mean is
+    // complete; from then on nothing changes.
+    for (int f = 0; f < 80 && !pipeline.renderer().accumulation_complete(); ++f) loop.step();
+    ASSERT_TRUE(pipeline.renderer().accumulation_complete());
     const gpu::FrameImages before = pipeline.images();
     for (int f = 0; f < 3; ++f) {
         const PipelineStats s = loop.step();
@@ -59,6 +63,38 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     for (size_t a = 0; a < after.aov.size(); ++a)
         EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << kFrameTermNames[a];
     EXPECT_EQ(before.frame.pixels, after.frame.pixels);
+}
+
+// A settled pipeline accumulates the frame: nothing it shows changes any more (the IIM's and the
+// caustics' revisions stand still), so every frame adds a sub-pixel offset to the running mean
+// until frame.accumulate_frames are in; an edit starts it again. Fails if any term's revision
+// moves on in a static scene (the mean would restart every frame).
+TEST_F(PipelineTest, ASettledFrameAccumulatesAndAnEditRestartsIt) {
+    Scene scene = cornell();
+    scene.settings.frame.accumulate_frames = 8;
+    Pipeline pipeline(scene, PipelineOptions{32, 32});
+    FrameLoop loop(pipeline);
+    ASSERT_GT(settle(loop), 0);
+    loop.step();  // the mean's frame 0 (the first frame in which nothing changed)
+    int frames = pipeline.renderer().accumulated_frames();
+    std::vector<float> last = pipeline.images().frame.pixels;
+    for (int f = 0; f < 10 && !pipeline.renderer().accumulation_complete(); ++f) {
+        loop.step();
+        EXPECT_EQ(pipeline.renderer().accumulated_frames(), frames + 1);
+        frames = pipeline.renderer().accumulated_frames();
+        const std::vector<float> now = pipeline.images().frame.pixels;
+        EXPECT_NE(now, last);
+        last = now;
+    }
+    EXPECT_TRUE(pipeline.renderer().accumulation_complete());
+    EXPECT_EQ(pipeline.renderer().accumulated_frames(), 8);
+    loop.step();
+    EXPECT_EQ(pipeline.images().frame.pixels, last);
+    loop.begin_edits();
+    set_light_color(scene, 0, scene.lights[0].value() * 0.5f);
+    loop.step();
+    EXPECT_EQ(pipeline.renderer().accumulated_frames(), 1);
+    EXPECT_FALSE(pipeline.renderer().accumulation_complete());
 }
 
 // A long run must not grow: every frame's CPU side runs on the same thread (a thread per frame

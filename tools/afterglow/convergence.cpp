@@ -161,6 +161,10 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
                                int lead_in) {
     scene.camera.width = width;
     scene.camera.height = height;
+    // Each frame is scored as drawn, one sample at each pixel centre: a running mean of
+    // sub-pixel offsets (frame.accumulate_frames) would add its own convergence after the method
+    // settles, and the reference's pixel filter is not what these curves measure.
+    scene.settings.frame.accumulate_frames = 1;
     const std::optional<FrameTerm> term =
         component == "full" ? std::nullopt : parse_frame_term(component);
     std::optional<Script> script;

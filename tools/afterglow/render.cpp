@@ -106,6 +106,15 @@ int run_render(const Args& args) {
                      rc->records().size(), (unsigned long long)s.records_made, s.added, s.replaced,
                      s.deleted, s.splat_ms, s.scan_ms, s.gather_ms);
     }
+    // A static scene's frame is the running mean of the frames since anything it shows last
+    // changed (frame.accumulate_frames: sub-pixel offsets; direct.accumulate_frames: area-light
+    // samples): say how far it got, so a comparison knows what it compares.
+    std::fprintf(stderr,
+                 "afterglow render: the frame is the mean of the last %d frames (%s; converged: "
+                 "%s)\n",
+                 pipeline.renderer().accumulated_frames(),
+                 pipeline.renderer().accumulation_complete() ? "complete" : "still accumulating",
+                 pipeline.converged() ? "yes" : "no");
     gpu::FrameImages images = pipeline.images();
     images.frame = box_downsample(images.frame, supersample);
     for (Image& aov : images.aov) aov = box_downsample(aov, supersample);
