@@ -16,3 +16,5 @@ endfunction()
 ag_viewer_test(script)
 # Recorded clicks drag the cube: it moved, and IIM texels around it were gathered again.
 ag_viewer_test(replay)
+# The VPL view: the VPLs drawn over their sum.
+ag_viewer_test(vpls)

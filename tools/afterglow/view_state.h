@@ -26,7 +26,8 @@ enum class ViewMode {
     aim = 1 + kFrameTermCount,
     iim,
     surfaces,
-    records  // irradiance cache records and their zones (docs/irradiance_cache.md)
+    records,  // irradiance cache records and their zones (docs/irradiance_cache.md)
+    vpls      // the VPL sum with the VPLs as points (docs/vpl.md)
 };
 inline constexpr std::array kViewModeNames = {"frame",
                                               kFrameTermNames[0],
@@ -37,8 +38,9 @@ inline constexpr std::array kViewModeNames = {"frame",
                                               "aim",
                                               "iim",
                                               "surfaces",
-                                              "records"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::records) + 1);
+                                              "records",
+                                              "vpls"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::vpls) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
