@@ -146,6 +146,9 @@ struct VplSettings {
     float clamp = 0.0f;           // 1/d² is clamped at 1/clamp² (world units); 0 = no clamp
     int updates_per_frame = 100;  // K: VPLs whose visibility is recomputed per frame (thesis: 100)
     int resolution_divisor = 4;   // the screen-space term is computed at frame size / this
+    bool tiles = true;    // gl: per-tile VPL lists (only VPLs facing a tile's points; exact)
+    bool labels = false;  // gl, tiles: F/P/N labels (cpu::VisibilityDatabase) in the tile lists
+    int interleave = 1;  // gl, tiles: n × n interleaved sampling + geometry-aware filter (1 = off)
 };
 
 // Irradiance cache splatting and temporal radiance caching (Gautron 2006 ch. 4, 5).
@@ -338,6 +341,11 @@ void visit_settings(Settings& s, Visitor& v) {
                        "VPLs whose visibility is recomputed per frame"});
     v.field(Field<int>{"resolution_divisor", s.vpl.resolution_divisor, 1, 64,
                        "screen-space term at frame size / this"});
+    v.field(Field<bool>{"tiles", s.vpl.tiles, 0, 1, "gl: per-tile lists of the VPLs facing it"});
+    v.field(Field<bool>{"labels", s.vpl.labels, 0, 1,
+                        "gl, tiles: F/P/N visibility labels in the tile lists"});
+    v.field(Field<int>{"interleave", s.vpl.interleave, 1, 4,
+                       "gl, tiles: n x n interleaved sampling with a geometry-aware filter"});
     v.end_section();
     v.section("rc", "irradiance cache splatting and temporal caching, Gautron 2006");
     v.field(EnumField<RcSource, kRcSourceNames.size()>{"source", s.rc.source, kRcSourceNames,

@@ -62,7 +62,7 @@ VplMethod::VplMethod(const Scene& scene, const gpu::SceneMeshes& meshes, int wid
 std::vector<size_t> VplMethod::make_points() {
     camera_version_ = scene_.camera_version;
     const std::vector<cpu::SurfacePoint> before = std::move(points_);
-    points_ = cpu::camera_points(scene_, rays_, tw_, th_, pool_);
+    points_ = cpu::camera_points(scene_, rays_, tw_, th_, pool_, &hits_);
     std::vector<size_t> changed;
     for (size_t i = 0; i < points_.size(); ++i)
         if (before.size() != points_.size() || before[i].position != points_[i].position ||
@@ -157,6 +157,40 @@ void VplMethod::upload_points() {
             normals[i] = p.normal;
         }
     gather_->set_points(positions, normals);
+    tiles_dirty_ = true;
+}
+
+void VplMethod::build_tiles() {
+    const VplSettings& vs = scene_.settings.vpl;
+    if (!vs.labels) {
+        gather_->set_tiles(records_, vs.interleave);
+        tiles_dirty_ = false;
+        return;
+    }
+    // The thesis's VPLs are static, so its database is built once and updated by Table 4-1;
+    // ours change with their photon groups, so it is rebuilt for the records now.
+    database_ = std::make_unique<cpu::VisibilityDatabase>(scene_, records_, 2);
+    std::vector<glm::vec3> positions(points_.size()), normals(points_.size());
+    std::vector<int> patches(points_.size(), 0);
+    for (int y = 0; y < th_; ++y)
+        for (int x = 0; x < tw_; ++x) {
+            const size_t from = size_t(y) * size_t(tw_) + size_t(x);
+            const size_t i = size_t(th_ - 1 - y) * size_t(tw_) + size_t(x);
+            positions[i] = points_[from].position;
+            normals[i] = points_[from].normal;
+            const cpu::RayHit& h = hits_[from];
+            // A point on a surface with no patches (mirror, glass) takes every lookup.
+            const int leaf = h.hit ? database_->leaf_at(h.object, h.triangle, h.barycentric) : -1;
+            patches[i] = leaf < 0 ? int(database_->nodes().size()) : leaf;
+        }
+    const size_t count = records_.size();
+    std::vector<uint32_t> labels((database_->nodes().size() + 1) * count, 1u);
+    for (size_t node = 0; node < database_->nodes().size(); ++node)
+        for (size_t l = 0; l < count; ++l)
+            labels[node * count + l] = uint32_t(database_->state(int(node), int(l)));
+    gather_->set_points(positions, normals, patches);
+    gather_->set_tiles(records_, vs.interleave, &labels);
+    tiles_dirty_ = false;
 }
 
 void VplMethod::shade(Slot& s) {
@@ -172,6 +206,7 @@ void VplMethod::shade(Slot& s) {
 void VplMethod::upload() {
     ++revision_;
     if (backend_ == VplBackend::gl) {
+        if (scene_.settings.vpl.tiles && tiles_dirty_) build_tiles();
         gather_->shade(*maps_, scene_.settings.vpl.clamp, glm::one_over_pi<float>());
         return;
     }
@@ -319,8 +354,10 @@ void VplMethod::refresh(const std::vector<size_t>& slots) {
     if (layout()) {
         maps_->set_vpls(records_);
         maps_->render_all();
+        tiles_dirty_ = true;
     } else {
         if (records_dirty_) maps_->set_vpls(records_);
+        tiles_dirty_ = tiles_dirty_ || records_dirty_;
         for (size_t i : slots) render_maps(slots_[i]);
     }
     records_dirty_ = false;

@@ -18,6 +18,7 @@
 #include "cpu/ray_tracer.h"
 #include "cpu/vpl_shading.h"
 #include "cpu/vpl_source.h"
+#include "cpu/vpl_visibility.h"
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
 #include "gpu/vpl_gather.h"
@@ -89,6 +90,9 @@ private:
     void render_maps(const Slot& s);
     void upload();
     void upload_points();
+    // GL, vpl.tiles: rebuilds the tile lists (and with vpl.labels the F/P/N database) for the
+    // VPL records and points now.
+    void build_tiles();
     // Reads scene changes: true if an object moved (visibility may change for every VPL).
     bool read_changes();
 
@@ -105,6 +109,9 @@ private:
     std::unique_ptr<gpu::VplGather> gather_;
     std::vector<Vpl> records_;  // GL: one per shadow-map layer (unused layers: zero power)
     bool records_dirty_ = false;
+    bool tiles_dirty_ = true;        // GL, vpl.tiles: records or points changed since build_tiles()
+    std::vector<cpu::RayHit> hits_;  // the G-buffer rays' hits (vpl.labels: the points' patches)
+    std::unique_ptr<cpu::VisibilityDatabase> database_;
     uint64_t revision_ = 1;
     uint64_t camera_version_ = 0;
     uint64_t seen_sequence_ = 0;

@@ -20,3 +20,5 @@ ag_viewer_test(replay)
 ag_viewer_test(photon_tiles)
 # The media view shows a slice of the media method's grids (docs/media.md).
 ag_viewer_test(media)
+# The VPL view: the VPLs drawn over their sum.
+ag_viewer_test(vpls)

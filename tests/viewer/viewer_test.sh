@@ -76,6 +76,16 @@ case $test_name in
             --shots "$out"
         expect "$check" not-blank "$out/last.png"
         ;;
+    vpls)
+        # The VPL view (docs/vpl.md): the VPL sum with the VPLs drawn over it as points, against
+        # the indirect view of the same run: not blank, and the points add light.
+        view scenes/cornell.json --indirect vpl --view indirect --frames 6 --size 128x128 \
+            --set vpl.map_size=32 --shots "$out/indirect"
+        view scenes/cornell.json --indirect vpl --view vpls --frames 6 --size 128x128 \
+            --set vpl.map_size=32 --shots "$out/vpls"
+        expect "$check" not-blank "$out/vpls/last.png"
+        expect "$check" changed "$out/indirect/last.png" "$out/vpls/last.png" 0 0 1 1 0.005
+        ;;
     *)
         echo "unknown viewer test '$test_name'"
         exit 2

@@ -23,6 +23,7 @@
 #include "shared/image.h"
 #include "shared/input_error.h"
 #include "shared/pipeline/frame_loop.h"
+#include "shared/pipeline/vpl_method.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
 #include "shared/script.h"
@@ -613,6 +614,14 @@ std::vector<ViewPoint> Viewer::overlay_points() const {
     const Overlays& o = state_.overlays;
     const cpu::PhotonMaps& maps = pipeline_->photons().maps();
     constexpr size_t kMaxPoints = 500000;
+    if (state_.mode == ViewMode::vpls)
+        if (const auto* vpl = dynamic_cast<const VplMethod*>(&pipeline_->indirect()))
+            for (const Vpl& v : vpl->vpls()) {
+                // The colour of its power; dimmer the later its bounce.
+                const float peak = std::max({v.power.r, v.power.g, v.power.b, 1e-30f});
+                const float dim = 1.0f / float(1 + v.bounce);
+                points.push_back({v.position, (0.3f + 0.7f * dim) * v.power / peak});
+            }
     if (o.primary_photons)
         for (size_t l = 0; l < scene_.lights.size(); ++l) {
             const glm::vec3 v = scene_.lights[l].value();
@@ -880,6 +889,9 @@ int Viewer::run() {
                 break;
             case ViewMode::media:
                 source = media_slice_texture();
+                break;
+            case ViewMode::vpls:  // the VPL sum; the VPLs are overlay points
+                source = pipeline_->renderer().aov_texture(FrameTerm::indirect);
                 break;
         }
         const int highlight =

@@ -28,7 +28,8 @@ enum class ViewMode {
     surfaces,
     records,       // irradiance cache records and their zones (docs/irradiance_cache.md)
     photon_tiles,  // gpu_pm's photons per 8×8 screen tile (docs/gpu_pm.md)
-    media          // a slice of the media method's grids (docs/media.md)
+    media,         // a slice of the media method's grids (docs/media.md)
+    vpls           // the VPL sum with the VPLs as points (docs/vpl.md)
 };
 inline constexpr std::array kViewModeNames = {"frame",
                                               kFrameTermNames[0],
@@ -41,8 +42,9 @@ inline constexpr std::array kViewModeNames = {"frame",
                                               "surfaces",
                                               "records",
                                               "photon_tiles",
-                                              "media"};
-static_assert(kViewModeNames.size() == size_t(ViewMode::media) + 1);
+                                              "media",
+                                              "vpls"};
+static_assert(kViewModeNames.size() == size_t(ViewMode::vpls) + 1);
 
 struct Selection {
     enum class Kind { none, object, light };
