@@ -312,12 +312,12 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
                 const glm::vec3 c(std::cos(u), 0.0f, std::sin(u));
                 const glm::vec3 nrm = std::cos(v) * c + glm::vec3(0.0f, std::sin(v), 0.0f);
                 torus.positions.push_back(0.7f * c + 0.3f * nrm);
-                const uint32_t a = uint32_t(i * sides + j);
-                const uint32_t b = uint32_t(((i + 1) % rings) * sides + j);
-                const uint32_t cc = uint32_t(((i + 1) % rings) * sides + (j + 1) % sides);
-                const uint32_t d = uint32_t(i * sides + (j + 1) % sides);
-                torus.triangles.emplace_back(a, cc, b);
-                torus.triangles.emplace_back(a, d, cc);
+                const uint32_t v00 = uint32_t(i * sides + j);
+                const uint32_t v10 = uint32_t(((i + 1) % rings) * sides + j);
+                const uint32_t v11 = uint32_t(((i + 1) % rings) * sides + (j + 1) % sides);
+                const uint32_t v01 = uint32_t(i * sides + (j + 1) % sides);
+                torus.triangles.emplace_back(v00, v11, v10);
+                torus.triangles.emplace_back(v00, v01, v11);
             }
         movers.emplace_back("torus", torus);
         // Where the scenes find it: ../../shared/external-scenes from the scene's folder.
