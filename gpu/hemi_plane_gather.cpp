@@ -69,6 +69,19 @@ double pixel_weight(double x0, double x1, double y0, double y1) {
     return sum * (x1 - x0) * (y1 - y0) / (kSub * kSub);
 }
 
+// The same in closed form from the origin's corner: ∫₀^X∫₀^Y dx dy / (π(x²+y²+1)²) =
+// (X/√(1+X²)·atan(Y/√(1+X²)) + Y/√(1+Y²)·atan(X/√(1+Y²))) / 2π, the form factor of a parallel
+// rectangle with a corner above the point; odd in X and in Y, so any rectangle follows by
+// inclusion and exclusion, unbounded ones (the stretched strips) with a limit of ±kFar.
+double corner_weight(double x, double y) {
+    const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
+    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * std::numbers::pi);
+}
+double rectangle_weight(double x0, double x1, double y0, double y1) {
+    return corner_weight(x1, y1) - corner_weight(x0, y1) - corner_weight(x1, y0) +
+           corner_weight(x0, y0);
+}
+
 }  // namespace
 
 double hemi_plane_coverage(float half_width) {
@@ -91,7 +104,24 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width,
     if (correction == BorderCorrection::renormalize) {
         for (double& v : w) v /= sum;  // Larsen: scale up by the covered fraction
     } else if (correction == BorderCorrection::stretch) {
-        // Gautron: directions beyond the plane are pushed radially (same azimuth) onto the
+        // Gautron's border pixels "virtually stretched to fill the remaining solid angle": each
+        // border pixel reaches out to the horizon perpendicular to its edge (x ≥ a over its own
+        // y range), and each corner pixel also takes the quadrant beyond its corner, so a missing
+        // direction reads the plane point nearest to it in plane coordinates (clamp-to-edge).
+        constexpr double kFar = 1e7;  // the horizon, in plane coordinates
+        for (int k = 0; k < r; ++k) {
+            const double lo = -a + k * step, hi = lo + step;
+            w[size_t(k) * r] += rectangle_weight(-kFar, -a, lo, hi);                // left column
+            w[size_t(k) * r + size_t(r - 1)] += rectangle_weight(a, kFar, lo, hi);  // right
+            w[size_t(k)] += rectangle_weight(lo, hi, -kFar, -a);                    // bottom row
+            w[size_t(r - 1) * r + size_t(k)] += rectangle_weight(lo, hi, a, kFar);  // top
+        }
+        const double quadrant = rectangle_weight(a, kFar, a, kFar);
+        for (const size_t corner :
+             {size_t(0), size_t(r - 1), size_t(r - 1) * r, size_t(r - 1) * r + size_t(r - 1)})
+            w[corner] += quadrant;
+    } else if (correction == BorderCorrection::stretch_radial) {
+        // Directions beyond the plane are pushed radially (same azimuth) onto the
         // border pixel they would leave through; integrate their cosine-weighted solid angle.
         constexpr int kPhi = 1024;
         for (int k = 0; k < kPhi; ++k) {

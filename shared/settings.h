@@ -49,8 +49,14 @@ inline constexpr std::array kRcSourceNames = {"aim", "direct"};
 enum class RcScan { gpu, cpu };
 inline constexpr std::array kRcScanNames = {"gpu", "cpu"};
 
-enum class BorderCorrection { none, renormalize, stretch };
-inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
+// The part of the hemisphere the hemi-plane misses (Gautron 2006, Table 4.1): counted black
+// (`none`), left out of the mean (`renormalize`, Larsen), or read from the border pixels stretched
+// out to the horizon (`stretch`: each border pixel perpendicular to its edge and the corner pixels
+// over the corner quadrants, the plane's clamp-to-edge; `stretch_radial`: the border point at the
+// missing direction's own azimuth). docs/irradiance_cache.md compares the two stretches.
+enum class BorderCorrection { none, renormalize, stretch, stretch_radial };
+inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch",
+                                                      "stretch_radial"};
 
 // What the CPU gather samples: `full`, cosine-weighted rays over the whole hemisphere (no plane,
 // no correction: the exact gather of the AIMs); `plane`, only directions through the hemi-plane
@@ -262,9 +268,9 @@ void visit_settings(Settings& s, Visitor& v) {
                          "hemi-plane half-width at unit distance"});
     v.field(Field<int>{"plane_resolution", s.gather.plane_resolution, 2, 1024,
                        "pixels across the hemi-plane"});
-    v.field(EnumField<BorderCorrection, 3>{"border_correction", s.gather.border_correction,
-                                           kBorderCorrectionNames,
-                                           "missing-hemisphere correction"});
+    v.field(EnumField<BorderCorrection, kBorderCorrectionNames.size()>{
+        "border_correction", s.gather.border_correction, kBorderCorrectionNames,
+        "missing-hemisphere correction"});
     v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6,
                        "IIM texels gathered per frame"});
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
