@@ -8,7 +8,7 @@
 set -uo pipefail
 bin="$1"; work="$2/reference_frames"
 "$bin" glinfo >/dev/null 2>&1 || { echo "no GL context: skipped"; exit 77; }
-mkdir -p "$work"
+rm -rf "$work"; mkdir -p "$work"
 common=(scenes/cube_in_a_box.json -n 6 --size 24x24 --ref-spp 4 --ref-photons 20000
         --reference-bounces 1 --plot '' --cache "$work/cache" -q)
 out=$("$bin" converge "${common[@]}" --reference-frames 2,6 2>&1); rc=$?
