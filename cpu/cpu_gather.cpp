@@ -98,17 +98,24 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
         glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
         if (plane && std::max(std::abs(d.x), std::abs(d.y)) > a * d.z) {
             // A direction the hemi-plane misses (Larsen ch. 11; Gautron 2006, Table 4.1): none
-            // counts it as black, renormalise leaves it out of the mean, stretch reads the border
-            // point the direction leaves the plane through (same azimuth), as the GL gather's
-            // stretched border pixels do.
+            // counts it as black, renormalise leaves it out of the mean, stretch reads the plane
+            // point nearest to it in plane coordinates (clamp-to-edge), stretch_radial the border
+            // point it leaves the plane through (same azimuth), as the GL gather's stretched
+            // border pixels do.
             if (settings.border_correction == BorderCorrection::none) {
                 ++counted;
                 continue;
             }
             if (settings.border_correction == BorderCorrection::renormalize) continue;
-            const float r = std::sqrt(d.x * d.x + d.y * d.y);
-            const float edge = a / std::max(std::abs(d.x), std::abs(d.y)) * r;  // border radius
-            d = glm::normalize(glm::vec3(d.x / r * edge, d.y / r * edge, 1.0f));
+            if (settings.border_correction == BorderCorrection::stretch) {
+                const float z = std::max(d.z, 1e-7f);  // grazing: clamps to the border anyway
+                d = glm::normalize(
+                    glm::vec3(std::clamp(d.x / z, -a, a), std::clamp(d.y / z, -a, a), 1.0f));
+            } else {
+                const float r = std::sqrt(d.x * d.x + d.y * d.y);
+                const float edge = a / std::max(std::abs(d.x), std::abs(d.y)) * r;  // border
+                d = glm::normalize(glm::vec3(d.x / r * edge, d.y / r * edge, 1.0f));
+            }
         }
         ++counted;
         const glm::vec3 direction = d.x * t + d.y * b + d.z * n;

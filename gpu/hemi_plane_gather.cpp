@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
+#include <limits>
 #include <numbers>
 
 #include "gpu/lightmap_texture.h"
@@ -20,19 +21,27 @@ layout(location = 2) in vec2 uv;
 layout(location = 3) in float chart;
 uniform mat4 model, view_projection;
 out vec2 v_uv;
+out vec3 v_world;
 flat out float v_chart;
 void main() {
     v_uv = uv;
     v_chart = chart;
-    gl_Position = view_projection * model * vec4(position, 1.0);
+    vec4 world = model * vec4(position, 1.0);
+    v_world = world.xyz;
+    gl_Position = view_projection * world;
 }
 )";
 
 // rgb: weight × AIM radiance; alpha: weight if the pixel shows a back face (texel behind or
-// inside geometry), so after the reduction alpha is the share of such pixels.
+// inside geometry), so after the reduction alpha is the share of such pixels. With the distance
+// output bound (attachment 1): r = weight / distance of every pixel that shows geometry (any face,
+// any material), so after the reduction r is Σ w/d and the harmonic mean distance Σw / Σ w/d.
 const std::string kFragment = std::string(kChartLightmapGlsl) + R"(
 in vec2 v_uv;
+in vec3 v_world;
 flat in float v_chart;
+uniform vec3 eye;
+layout(location = 1) out vec4 inverse_distance;
 uniform sampler2D aim;
 uniform sampler2D charts;
 uniform int use_charts;
@@ -40,10 +49,11 @@ uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int specular;
 uniform float specular_tag;
-out vec4 color;
+layout(location = 0) out vec4 color;
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
+    inverse_distance = vec4(w / max(distance(v_world, eye), 1e-6), 0.0, 0.0, 0.0);
     // A mirror or glass pixel adds w × specular_tag to alpha, more than 1 even for the smallest
     // pixel weight, so a tile's alpha above 1 says the view met one (back faces add at most 1).
     if (specular != 0 && specular_tag > 0.0) { color = vec4(0.0, 0.0, 0.0, w * specular_tag); return; }
@@ -69,6 +79,19 @@ double pixel_weight(double x0, double x1, double y0, double y1) {
     return sum * (x1 - x0) * (y1 - y0) / (kSub * kSub);
 }
 
+// The same in closed form from the origin's corner: ∫₀^X∫₀^Y dx dy / (π(x²+y²+1)²) =
+// (X/√(1+X²)·atan(Y/√(1+X²)) + Y/√(1+Y²)·atan(X/√(1+Y²))) / 2π, the form factor of a parallel
+// rectangle with a corner above the point; odd in X and in Y, so any rectangle follows by
+// inclusion and exclusion, unbounded ones (the stretched strips) with a limit of ±kFar.
+double corner_weight(double x, double y) {
+    const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
+    return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * std::numbers::pi);
+}
+double rectangle_weight(double x0, double x1, double y0, double y1) {
+    return corner_weight(x1, y1) - corner_weight(x0, y1) - corner_weight(x1, y0) +
+           corner_weight(x0, y0);
+}
+
 }  // namespace
 
 double hemi_plane_coverage(float half_width) {
@@ -91,7 +114,24 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width,
     if (correction == BorderCorrection::renormalize) {
         for (double& v : w) v /= sum;  // Larsen: scale up by the covered fraction
     } else if (correction == BorderCorrection::stretch) {
-        // Gautron: directions beyond the plane are pushed radially (same azimuth) onto the
+        // Gautron's border pixels "virtually stretched to fill the remaining solid angle": each
+        // border pixel reaches out to the horizon perpendicular to its edge (x ≥ a over its own
+        // y range), and each corner pixel also takes the quadrant beyond its corner, so a missing
+        // direction reads the plane point nearest to it in plane coordinates (clamp-to-edge).
+        constexpr double kFar = 1e7;  // the horizon, in plane coordinates
+        for (int k = 0; k < r; ++k) {
+            const double lo = -a + k * step, hi = lo + step;
+            w[size_t(k) * r] += rectangle_weight(-kFar, -a, lo, hi);                // left column
+            w[size_t(k) * r + size_t(r - 1)] += rectangle_weight(a, kFar, lo, hi);  // right
+            w[size_t(k)] += rectangle_weight(lo, hi, -kFar, -a);                    // bottom row
+            w[size_t(r - 1) * r + size_t(k)] += rectangle_weight(lo, hi, a, kFar);  // top
+        }
+        const double quadrant = rectangle_weight(a, kFar, a, kFar);
+        for (const size_t corner :
+             {size_t(0), size_t(r - 1), size_t(r - 1) * r, size_t(r - 1) * r + size_t(r - 1)})
+            w[corner] += quadrant;
+    } else if (correction == BorderCorrection::stretch_radial) {
+        // Directions beyond the plane are pushed radially (same azimuth) onto the
         // border pixel they would leave through; integrate their cosine-weighted solid angle.
         constexpr int kPhi = 1024;
         for (int k = 0; k < kPhi; ++k) {
@@ -113,8 +153,8 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width,
 }
 
 HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles,
-                                 const LightmapTexture* aim)
-    : scene_(scene), meshes_(meshes), aim_(aim) {
+                                 const LightmapTexture* aim, bool distances)
+    : scene_(scene), meshes_(meshes), aim_(aim), distances_(distances) {
     resolution_ = 1;
     while (resolution_ < scene.settings.gather.plane_resolution) resolution_ *= 2;  // mip alignment
     level_ = 0;
@@ -139,11 +179,22 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
     gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    if (distances_) {
+        distance_ = make_texture();
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, distance_.get());
+        gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, level_ + 1, GL_RGBA32F, resolution_, resolution_,
+                         layers_);
+        gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
+        gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
+    }
     const std::vector<float> w =
         hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
                            scene.settings.gather.border_correction);
     std::vector<float> rgba(w.size() * 4, 0.0f);
     for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
+    weight_sum_ = 0.0;
+    for (float v : w) weight_sum_ += v;
     weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
     if (scene.settings.gather.specular_bounces > 0) {
         float smallest = 1.0f;
@@ -157,6 +208,8 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
     fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0, 0);
+    if (distances_)
+        gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, distance_.get(), 0, 0);
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_.get());
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("hemi-plane gather: framebuffer incomplete");
@@ -203,8 +256,8 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
     const float offset = 2e-5f * diagonal;  // leave the surface, stay inside thin gaps
 
     gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
-    const GLenum draw = GL_COLOR_ATTACHMENT0;
-    gl::DrawBuffers(1, &draw);
+    const GLenum draw[2] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1};
+    gl::DrawBuffers(distances_ ? 2 : 1, draw);
     gl::Enable(GL_DEPTH_TEST);
     gl::DepthFunc(GL_GREATER);
     gl::ClipControl(GL_LOWER_LEFT, GL_ZERO_TO_ONE);
@@ -248,8 +301,12 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
             const glm::mat4 vp = projection * view;
             gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0,
                                         GLint(k));
+            if (distances_)
+                gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, distance_.get(),
+                                            0, GLint(k));
             gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
             program_.set("view_projection", vp);
+            program_.set("eye", p);
             for (size_t o = 0; o < scene_.objects.size(); ++o) {
                 program_.set("model", model_matrix(scene_.objects[o]));
                 program_.set("specular",
@@ -266,12 +323,24 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
         gl::GenerateMipmap(GL_TEXTURE_2D_ARRAY);
         std::vector<float> means(size_t(layers_) * 4);
         gl::GetTexImage(GL_TEXTURE_2D_ARRAY, level_, GL_RGBA, GL_FLOAT, means.data());
+        std::vector<float> inverse(distances_ ? size_t(layers_) * 4 : 0);
+        if (distances_) {
+            gl::BindTexture(GL_TEXTURE_2D_ARRAY, distance_.get());
+            gl::GenerateMipmap(GL_TEXTURE_2D_ARRAY);
+            gl::GetTexImage(GL_TEXTURE_2D_ARRAY, level_, GL_RGBA, GL_FLOAT, inverse.data());
+        }
         gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);  // never leave the target bound for sampling
         gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         const float pixels = float(resolution_) * float(resolution_);
         for (size_t k = 0; k < count; ++k) {
             const float* m = &means[4 * k];  // layer k
             out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
+            if (distances_) {
+                // Σ w / Σ w/d over the whole (corrected) view; nothing seen: infinitely far.
+                const double sum = double(pixels) * double(inverse[4 * k]);
+                out[first + k].harmonic_distance =
+                    sum > 0.0 ? float(weight_sum_ / sum) : std::numeric_limits<float>::infinity();
+            }
             const float alpha = pixels * m[3];
             if (specular_tag_ > 0.0f && alpha > 2.0f) {
                 out[first + k].sees_specular = true;  // alpha holds the tag: no back share

@@ -30,9 +30,11 @@ double hemi_plane_coverage(float half_width);
 class HemiPlaneGather final : public Gatherer {
 public:
     // Up to `tiles` texels are gathered per pass (rounded up to a square of tiles).
-    // `aim`, if given, is the AIM texture gather(texels) reads, chart-aware.
+    // `aim`, if given, is the AIM texture gather(texels) reads, chart-aware. With `distances`, a
+    // second layer array takes weight/distance per pixel and every result carries the harmonic
+    // mean distance (GatherResult::harmonic_distance: the irradiance cache's R_k).
     HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, int tiles = 256,
-                    const LightmapTexture* aim = nullptr);
+                    const LightmapTexture* aim = nullptr, bool distances = false);
 
     GatherBackend backend() const override { return GatherBackend::gl; }
     // Texels whose plane shows a mirror or glass come back with sees_specular set when
@@ -64,8 +66,10 @@ private:
     int resolution_, tiles_x_, level_, layers_;
     int max_per_pass_ = 0;
     float specular_tag_ = 0.0f;  // alpha per unit weight of mirror/glass pixels; 0 = not tagged
+    bool distances_ = false;
+    double weight_sum_ = 1.0;  // Σ w of the weight table (the coverage, or 1 when corrected)
     Program program_;
-    Texture color_, weights_;
+    Texture color_, weights_, distance_;
     Renderbuffer depth_;
     Framebuffer fbo_;
 };

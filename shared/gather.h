@@ -18,6 +18,10 @@ struct GatherResult {
     // GL: the hemi-plane showed a mirror or glass, which it cannot see through; the result is
     // then to be replaced by the CPU gather's (settings.gather.specular_bounces > 0 only).
     bool sees_specular = false;
+    // GL with the distance output on (gpu::HemiPlaneGather): the cosine-weighted harmonic mean
+    // distance to what the view shows, misses counting as infinitely far (Gautron's R_k; the
+    // irradiance cache's record radius); 0 where not measured.
+    float harmonic_distance = 0.0f;
 };
 
 // A world-space point to gather at, other than a texel centre (a texel's footprint, a pixel).

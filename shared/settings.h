@@ -48,9 +48,19 @@ inline constexpr std::array kRcSourceNames = {"aim", "direct"};
 // scan of the read-back buffer.
 enum class RcScan { gpu, cpu };
 inline constexpr std::array kRcScanNames = {"gpu", "cpu"};
+// How records are gathered: stratified rays (E, R_k, gradients, reprojection) or the GL hemi-plane
+// with its distance output (E and R_k only; the AIMs only).
+enum class RcGather { rays, gl };
+inline constexpr std::array kRcGatherNames = {"rays", "gl"};
 
-enum class BorderCorrection { none, renormalize, stretch };
-inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch"};
+// The part of the hemisphere the hemi-plane misses (Gautron 2006, Table 4.1): counted black
+// (`none`), left out of the mean (`renormalize`, Larsen), or read from the border pixels stretched
+// out to the horizon (`stretch`: each border pixel perpendicular to its edge and the corner pixels
+// over the corner quadrants, the plane's clamp-to-edge; `stretch_radial`: the border point at the
+// missing direction's own azimuth). docs/irradiance_cache.md compares the two stretches.
+enum class BorderCorrection { none, renormalize, stretch, stretch_radial };
+inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch",
+                                                      "stretch_radial"};
 
 // What the CPU gather samples: `full`, cosine-weighted rays over the whole hemisphere (no plane,
 // no correction: the exact gather of the AIMs); `plane`, only directions through the hemi-plane
@@ -155,6 +165,7 @@ struct VplSettings {
 struct RcSettings {
     RcSource source = RcSource::aim;
     RcScan scan = RcScan::gpu;
+    RcGather gather = RcGather::rays;
     float accuracy = 0.3f;  // a: zone of influence a·R_k, new records where Σ w < a
     int theta_strata = 16;  // M × N stratified rays per record (Ward & Heckbert 1992)
     int phi_strata = 64;
@@ -274,9 +285,9 @@ void visit_settings(Settings& s, Visitor& v) {
                          "hemi-plane half-width at unit distance"});
     v.field(Field<int>{"plane_resolution", s.gather.plane_resolution, 2, 1024,
                        "pixels across the hemi-plane"});
-    v.field(EnumField<BorderCorrection, 3>{"border_correction", s.gather.border_correction,
-                                           kBorderCorrectionNames,
-                                           "missing-hemisphere correction"});
+    v.field(EnumField<BorderCorrection, kBorderCorrectionNames.size()>{
+        "border_correction", s.gather.border_correction, kBorderCorrectionNames,
+        "missing-hemisphere correction"});
     v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6,
                        "IIM texels gathered per frame"});
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
@@ -352,6 +363,8 @@ void visit_settings(Settings& s, Visitor& v) {
                                                        "what records gather: aim or direct"});
     v.field(EnumField<RcScan, kRcScanNames.size()>{"scan", s.rc.scan, kRcScanNames,
                                                    "cache-miss scan: gpu tiles or cpu read-back"});
+    v.field(EnumField<RcGather, kRcGatherNames.size()>{
+        "gather", s.rc.gather, kRcGatherNames, "records by rays or the GL hemi-plane (aim only)"});
     v.field(Field<float>{"accuracy", s.rc.accuracy, 0.01, 1.0, "a: records cover a·R_k"});
     v.field(Field<int>{"theta_strata", s.rc.theta_strata, 1, 1024, "record rays: strata in θ"});
     v.field(Field<int>{"phi_strata", s.rc.phi_strata, 3, 4096, "record rays: strata in φ"});

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "gpu/gl.h"
+#include "shared/input_error.h"
 #include "shared/scene_edit.h"
 
 namespace ag {
@@ -34,6 +35,14 @@ IrradianceCacheMethod::IrradianceCacheMethod(const Scene& scene, const gpu::Scen
       splat_(scene, meshes, width, height),
       rays_(scene),
       gather_(scene, rays_, pool_) {
+    if (scene_.settings.rc.gather == RcGather::gl) {
+        if (scene_.settings.rc.source != RcSource::aim)
+            throw InputError(
+                "settings: rc.gather: \"gl\" reads the AIM texture, so it needs rc.source "
+                "\"aim\" (got \"direct\"; direct light has no texture): use rc.gather \"rays\"");
+        aim_texture_ = std::make_unique<gpu::LightmapTexture>(scene.atlas);
+        plane_ = std::make_unique<gpu::HemiPlaneGather>(scene, meshes, 1, aim_texture_.get(), true);
+    }
     if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
     version_ = scene_.version;
 }
@@ -56,9 +65,32 @@ cpu::RecordGatherOptions IrradianceCacheMethod::gather_options() const {
     return o;
 }
 
+IrradianceRecord IrradianceCacheMethod::plane_record(const GatherPoint& at) {
+    if (aim_texture_stale_) {
+        aim_texture_->update_all(aim_);
+        aim_texture_stale_ = false;
+    }
+    const GatherResult g = plane_->gather_points({at}).front();
+    const cpu::RecordGatherOptions options = gather_options();
+    IrradianceRecord r;
+    r.position = at.position;
+    r.normal = glm::normalize(at.normal);
+    r.iim = g.iim;
+    r.harmonic_distance =
+        std::clamp(g.harmonic_distance, options.min_distance, options.max_distance);
+    return r;  // no gradients: a mipmap reduction gives sums, not the strata's neighbours
+}
+
 IrradianceRecord IrradianceCacheMethod::make_record(const GatherPoint& at, int frame) {
     const RcSettings& rc = scene_.settings.rc;
     const bool temporal = rc.max_lifespan > 0;
+    if (plane_) {
+        // The hemi-plane keeps no strata to reproject: a record lives δt_max frames.
+        IrradianceRecord r = plane_record(at);
+        r.born = frame;
+        if (temporal) r.expires = frame + rc.max_lifespan - 1;
+        return r;
+    }
     std::vector<cpu::RecordSample> samples;
     const cpu::RecordGatherOptions options = gather_options();
     IrradianceRecord r = gather_.gather_one(at, radiance_source(scene_, rays_), options,
@@ -196,6 +228,7 @@ void IrradianceCacheMethod::update(const IndirectInputs& in, PipelineStats& stat
     stats_.dropped = 0;
     const int frame = int(in.frame);
     read_changes();
+    if (in.aim_changed) aim_texture_stale_ = true;
     if (in.aim_changed && scene_.settings.rc.source == RcSource::aim)
         for (IrradianceRecord& r : records_) r.expires = std::numeric_limits<int>::min();
     // Per-frame recomputation (the baseline of Gautron's Table 5.2): a new cache every frame.
@@ -211,6 +244,7 @@ void IrradianceCacheMethod::hand_over(cpu::PhotonSimulation&, PipelineStats& sta
 
 void IrradianceCacheMethod::prime(cpu::PhotonSimulation&, uint64_t frame) {
     read_changes();
+    aim_texture_stale_ = true;
     records_.clear();
     run(int(frame), 0, true);
 }

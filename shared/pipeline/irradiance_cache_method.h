@@ -11,6 +11,8 @@
 
 #include "cpu/irradiance_gather.h"
 #include "cpu/ray_tracer.h"
+#include "gpu/hemi_plane_gather.h"
+#include "gpu/lightmap_texture.h"
 #include "gpu/radiance_cache_splat.h"
 #include "gpu/scene_meshes.h"
 #include "shared/parallel.h"
@@ -72,6 +74,7 @@ public:
 
 private:
     IrradianceRecord make_record(const GatherPoint& at, int frame);
+    IrradianceRecord plane_record(const GatherPoint& at);
     void read_changes();
     void run(int frame, int budget, bool everything);
 
@@ -81,6 +84,10 @@ private:
     cpu::RayTracer rays_;
     ThreadPool pool_{1};  // beside the photon work, like the IIM's CPU gather
     cpu::IrradianceGather gather_;
+    // rc.gather = gl: the AIMs as a texture and a hemi-plane gather with the distance output.
+    std::unique_ptr<gpu::LightmapTexture> aim_texture_;
+    std::unique_ptr<gpu::HemiPlaneGather> plane_;
+    bool aim_texture_stale_ = true;
     std::vector<IrradianceRecord> records_;
     std::vector<Prediction> predictions_;
     const Scene* lookahead_ = nullptr;

@@ -54,13 +54,16 @@ def check(ok, what):
     if not ok:
         failed.append(what)
 
-# Gautron's Table 4.1 with our gather (111 mm texels; measured 19.1 / 11.0 / 6.2% GL and
-# 19.1 / 11.1 / 6.0% CPU at 4096 reference rays): the order, and stretch near 6%.
+# Gautron's Table 4.1 with our gather (111 mm texels; measured 19.1 / 11.0 / 5.2% GL and
+# 19.1 / 11.1 / 4.9% CPU at 1024 reference rays): the order, and stretch (border pixels stretched
+# perpendicular to their edge, clamp-to-edge) within Gautron's 5.8%. The radial stretch (same
+# azimuth; 6.15% GL, 6.0% CPU) fails that bound.
 for b in ("gl", "cpu"):
-    none, ren, st = (g[("b", f"{b}_plane_{c}", "full_black", "all")][1]
-                     for c in ("none", "renormalize", "stretch"))
+    none, ren, st, radial = (g[("b", f"{b}_plane_{c}", "full_black", "all")][1]
+                             for c in ("none", "renormalize", "stretch", "stretch_radial"))
     check(none > ren > st, f"{b} plane RMS none {none:.3f} > renormalize {ren:.3f} > stretch {st:.3f}")
-    check(0.15 < none < 0.23 and st < 0.09, f"{b} plane RMS none {none:.3f}, stretch {st:.3f}")
+    check(0.15 < none < 0.23 and st <= 0.058, f"{b} plane RMS none {none:.3f}, stretch {st:.3f} (<= 0.058)")
+    check(st < radial, f"{b} plane RMS stretch {st:.3f} < radial stretch {radial:.3f}")
 # Light through the glass sphere counts: without specular bounces the gather loses 5% (measured
 # 0.949); with them the pipeline's gather matches the full-hemisphere one (measured 1.000).
 black = g[("b", "full_black", "full", "all")][0]

@@ -47,3 +47,11 @@ add_test(NAME convergence.compare_methods
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(convergence.compare_methods PROPERTIES LABELS convergence SKIP_RETURN_CODE 77
                      TIMEOUT 300)
+# Issue #18: converge --reference-frames scores chosen frames against references of their own
+# states (the ghosting check of temporal caching).
+add_test(NAME convergence.reference_frames
+         COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/convergence/reference_frames_test.sh
+                 $<TARGET_FILE:afterglow> ${PROJECT_BINARY_DIR}/convergence
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(convergence.reference_frames PROPERTIES LABELS convergence SKIP_RETURN_CODE 77
+                     TIMEOUT 120)

@@ -5,10 +5,13 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
+#include <sstream>
 
 #include "gpu/gl_context.h"
 #include "shared/frame_terms.h"
 #include "shared/image.h"
+#include "shared/metrics.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/commands.h"
 #include "tools/afterglow/convergence.h"
@@ -48,6 +51,9 @@ const Command kConvergeCommand{
         text("plot", "FILE.png",
              "plot of error against time (default out/NAME.MODE.png); '' for none"),
         text("compare", "OTHER.csv", "also draw this run's CSV on the plot"),
+        text("reference-frames", "F1,F2,...",
+             "also score these frames against references of the script's state at each of them "
+             "(cached like the final one): the ghosting check of temporal methods"),
         text("cache", "DIR", "reference cache", "out/reference-cache"),
         integer("ref-spp", "N", "samples per pixel of a computed reference", 1, 1000000, 64),
         integer("ref-photons", "N", "photons of a computed pm reference", 1000, 100000000, 400000),
@@ -90,26 +96,51 @@ int run_converge(const Args& args) {
     const std::string plot_path = args.get("plot", "out/" + name + "." + mode + ".png");
     const int threads = args.get_int("threads", scene.settings.threads);
 
+    // --reference-frames, checked before any reference is rendered.
+    std::vector<int> reference_frames;
+    if (args.has("reference-frames")) {
+        std::stringstream list(args.get("reference-frames"));
+        for (std::string item; std::getline(list, item, ',');) {
+            char* end = nullptr;
+            const long f = std::strtol(item.c_str(), &end, 10);
+            if (item.empty() || *end != '\0' || f < 0 || f >= frames)
+                throw CliError("afterglow converge: --reference-frames: \"" + item +
+                               "\" is not a frame in 0.." + std::to_string(frames - 1));
+            reference_frames.push_back(int(f));
+        }
+    }
     // The reference: given, or rendered for the scene's final state (the script run ahead on a
     // copy) and cached by a hash of that state.
     std::string reference_path = args.get("reference", "");
-    if (reference_path.empty()) {
-        ReferenceRequest request;
-        request.name = name;
-        request.cache = args.get("cache");
-        request.spp = args.get_int("ref-spp");
-        request.photons = args.get_int("ref-photons");
-        request.threads = threads;
-        request.indirect_bounces = args.get_int("reference-bounces", -1);
+    ReferenceRequest request;
+    request.name = name;
+    request.cache = args.get("cache");
+    request.spp = args.get_int("ref-spp");
+    request.photons = args.get_int("ref-photons");
+    request.threads = threads;
+    request.indirect_bounces = args.get_int("reference-bounces", -1);
+    if (reference_path.empty())
         reference_path = cached_reference(scene, script_path, frames, request);
-    }
     const Image reference = read_reference(reference_path, component, width, height);
+    // --reference-frames: the state at frame F is the script run for F + 1 frames.
+    std::map<int, Image> at_frame;
+    std::map<int, std::string> at_frame_path;
+    for (const int f : reference_frames) {
+        at_frame_path[f] = cached_reference(scene, script_path, f + 1, request);
+        at_frame[f] = read_reference(at_frame_path[f], component, width, height);
+    }
+    std::map<int, double> at_frame_error;
 
     auto context = gpu::make_gl_context(backend);
     Progress progress("converge", frames, !args.has("quiet"));
     const ConvergenceRun run = run_convergence(
         scene, script_path, PipelineMode(args.get_choice("baseline")), frames, width, height,
-        component, reference, threads, args.has("prime"), [&](int done) { progress.update(done); });
+        component, [&](int) -> const Image& { return reference; }, threads, args.has("prime"),
+        [&](int done) { progress.update(done); },
+        [&](int frame, const Image& image) {
+            if (auto it = at_frame.find(frame); it != at_frame.end())
+                at_frame_error[frame] = compare_images(image, it->second).rel_mse;
+        });
     progress.finish();
     std::filesystem::create_directories(std::filesystem::absolute(csv_path).parent_path());
     write_file_atomically(csv_path, convergence_csv(run));
@@ -128,6 +159,9 @@ int run_converge(const Args& args) {
             s.within, s.frames, s.seconds);
     else
         std::printf("the error did not settle within 10%% after the last edit\n");
+    for (const auto& [f, e] : at_frame_error)
+        std::printf("frame %d: relMSE %.5f against its own state (%s)\n", f, e,
+                    at_frame_path[f].c_str());
     std::printf("wrote %s\n", csv_path.c_str());
 
     if (!plot_path.empty()) {
