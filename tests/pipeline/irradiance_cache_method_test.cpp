@@ -212,9 +212,10 @@ TEST_F(IrradianceCacheMethodTest, GlGatherRecordsCoverTheFrame) {
     const std::vector<SplatPixel> px = m.splat().read_gbuffer();
     std::vector<glm::vec4> sums;
     splat_records(m.records(), px, scene.settings.rc.accuracy, 0, sums);
-    for (size_t i = 0; i < px.size(); ++i)
-        if (px[i].covered)
-            ASSERT_GE(sums[i].a, scene.settings.rc.accuracy * (1.0f - 1e-5f)) << "pixel " << i;
+    for (size_t i = 0; i < px.size(); ++i) {
+        if (!px[i].covered) continue;
+        ASSERT_GE(sums[i].a, scene.settings.rc.accuracy * (1.0f - 1e-5f)) << "pixel " << i;
+    }
     const float lo = scene.settings.rc.min_radius * scene.diagonal(),
                 hi = scene.settings.rc.max_radius * scene.diagonal();
     int inside = 0;
