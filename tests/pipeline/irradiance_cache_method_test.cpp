@@ -198,8 +198,24 @@ TEST_F(IrradianceCacheMethodTest, GlHemiPlaneRecordsAgreeWithTheRays) {
 }
 
 // rc.gather gl in the pipeline: one frame covers every pixel with records whose R_k came from the
-// plane. (rc.source direct is refused by the method's constructor with a message naming both
-// settings; not tested here: a Pipeline whose constructor throws crashes at exit, see the report.)
+// plane.
+// GL records read the AIM texture: with direct light as the source there is none, and the
+// pipeline refuses to be built, naming both settings; the process goes on.
+TEST_F(IrradianceCacheMethodTest, GlGatherWithDirectSourceIsRefused) {
+    Scene scene = load("cornell.json");
+    scene.settings.rc.gather = RcGather::gl;
+    scene.settings.rc.source = RcSource::direct;
+    try {
+        Pipeline pipeline(scene, PipelineOptions{48, 40});
+        FAIL() << "no error";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("rc.source"), std::string::npos) << e.what();
+    }
+    scene.settings.rc.source = RcSource::aim;
+    Pipeline pipeline(scene, PipelineOptions{48, 40});
+    pipeline.frame();
+}
+
 TEST_F(IrradianceCacheMethodTest, GlGatherRecordsCoverTheFrame) {
     Scene scene = load("cornell.json");
     scene.settings.rc.gather = RcGather::gl;
