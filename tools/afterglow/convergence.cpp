@@ -243,6 +243,10 @@ double converged_error(const Scene& scene, const std::string& script_path, int f
     }
     final_state.camera.width = width;
     final_state.camera.height = height;
+    // Scored as the runs are: single frames. Priming draws frames until the pipeline converges;
+    // with nothing changing between them the frame would average sub-pixel offsets, and the
+    // settled value would be lower than any single frame of a run can reach.
+    final_state.settings.frame.accumulate_frames = 1;
     const std::optional<FrameTerm> term =
         component == "full" ? std::nullopt : parse_frame_term(component);
     Pipeline pipeline(final_state,
