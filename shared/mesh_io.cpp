@@ -332,7 +332,13 @@ void validate_off(const std::string& path, const std::string& data) {
     std::vector<std::string_view> words;
     if (!next_line(words) || words[0].find("OFF") == std::string_view::npos)
         throw_input_error(path, "line 1", "expected an OFF header line ('OFF')");
-    const bool binary = words.size() >= 2 && words[1] == "BINARY";
+    // OpenMesh reads the file as binary when the six characters one past "OFF" are "BINARY",
+    // whatever follows them ("OFF BINARY\xf7..." is binary to it): decide as it does, or a binary
+    // header would be validated as text and its counts reach OpenMesh's reserve() unchecked.
+    const size_t off = line.find("OFF");
+    const bool binary = (words.size() >= 2 && words[1] == "BINARY") ||
+                        (off != std::string_view::npos && line.size() >= off + 10 &&
+                         line.substr(off + 4, 6) == "BINARY");
     const int64_t size = int64_t(data.size());
     if (binary) {
         // Native-endian int32 counts, float32 vertices, then "n i1 .. in" int32 faces.

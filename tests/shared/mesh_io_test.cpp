@@ -247,6 +247,16 @@ TEST_F(MeshIo, OffCountsAreChecked) {
         err = load_error(write("garbage.off", "OFF BINARY\n" + std::string(64, '\xff')));
     });
     EXPECT_NE(err.find("garbage.off: byte"), std::string::npos) << err;
+    // Found by the fuzzer: "BINARY" followed by other bytes on the header line is still binary to
+    // OpenMesh, and its counts (0xfffffff7 vertices) made OpenMesh reserve 52 GB.
+    static const char kFuzzed[] =
+        "OFF BINARY\xf7\xff\xff\xff\xff\n0 0 \0\0\0\n"
+        "\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff\xff"
+        "\xff\xff\xff\xff\xff\xff\xff\xff\xf7\xff\xff\xff\xff\n0 0 \0\0\0\0\x80\0\0\0\xff\n";
+    const std::string fuzzed(kFuzzed, sizeof kFuzzed - 1);
+    test::within_deadline(std::chrono::seconds(20),
+                          [&] { err = load_error(write("fuzzed.off", fuzzed)); });
+    EXPECT_NE(err.find("fuzzed.off: byte"), std::string::npos) << err;
 }
 
 TEST_F(MeshIo, TruncatedStlAndObjAreRejected) {
