@@ -99,6 +99,22 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
     maps.set_vpls(v300);
     maps.render_all();
     const int n = int(v300.size());
+    // Per pixel, the patch (leaf of the visibility database) its hit lies in; per (patch, VPL),
+    // the F/P/N label: what the GL sum reads to skip pairs.
+    auto patches_and_labels = [&](const cpu::VisibilityDatabase& db) {
+        std::vector<int> patch(points.size(), 0);
+        for (int y = 0; y < height; ++y)
+            for (int x = 0; x < width; ++x) {
+                const cpu::RayHit& h = hits[size_t(y) * size_t(width) + size_t(x)];
+                const int leaf = h.hit ? db.leaf_at(h.object, h.triangle, h.barycentric) : -1;
+                patch[size_t(height - 1 - y) * size_t(width) + size_t(x)] = std::max(0, leaf);
+            }
+        std::vector<uint32_t> labels(db.nodes().size() * v300.size());
+        for (size_t node = 0; node < db.nodes().size(); ++node)
+            for (int l = 0; l < n; ++l)
+                labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
+        return std::pair{patch, labels};
+    };
     const double naive = best_ms(repeat, [&] {
         maps.render_all();
         gather.shade(maps, vs.clamp, scale);
@@ -129,17 +145,7 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         const Clock::time_point t = Clock::now();
         const cpu::VisibilityDatabase db(scene, v300, 2);
         const double build_ms = std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-        std::vector<int> patch(points.size(), 0);
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x) {
-                const cpu::RayHit& h = hits[size_t(y) * size_t(width) + size_t(x)];
-                const int leaf = h.hit ? db.leaf_at(h.object, h.triangle, h.barycentric) : -1;
-                patch[size_t(height - 1 - y) * size_t(width) + size_t(x)] = std::max(0, leaf);
-            }
-        std::vector<uint32_t> labels(db.nodes().size() * v300.size());
-        for (size_t node = 0; node < db.nodes().size(); ++node)
-            for (int l = 0; l < n; ++l)
-                labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
+        auto [patch, labels] = patches_and_labels(db);
         gather.set_points(column(points, width, height, false), column(points, width, height, true),
                           patch);
         gather.set_labels(labels);
@@ -235,17 +241,7 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         const cpu::VisibilityDatabase db(scene, v300, 2);
         const double db_ms =
             std::chrono::duration<double, std::milli>(Clock::now() - db_start).count();
-        std::vector<int> patch(points.size(), 0);
-        for (int y = 0; y < height; ++y)
-            for (int x = 0; x < width; ++x) {
-                const cpu::RayHit& h = hits[size_t(y) * size_t(width) + size_t(x)];
-                const int leaf = h.hit ? db.leaf_at(h.object, h.triangle, h.barycentric) : -1;
-                patch[size_t(height - 1 - y) * size_t(width) + size_t(x)] = std::max(0, leaf);
-            }
-        std::vector<uint32_t> labels(db.nodes().size() * v300.size());
-        for (size_t node = 0; node < db.nodes().size(); ++node)
-            for (int l = 0; l < n; ++l)
-                labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
+        auto [patch, labels] = patches_and_labels(db);
         gather.set_points(column(points, width, height, false), column(points, width, height, true),
                           patch);
         ms = timed([&] { gather.set_tiles(v300, 1, &labels); });
