@@ -75,9 +75,12 @@ void Iim::schedule(PhotonMaps& maps) {
     }
     // Within them, the texels whose own indirect estimate moved most since they were last
     // gathered go first (one whose estimate is not known keeps its surface's place, first).
+    // Where the camera sees them, a texel's share of the image's relative squared error is
+    // about its staleness squared times the pixels it covers: that product orders them, so a
+    // texel filling much of the screen goes before an equally stale one seen in a few pixels.
     if (!estimate_.empty())
         std::stable_sort(changed.begin(), changed.end(),
-                         [&](int a, int b) { return staleness(a) > staleness(b); });
+                         [&](int a, int b) { return priority(a) > priority(b); });
     order.insert(order.end(), changed.begin(), changed.end());
     for (int t : pending_)
         if (!moved[size_t(t)]) order.push_back(t);
@@ -99,6 +102,13 @@ float Iim::staleness(int record) const {
     if (now < 0.0f || then < 0.0f) return std::numeric_limits<float>::infinity();
     const float denominator = now + then + estimate_floor_[size_t(record)];
     return denominator > 0.0f ? std::abs(now - then) / denominator : 0.0f;
+}
+
+float Iim::priority(int record) const {
+    const float s = staleness(record);
+    if (coverage_.empty() || !std::isfinite(s)) return s;
+    const float pixels = coverage_[size_t(record)];
+    return pixels > 0.0f ? s * s * pixels : s;  // unseen ones are partitioned after the seen
 }
 
 void Iim::set_coverage(const std::vector<float>& per_record) {

@@ -110,6 +110,9 @@ private:
     bool refinable(size_t record) const;
 
     bool seen(int t) const { return coverage_.empty() || coverage_[size_t(t)] > 0.0f; }
+    // Order within the changed texels: staleness² × pixels covered where the camera sees the
+    // texel; the staleness alone where coverage is not known or the texel is not seen.
+    float priority(int record) const;
 
     const Scene& scene_;
     std::vector<float> coverage_;  // per record; empty = not known

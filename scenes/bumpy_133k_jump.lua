@@ -1,10 +1,10 @@
--- scenes/bumpy_133k_box.json: the blue box jumps in one frame (frame 20) from the bumpy floor at
--- the front left onto the top of the short block, 301 mm away ((-244.5, 165, 59) in x, y, z), and
--- stays there. A step edit on a 131,000-triangle scene: the groups whose stored paths cross the
--- old or the new placement must be invalidated in that frame.
+-- scenes/bumpy_133k_box.json: the blue box (160 mm) jumps in one frame (frame 20) from the bumpy
+-- floor at the front left onto the top of the short block, 313 mm away ((-244.5, 185, 59) in x,
+-- y, z), and stays there. A step edit on a 131,000-triangle scene: the groups whose stored paths
+-- cross the old or the new placement must be invalidated in that frame.
 
 local at = 20
-local offset = {-244.5, 165, 59}
+local offset = {-244.5, 185, 59}
 
 local box
 local start = {}

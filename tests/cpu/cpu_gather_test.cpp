@@ -689,3 +689,50 @@ TEST(IimSchedule, MostStaleTexelsFirst) {
 }
 
 }  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// With screen coverage known, the changed texels the camera sees are ordered by staleness² ×
+// pixels covered (their share of the image's relative squared error), not by staleness alone: a
+// texel filling many pixels goes before a staler one seen in a single pixel, and one seen in no
+// pixel at all goes after every seen one, however stale.
+TEST(IimSchedule, ChangedTexelsByStalenessSquaredTimesPixels) {
+    ScheduleCase c;
+    Simulated& s = c.s;
+    CpuGather& gather = c.gather;
+    Iim& map = c.map;
+    const int texels = int(s.scene.atlas.texels.size());
+    ASSERT_GT(texels, 10);
+    std::vector<float> coverage(size_t(texels), 1.0f);
+    coverage[4] = 50.0f;  // large on screen, a little stale
+    coverage[7] = 0.0f;   // not seen, the stalest
+    map.set_coverage(coverage);
+    const std::vector<float> floors(size_t(texels), 0.0f);
+    std::vector<float> estimate(size_t(texels), 1.0f);
+    map.note_indirect_estimates(estimate, floors);
+    map.gather(gather, texels, 0);
+    ASSERT_TRUE(map.complete());
+    estimate[4] = 1.2f;  // staleness 0.2 / 2.2 = 0.091: 0.0083 x 50 pixels = 0.41
+    estimate[5] = 1.6f;  // 0.6 / 2.6 = 0.23: 0.053 x 1 pixel
+    estimate[6] = 1.1f;  // 0.1 / 2.1 = 0.048: 0.0023 x 1 pixel
+    estimate[7] = 3.0f;  // 0.5, not seen
+    map.note_indirect_estimates(estimate, floors);
+    PhotonMaps& maps = s.sim->maps();
+    for (int surface = 0; surface < int(maps.surface_count()); ++surface)
+        maps.surface(surface).delta_i = 1e9;
+    map.schedule(maps);
+    map.gather(gather, 3, 1);
+    const std::vector<int> got = map.last_gathered();
+    ASSERT_EQ(got.size(), 3u);
+    EXPECT_EQ(got[0], 4);  // by staleness alone it would come after 5
+    EXPECT_EQ(got[1], 5);
+    EXPECT_EQ(got[2], 6);
+    map.gather(gather, texels, 2);
+    // The unseen one was gathered last among the changed: after every seen texel of its class.
+    const std::vector<int> rest = map.last_gathered();
+    const auto at7 = std::find(rest.begin(), rest.end(), 7);
+    ASSERT_NE(at7, rest.end());
+    for (auto it = at7 + 1; it != rest.end(); ++it) EXPECT_EQ(coverage[size_t(*it)], 0.0f);
+}
+
+}  // namespace ag::cpu

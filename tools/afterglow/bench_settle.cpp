@@ -72,7 +72,7 @@ struct SettleResult {
     double frame_mean_settle = 0, frame_p95_settle = 0, frame_mean = 0, frame_p95 = 0;  // ms
     uint64_t photons = 0, aim_texels = 0, iim_texels = 0;  // first edit .. settled (or the end)
     double auc = 0.0;                // ∫ relMSE dt after the first edit over the common window
-    double after_last_edit_s = 0.0;  // wall time from the last edit's frame to the run's end
+    double after_last_edit_s = 0.0;  // wall time from the start of the last edit's frame to the end
 };
 
 // Wall time of frame f in ms (its share of the run's wall time).
@@ -117,7 +117,7 @@ SettleResult analyse(const ConvergenceRun& run) {
         if (f >= from && f <= to) window.push_back(all.back());
     }
     r.frame_mean = mean(all), r.frame_p95 = p95(all);
-    if (n > from) r.after_last_edit_s = run.frames[n - 1].wall_s - run.frames[from].wall_s;
+    if (n > from) r.after_last_edit_s = run.frames[n - 1].wall_s - frame_start_s(run.frames, from);
     r.frame_mean_settle = mean(window), r.frame_p95_settle = p95(window);
     for (size_t f = size_t(std::max(0, run.settle.first_edit)); f <= to && f < n; ++f) {
         r.photons += run.frames[f].photons_retraced;
@@ -350,7 +350,8 @@ int bench_settle(const Args& args, int width, int height) {
         ++measured;
     }
     std::printf(
-        "(settle_s: wall time from the last edit; ms mean/p95 over the frames from the last edit "
+        "(settle_s: wall time from the start of the last edit's frame, that frame included; ms "
+        "mean/p95 over the frames from the last edit "
         "until settled, and over all frames; photons re-traced, AIM texels rebuilt and IIM texels "
         "gathered from the first edit until settled; area: ∫ relMSE dt from the first edit over "
         "the shortest mode's remaining run; speedup: full-budget's settle time over "

@@ -203,7 +203,7 @@ MethodResult run_variant(const Variant& v, const Scene& base, const std::string&
     for (const Segment& s : segments) {
         SegmentResult sr;
         const std::vector<FrameRecord> part(fr.begin() + s.begin, fr.begin() + s.end);
-        sr.settle = analyse_settle(part);
+        sr.settle = analyse_settle(part, 0.0, frame_start_s(fr, size_t(s.begin)));
         if (sr.settle.within >= 0) sr.settle.within += s.begin;
         sr.settle.last_edit += s.begin;
         sr.ssim = tail_mean(ssim, size_t(s.begin), size_t(s.end));

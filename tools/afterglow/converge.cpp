@@ -150,8 +150,7 @@ int run_converge(const Args& args) {
         "converge %s (%s, %s): %d frames, %.2f s; settled relMSE %.5f (%s); last edit at frame %d "
         "(%.2f s)\n",
         scene_path.c_str(), mode.c_str(), component.c_str(), frames, run.wall_s, s.settled,
-        reference_path.c_str(), s.last_edit,
-        s.last_edit < int(run.frames.size()) ? run.frames[size_t(s.last_edit)].wall_s : 0.0);
+        reference_path.c_str(), s.last_edit, frame_start_s(run.frames, size_t(s.last_edit)));
     if (s.settled_ok())
         std::printf(
             "within 10%% of the settled error from frame %d: %d frames, %.3f s after the last "

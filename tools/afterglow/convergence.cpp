@@ -118,7 +118,8 @@ Image read_reference(const std::string& reference_path, const std::string& compo
     return reference;
 }
 
-SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target) {
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target,
+                              double first_start_s) {
     SettleAnalysis a;
     if (frames.empty()) return a;
     const size_t n = frames.size();
@@ -139,7 +140,8 @@ SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double tar
     }
     if (a.within >= 0) {
         a.frames = a.within - a.last_edit;
-        a.seconds = frames[size_t(a.within)].wall_s - frames[size_t(a.last_edit)].wall_s;
+        a.seconds = frames[size_t(a.within)].wall_s -
+                    frame_start_s(frames, size_t(a.last_edit), first_start_s);
     }
     return a;
 }

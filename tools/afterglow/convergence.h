@@ -57,10 +57,20 @@ struct SettleAnalysis {
     // First frame from last_edit on after which the error stays within 10% of `settled`; -1 if
     // none.
     int within = -1;
-    int frames = -1;        // within − last_edit, or −1
-    double seconds = -1.0;  // wall time from the last edit's frame to `within`, or −1
+    int frames = -1;  // within − last_edit (0: the edit's own frame is already within), or −1
+    // Wall time from the start of the last edit's frame (the moment the edit is made) to the end
+    // of frame `within`, or −1. It includes the edit's own frame, where most repair work lands: a
+    // mode that settles in that frame settles in that frame's time, not in no time.
+    double seconds = -1.0;
     bool settled_ok() const { return within >= 0; }
 };
+
+// Wall time at the start of frame i of a run (the end of frame i − 1; `first_start_s`, the
+// start of frames[0], for the first frame).
+inline double frame_start_s(const std::vector<FrameRecord>& frames, size_t i,
+                            double first_start_s = 0.0) {
+    return i > 0 && i <= frames.size() ? frames[i - 1].wall_s : first_start_s;
+}
 
 struct ConvergenceRun {
     PipelineMode mode = PipelineMode::selective;
@@ -73,7 +83,9 @@ struct ConvergenceRun {
 
 // With `target` > 0 (the error of the converged final state, converged_error()) a run settles
 // when its error is back within 10% of that; otherwise within 10% of its own plateau.
-SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target = 0.0);
+// `first_start_s`: the wall time at the start of frames[0] (non-zero for a slice of a run).
+SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double target = 0.0,
+                              double first_start_s = 0.0);
 
 // The relMSE against `reference` of the converged final state: `scene` after `frames` frames of
 // the script, primed at once (Pipeline::prime) and drawn. Every mode converges to it (repair ==
