@@ -109,6 +109,11 @@ const Command kBenchCommand{
                 "K points of its round-robin sweep; prints the median speed-up",
                 1, 100, 1),
         integer("phase-step", "S", "'settle': frames between the phases' starts", 1, 1000, 1),
+        integer("track-every", "K",
+                "'settle': also score every K-th frame against the reference of its own state "
+                "and report the area under that error (how far the light lags a continuous move); "
+                "0 = off (default: 4 for the ladder's continuous move, else off)",
+                0, 1000, 0),
         text("modes", "LIST",
              "'settle': the modes to run, comma-separated (selective, full, full-budget); "
              "selective's speed-up needs full-budget",

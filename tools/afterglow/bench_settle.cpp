@@ -9,10 +9,12 @@
 #include <cstdlib>
 #include <filesystem>
 #include <iostream>
+#include <map>
 #include <sstream>
 
 #include "gpu/gl_context.h"
 #include "shared/image.h"
+#include "shared/metrics.h"
 #include "shared/scene_file.h"
 #include "tools/afterglow/cli.h"
 #include "tools/afterglow/convergence.h"
@@ -29,6 +31,10 @@ struct LadderEntry {
     // the direct term accumulates after an edit), so at 33 ms every mode would get only its
     // minimum share and no frame would come near the target.
     double frame_ms = 0.0;
+    // Continuous moves: every `track_every` frames the frame is also scored against the
+    // reference of its own state (not the final one), so the area measures how far the light
+    // lags the move rather than how far the object is from where it stops; 0 = not tracked.
+    int track_every = 0;
 };
 
 // The default ladder: small to large scenes, step edits (geometry, material, visibility, light)
@@ -36,7 +42,7 @@ struct LadderEntry {
 const std::vector<LadderEntry> kLadder = {
     {"scenes/cornell.json", "scenes/cornell_cube_jump.lua"},
     {"scenes/cornell.json", "scenes/cornell_albedo_step.lua"},
-    {"scenes/cornell.json", "scenes/cornell_move_cube.lua"},
+    {"scenes/cornell.json", "scenes/cornell_move_cube.lua", 90, 0.0, 4},
     {"scenes/two_rooms.json", "scenes/two_rooms_door_step.lua"},
     {"scenes/two_rooms.json", "scenes/two_rooms_light_off_step.lua"},
     {"scenes/bumpy_133k_box.json", "scenes/bumpy_133k_jump.lua", 120, 200.0},
@@ -72,6 +78,7 @@ struct SettleResult {
     double frame_mean_settle = 0, frame_p95_settle = 0, frame_mean = 0, frame_p95 = 0;  // ms
     uint64_t photons = 0, aim_texels = 0, iim_texels = 0;  // first edit .. settled (or the end)
     double auc = 0.0;                // ∫ relMSE dt after the first edit over the common window
+    double tracking_auc = -1.0;      // the same against each frame's own state; −1: not tracked
     double after_last_edit_s = 0.0;  // wall time from the start of the last edit's frame to the end
 };
 
@@ -102,6 +109,18 @@ double error_area(const ConvergenceRun& run, double window) {
     }
     if (t < end && !run.frames.empty()) area += run.frames.back().relmse * (end - t);
     return area;
+}
+
+// The run with each frame's error replaced by its error against its own state's reference,
+// held from one sampled frame to the next (`tracked`: frame → relMSE; frames before the first
+// sample keep their own error).
+ConvergenceRun tracked_run(ConvergenceRun run, const std::map<int, double>& tracked) {
+    double held = -1.0;
+    for (FrameRecord& r : run.frames) {
+        if (auto it = tracked.find(r.frame); it != tracked.end()) held = it->second;
+        if (held >= 0.0) r.relmse = held;
+    }
+    return run;
 }
 
 SettleResult analyse(const ConvergenceRun& run) {
@@ -209,7 +228,7 @@ int bench_settle(const Args& args, int width, int height) {
            "first_"
            "edit,last_edit,settle_frames,settle_s,frame_ms_mean_settle,frame_ms_p95_settle,frame_"
            "ms_mean,frame_ms_p95,photons_retraced,aim_texels,iim_texels,error_area,error_area_"
-           "window_s,speedup_vs_full_budget,speedup_at_least\n";
+           "window_s,speedup_vs_full_budget,speedup_at_least,tracking_area\n";
     const std::filesystem::path runs_dir =
         std::filesystem::absolute(csv_path).parent_path() / (stem(csv_path) + ".runs");
     int measured = 0;
@@ -256,6 +275,15 @@ int bench_settle(const Args& args, int width, int height) {
         const double target = prime ? converged_error(scene, entry.script, frames, width, height,
                                                       component, reference, threads)
                                     : 0.0;
+        // Tracked entries: the reference of the state after f + 1 script frames for every
+        // track_every-th frame f (states after the last edit share one cached reference).
+        const int track_every =
+            args.has("track-every") ? args.get_int("track-every", 0) : entry.track_every;
+        std::map<int, Image> own_state;
+        if (track_every > 0)
+            for (int f = 0; f < frames; f += track_every)
+                own_state[f] = read_reference(cached_reference(scene, entry.script, f + 1, request),
+                                              component, width, height);
         // Full-budget's settle depends on where its round-robin sweep is when the edit lands:
         // each phase starts the script `lead_in` untimed frames later.
         std::vector<double> speedups, bounds;
@@ -264,9 +292,17 @@ int bench_settle(const Args& args, int width, int height) {
             std::vector<ConvergenceRun> runs;
             double speedup_of_phase = 0.0, bound_of_phase = 0.0;
             const std::string phase_suffix = phases > 1 ? ".lead" + std::to_string(lead_in) : "";
+            std::vector<std::map<int, double>> tracked;
             for (PipelineMode mode : modes) {
-                runs.push_back(run_convergence(scene, entry.script, mode, frames, width, height,
-                                               component, reference, threads, prime, {}, lead_in));
+                std::map<int, double>& errors = tracked.emplace_back();
+                runs.push_back(run_convergence(
+                    scene, entry.script, mode, frames, width, height, component,
+                    [&](int) -> const Image& { return reference; }, threads, prime, {},
+                    [&](int f, const Image& image) {
+                        if (auto it = own_state.find(f); it != own_state.end())
+                            errors[f] = compare_images(image, it->second).rel_mse;
+                    },
+                    lead_in));
                 runs.back().settle = analyse_settle(runs.back().frames, target);
                 std::filesystem::create_directories(runs_dir);
                 write_file_atomically(
@@ -280,9 +316,12 @@ int bench_settle(const Args& args, int width, int height) {
             for (const ConvergenceRun& run : runs)
                 window = std::min(window, run.wall_s - edit_time(run));
             std::vector<SettleResult> results;
-            for (const ConvergenceRun& run : runs) {
-                results.push_back(analyse(run));
-                results.back().auc = error_area(run, window);
+            for (size_t m = 0; m < runs.size(); ++m) {
+                results.push_back(analyse(runs[m]));
+                results.back().auc = error_area(runs[m], window);
+                if (!tracked[m].empty())
+                    results.back().tracking_auc =
+                        error_area(tracked_run(runs[m], tracked[m]), window);
             }
             // A mode settles only where the others do: a run whose own plateau is more than 10%
             // above the best mode's never reached the converged state within the run (it is "-").
@@ -333,7 +372,17 @@ int bench_settle(const Args& args, int width, int height) {
                     << r.frame_p95_settle << ',' << r.frame_mean << ',' << r.frame_p95 << ','
                     << r.photons << ',' << r.aim_texels << ',' << r.iim_texels << ',' << r.auc
                     << ',' << window << ',' << (speedup_ok ? fixed(speedup, 4) : "") << ','
-                    << (bound_ok ? fixed(at_least, 4) : "") << "\n";
+                    << (bound_ok ? fixed(at_least, 4) : "") << ','
+                    << (r.tracking_auc >= 0.0 ? fixed(r.tracking_auc, 6) : "") << "\n";
+            }
+            if (track_every > 0) {
+                std::printf(
+                    "%-10s %-22s %4d tracking area (against each frame's own state, every "
+                    "%d frames):",
+                    request.name.c_str(), stem(entry.script).c_str(), lead_in, track_every);
+                for (const SettleResult& r : results)
+                    std::printf(" %s %.5f", kPipelineModeNames[size_t(r.mode)], r.tracking_auc);
+                std::printf("\n");
             }
             if (speedup_of_phase > 0.0) speedups.push_back(speedup_of_phase);
             if (bound_of_phase > 0.0) bounds.push_back(bound_of_phase);
