@@ -41,7 +41,7 @@ layout(local_size_x = 64) in;
 struct Emitter { vec3 a; uint type; vec3 b; float cos_outer; vec3 c; float cos_inner;
                  vec3 power; float cdf_lo; vec3 normal; float cdf_hi; };
 layout(std430, binding = 9) readonly buffer Emitters { Emitter emitters[]; };
-layout(std430, binding = 10) readonly buffer Materials { vec4 materials[]; };  // albedo, type
+layout(std430, binding = 10) readonly buffer Materials { vec4 materials[]; };  // albedo or ior, type
 uniform uint paths, path_base, frame_index, emitter_count;
 uniform int bounces, kwast;
 uniform float epsilon;
@@ -90,19 +90,52 @@ void main() {
         o += epsilon * e.normal;
         d = cosine_direction(r, e.normal);
     }
-    for (int depth = 0; depth <= bounces; ++depth) {
+    // Diffuse vertices are counted: hits from the second on are stored (his "second bounce"),
+    // up to `bounces` stored. Mirrors and glass carry the photon on unchanged (reflected, or
+    // refracted by the Fresnel share), anywhere along the path, as pt's single-bounce indirect
+    // term counts L S* D S* D paths; a chain of more than kSpecularVertices ends it.
+    const int kSpecularVertices = 8;
+    int diffuse = 0, specular = 0;
+    while (true) {
         BvhHit hit;
         if (!bvh_intersect(o, d, 0.0, 1e30, hit)) break;
         vec3 x = o + hit.t * d;
         vec4 m = materials[hit.object];
-        if (depth >= 1) {
+        BvhTriangle tri = bvh_triangles[hit.index];
+        vec3 n = normalize(cross(tri.e1, tri.e2));
+        int type = int(m.w + 0.5);
+        if (type != kMaterialDiffuse) {
+            if (++specular > kSpecularVertices) break;
+            vec3 facing = dot(n, d) < 0.0 ? n : -n;  // towards the incoming side
+            seed = tea_next(seed);
+            float cos_i = -dot(d, facing), cos_t = 0.0, reflectance = 1.0;
+            float eta = dot(n, d) < 0.0 ? 1.0 / m.x : m.x;  // glass: .x holds the ior
+            if (type == kMaterialGlass) {
+                float sin2_t = eta * eta * max(0.0, 1.0 - cos_i * cos_i);
+                if (sin2_t < 1.0) {
+                    cos_t = sqrt(1.0 - sin2_t);
+                    // Unpolarised Fresnel for a dielectric (as fresnel_dielectric on the CPU).
+                    float rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+                    float rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+                    reflectance = 0.5 * (rs * rs + rp * rp);
+                }
+            }
+            if (type == kMaterialGlass && tea_unit(seed).x >= reflectance) {
+                d = normalize(eta * d + (eta * cos_i - cos_t) * facing);
+                o = x - epsilon * facing;
+            } else {
+                d = reflect(d, facing);
+                o = x + epsilon * facing;
+            }
+            continue;
+        }
+        if (diffuse >= 1) {
             uint at = atomicAdd(photon_count, 1u);
             vec2 enc = octahedral_encode(-d);
             if (at < capacity) photons[at] = Photon(vec4(x, enc.x), vec4(power, enc.y));
         }
-        if (depth == bounces || int(m.w + 0.5) != kMaterialDiffuse) break;
-        BvhTriangle tri = bvh_triangles[hit.index];
-        vec3 n = normalize(cross(tri.e1, tri.e2));
+        if (diffuse == bounces) break;
+        ++diffuse;
         if (dot(n, d) > 0.0) n = -n;
         // The albedo where it landed: base × the texel (bilinear) on a textured surface.
         power *= m.rgb * texture_albedo(hit.object, hit.index, hit.barycentric);
@@ -469,7 +502,11 @@ void GpuPhotonMapper::reset() {
                                     emitters.empty() ? nullptr : emitters.data());
     std::vector<glm::vec4> materials;
     for (const Object& o : scene_.objects)
-        materials.emplace_back(base_albedo(o), float(int(o.material.type)));  // × the texture
+        // Diffuse: the albedo (× the texture in the trace); glass: its ior in .x (mirrors and
+        // glass pass photons on unchanged, as pt's paths).
+        materials.emplace_back(
+            o.material.type == MaterialType::glass ? glm::vec3(o.material.ior) : base_albedo(o),
+            float(int(o.material.type)));
     if (materials.empty()) materials.emplace_back(0.0f);
     materials_ = make_storage_buffer(materials.size() * sizeof(glm::vec4), materials.data());
     radius_ = scene_.settings.gpu_pm.radius * scene_.diagonal();

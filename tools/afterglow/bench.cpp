@@ -56,7 +56,8 @@ const Command kBenchCommand{
     "--indirect gpu_pm (--paths x --radii, radius as a fraction of the scene diagonal) at --size "
     "(default 256x256): stored photons, frame time mean and sigma over --frames (default 20), "
     "pixels refined at full resolution, and with --reference the 8-bit MSE, NRMSE and MSSIM of the "
-    "frame; --budget MS picks the paths of each radius for a fixed time (Table 6.2); "
+    "frame; --budget MS searches the paths of each radius for a fixed time (Table 6.2), "
+    "reporting whether it held within --budget-tolerance; "
     "--no-direct times the method alone (docs/gpu_pm.md). 'vpl [SCENE]': Barczak 2006's claims on "
     "the VPL path "
     "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
@@ -127,6 +128,14 @@ const Command kBenchCommand{
                "'gpu_pm': Table 6.2: per radius of --radii, the paths per frame that make the "
                "method's own time (G-buffer, photons, binning, estimate) about MS milliseconds",
                0.001, 1e6),
+        number(
+            "budget-tolerance", "FRAC",
+            "'gpu_pm': --budget: a probe holds the budget when within +-FRAC of it (default "
+            "0.1); a count holds when two of its probes are within it (at most 12 probes a radius)",
+            0.001, 1.0),
+        integer("budget-frames", "N",
+                "'gpu_pm': --budget: frames per probe, whose median is its time (default 9)", 1,
+                10000),
         flag("no-direct",
              "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
         integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),

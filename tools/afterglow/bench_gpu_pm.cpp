@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <memory>
 #include <sstream>
+#include <utility>
 #include <vector>
 
 #include "gpu/frame_renderer.h"
@@ -13,6 +14,7 @@
 #include "gpu/gl_context.h"
 #include "gpu/gpu_photon_mapper.h"
 #include "gpu/scene_meshes.h"
+#include "shared/budget_search.h"
 #include "shared/image.h"
 #include "shared/metrics.h"
 #include "shared/scene_file.h"
@@ -91,37 +93,15 @@ Cell run_cell(Scene& scene, gpu::GBuffer& g_buffer, gpu::FrameRenderer* renderer
     return c;
 }
 
-// Table 6.2: the paths whose method time is `budget` ms at this radius. The time is close to
-// linear in the paths (tracing and binning are per photon, the estimate per photon in a tile), so
-// a line through two probes (medians of 8 frames: the machine may be loaded) gives the count,
-// refined once by a third probe's line.
-int paths_for_budget(Scene& scene, gpu::GBuffer& g_buffer, float radius, double budget) {
-    constexpr int kProbeFrames = 8;
-    int lo = 250, hi = 4000;
-    double t_lo = run_cell(scene, g_buffer, nullptr, lo, radius, kProbeFrames).method.median;
-    double t_hi = run_cell(scene, g_buffer, nullptr, hi, radius, kProbeFrames).method.median;
-    int paths = lo;
-    for (int round = 0; round < 2; ++round) {
-        const double slope = std::max((t_hi - t_lo) / double(hi - lo), 1e-9);
-        paths = int(std::clamp(double(lo) + (budget - t_lo) / slope, 50.0, 100000.0));
-        if (round == 1) break;
-        const double t =
-            run_cell(scene, g_buffer, nullptr, paths, radius, kProbeFrames).method.median;
-        // Keep the probe nearer the answer; the line through it and the other is the refinement.
-        if (std::abs(paths - lo) < std::abs(paths - hi)) {
-            hi = paths;
-            t_hi = t;
-        } else {
-            lo = paths;
-            t_lo = t;
-        }
-        if (lo == hi) break;
-        if (lo > hi) {
-            std::swap(lo, hi);
-            std::swap(t_lo, t_hi);
-        }
-    }
-    return std::max(50, paths / 25 * 25);  // round as his table does (multiples of 25)
+// Table 6.2: the paths whose method time is `budget` ms at this radius, searched per radius
+// (the paths per ms differ with the radius: longer tile lists) through the median of
+// `probe_frames` frames per probe, until a probe lands within the tolerance
+// (shared/budget_search.h).
+BudgetResult paths_for_budget(Scene& scene, gpu::GBuffer& g_buffer, float radius,
+                              const BudgetSearch& search, int probe_frames) {
+    return search_budget(search, [&](int paths) {
+        return run_cell(scene, g_buffer, nullptr, paths, radius, probe_frames).method.median;
+    });
 }
 
 }  // namespace
@@ -165,13 +145,20 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
         "method's time (G-buffer, photons, binning, estimate)%s\n",
         scene_path.c_str(), width, height, frames,
         no_direct ? "" : " and of the frame's (with direct light and compose)");
-    if (budget)
-        std::printf("paths per radius chosen for %.3g ms of the method's time (Table 6.2)\n",
-                    args.get_double("budget"));
+    BudgetSearch search;
+    const int probe_frames = args.get_int("budget-frames", 9);
+    if (budget) {
+        search.budget_ms = args.get_double("budget");
+        search.tolerance = args.get_double("budget-tolerance", 0.1);
+        std::printf(
+            "paths per radius chosen for %.3g ms of the method's time (Table 6.2): each probe the "
+            "median of %d frames, held when two probes of one count are within +-%.3g%%\n",
+            search.budget_ms, probe_frames, 100.0 * search.tolerance);
+    }
     std::printf("%8s %9s %8s %9s %8s %8s %9s %8s %8s %8s %8s %7s\n", "paths", "(stored)", "radius",
                 "gpu_pm ms", "sigma", "median", "frame ms", "sigma", "refined", "MSE", "NRMSE",
                 "MSSIM");
-    auto report = [&](int n, double r) {
+    auto report = [&](int n, double r) -> Cell {
         const Cell c = run_cell(scene, g_buffer, renderer.get(), n, float(r), frames);
         std::printf("%8d %9u %8.4g %9.2f %8.2f %8.2f", n, c.stored, r, c.method.mean,
                     c.method.sigma, c.method.median);
@@ -186,10 +173,39 @@ int bench_gpu_pm(const Args& args, const std::string& scene_path, int width, int
         }
         std::printf("\n");
         std::fflush(stdout);
+        return c;
     };
     if (budget) {
-        for (const double r : radii)
-            report(paths_for_budget(scene, g_buffer, float(r), args.get_double("budget")), r);
+        // The search's own verdict, and the cell's: its frames are timed after the search, so
+        // its median is a second, independent check that the budget held.
+        std::vector<std::pair<BudgetResult, Cell>> rows;
+        for (const double r : radii) {
+            BudgetResult found = paths_for_budget(scene, g_buffer, float(r), search, probe_frames);
+            rows.emplace_back(found, report(found.count, r));
+        }
+        const double band = search.tolerance * search.budget_ms;
+        int held = 0, cells_held = 0;
+        std::printf(
+            "\nbudget search per radius: the paths found, the probe's median, the line's ms per "
+            "1000 paths and fixed ms, whether the search held, the cell's median and whether it "
+            "held; the probes (paths:ms)\n");
+        std::printf("%8s %8s %9s %10s %9s %5s %9s %5s  %s\n", "radius", "paths", "probe ms",
+                    "ms/1000", "fixed ms", "held", "cell ms", "held", "probes");
+        for (size_t i = 0; i < rows.size(); ++i) {
+            const auto& [found, cell] = rows[i];
+            const bool cell_held = std::abs(cell.method.median - search.budget_ms) <= band;
+            held += found.held;
+            cells_held += cell_held;
+            std::printf("%8.4g %8d %9.2f %10.3f %9.2f %5s %9.2f %5s ", radii[i], found.count,
+                        found.ms, 1000.0 * found.ms_per_count, found.fixed_ms,
+                        found.held ? "yes" : "no", cell.method.median, cell_held ? "yes" : "no");
+            for (const BudgetProbe& p : found.probes) std::printf(" %d:%.2f", p.count, p.ms);
+            std::printf("\n");
+        }
+        std::printf(
+            "budget %.3g ms held (within +-%.3g%%) by the search in %d of %zu radii, by "
+            "the cells' medians in %d of %zu\n",
+            search.budget_ms, 100.0 * search.tolerance, held, rows.size(), cells_held, rows.size());
     } else {
         for (const double n : paths)
             for (const double r : radii) report(int(n), r);
