@@ -104,9 +104,12 @@ std::vector<int> choose_chart_subdivision(const Scene& scene, const std::vector<
     const int count = int(charts.size());
     std::vector<int> subdivision(static_cast<size_t>(count), 1);
     if (ls.refine_factor <= 1 || count == 0) return subdivision;
+    // In doubles: an atlas too large for ints is refused after this, naming the texel size.
     const auto texels = [&](int c, int factor) {
-        const glm::ivec2 e = chart_texel_extent(extents[size_t(c)], base_texel_size / factor);
-        return double(e.x + 2 * gutter) * double(e.y + 2 * gutter);
+        const glm::dvec2 e = glm::max(
+            glm::ceil(extents[size_t(c)] * double(factor) / base_texel_size + 2.0 * kChartMargin),
+            glm::dvec2(1.0));
+        return (e.x + 2.0 * gutter) * (e.y + 2.0 * gutter);
     };
     std::vector<double> fraction(static_cast<size_t>(count));
     double total = 0.0;
