@@ -72,7 +72,6 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     KnnIndex index;
     index.build(points);
     const int k = scene_.settings.aim.knn;
-    const float texel = scene_.atlas.texel_size;
 
     std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
         indirect(texels.size(), glm::vec3(0.0f));
@@ -86,7 +85,10 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
             if (n == 0) return;
             // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
             double r2 = double(d2[size_t(n - 1)]);
-            if (r2 <= 0.0) r2 = double(texel) * texel / std::numbers::pi;
+            if (r2 <= 0.0) {
+                const double texel = scene_.atlas.charts[size_t(t.chart)].texel_size;
+                r2 = texel * texel / std::numbers::pi;
+            }
             glm::dvec3 sum(0.0), bounced(0.0);
             for (int j = 0; j < n; ++j) {
                 const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];

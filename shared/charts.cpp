@@ -18,6 +18,7 @@
 #include <utility>
 
 #include "shared/input_error.h"
+#include "shared/texel_density.h"
 
 namespace ag {
 namespace {
@@ -26,9 +27,6 @@ using OmMesh = OpenMesh::TriMesh_ArrayKernelT<>;
 using Tri2 = std::array<glm::dvec2, 3>;
 
 constexpr double kDegree = std::numbers::pi / 180.0;
-// Charts keep this many texels between their triangles and their rectangle's edge, so every
-// corner UV lies strictly inside the rectangle.
-constexpr double kChartMargin = 0.01;
 // A texel belongs to a chart if its square overlaps chart triangles by more than this (texel²);
 // anything smaller is a rounding sliver along a texel line.
 constexpr double kMinCoverage = 1e-9;
@@ -775,6 +773,7 @@ void make_surfaces_and_atlas(Scene& scene) {
     const double cos_cone = std::cos(double(ls.chart_cone) * kDegree);
 
     std::vector<TriangleInfo> infos(scene.objects.size());
+    std::vector<glm::dvec2> chart_lo, extents;  // per chart, object units
     OverlapGrid grid;
     for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
         const Mesh& mesh = scene.objects[size_t(oi)].mesh;
@@ -824,7 +823,7 @@ void make_surfaces_and_atlas(Scene& scene) {
                 chart.axis = glm::vec3(frame.axis);
                 chart.u_axis = glm::vec3(frame.u);
                 chart.v_axis = glm::vec3(frame.v);
-                // Rectangle: the projected bounds plus a margin, centred, in whole texels.
+                // Projected bounds; the rectangle follows once each chart's density is chosen.
                 glm::dvec2 lo(1e300), hi(-1e300);
                 for (int t : chart.triangles)
                     for (int k = 0; k < 3; ++k) {
@@ -834,21 +833,33 @@ void make_surfaces_and_atlas(Scene& scene) {
                         lo = glm::min(lo, uv);
                         hi = glm::max(hi, uv);
                     }
-                const glm::dvec2 texels = (hi - lo) / texel_size + 2.0 * kChartMargin;
-                if (!(texels.x < 65536.0 && texels.y < 65536.0))
-                    throw_input_error(where, "settings.lightmap.texel_size",
-                                      "a chart of object '" + scene.objects[size_t(oi)].name +
-                                          "' would be over 65536 texels wide; expected a texel "
-                                          "size closer to the scene's scale");
-                chart.width = std::max(1, int(std::ceil(texels.x)));
-                chart.height = std::max(1, int(std::ceil(texels.y)));
-                const glm::dvec2 slack =
-                    glm::dvec2(chart.width, chart.height) * texel_size - (hi - lo);
-                chart.origin = glm::vec2(lo - 0.5 * slack);
+                chart_lo.push_back(lo);
+                extents.push_back(hi - lo);
                 surface.charts.push_back(int(atlas.charts.size()));
                 atlas.charts.push_back(std::move(chart));
             }
         }
+    }
+
+    // Rectangles: the projected bounds plus a margin, centred, in whole texels of the chart's
+    // own size (texel_density.h: finer where the chart touches a dynamic object).
+    const std::vector<int> subdivision =
+        choose_chart_subdivision(scene, atlas.charts, extents, texel_size, atlas.gutter);
+    for (size_t c = 0; c < atlas.charts.size(); ++c) {
+        Chart& chart = atlas.charts[c];
+        const double size = texel_size / double(subdivision[c]);
+        chart.texel_size = float(size);
+        const glm::dvec2 texels = extents[c] / size + 2.0 * kChartMargin;
+        if (!(texels.x < 65536.0 && texels.y < 65536.0))
+            throw_input_error(where, "settings.lightmap.texel_size",
+                              "a chart of object '" + scene.objects[size_t(chart.object)].name +
+                                  "' would be over 65536 texels wide; expected a texel "
+                                  "size closer to the scene's scale");
+        const glm::ivec2 e = chart_texel_extent(extents[c], size);
+        chart.width = e.x;
+        chart.height = e.y;
+        const glm::dvec2 slack = glm::dvec2(chart.width, chart.height) * size - extents[c];
+        chart.origin = glm::vec2(chart_lo[c] - 0.5 * slack);
     }
 
     scene.load_timing.surfaces = lap();
@@ -920,12 +931,12 @@ void make_surfaces_and_atlas(Scene& scene) {
         const Mesh& mesh = scene.objects[size_t(chart.object)].mesh;
         std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(chart.object)];
         for (int t : chart.triangles) {
-            const Tri2 q = chart_texel_triangle(mesh, chart, t, texel_size);
+            const Tri2 q = chart_texel_triangle(mesh, chart, t, chart.texel_size);
             for (int k = 0; k < 3; ++k)
                 uvs[3 * size_t(t) + size_t(k)] =
                     glm::vec2(q[size_t(k)] + glm::dvec2(chart.x, chart.y));
         }
-        make_chart_texels(mesh, infos[size_t(chart.object)], chart, c, texel_size, atlas);
+        make_chart_texels(mesh, infos[size_t(chart.object)], chart, c, chart.texel_size, atlas);
     }
     scene.load_timing.texels = lap();
 }

@@ -20,6 +20,7 @@ struct Chart {
     glm::vec2 origin{0.0f};     // (u, v) in object units of the chart's lower-left corner
     int x = 0, y = 0;           // atlas position of the first texel
     int width = 0, height = 0;  // in texels
+    float texel_size = 0.0f;    // world units per texel edge in this chart (adaptive density)
 };
 
 // What one atlas texel stands for. Position and normal are in the object's space, so rigid
@@ -37,7 +38,7 @@ struct TexelRecord {
 
 struct LightmapAtlas {
     int width = 0, height = 0;  // in texels
-    float texel_size = 0.0f;    // world units per texel edge
+    float texel_size = 0.0f;    // world units per texel edge, the coarsest (Chart::texel_size)
     int gutter = 0;             // texels kept free around every chart
     std::vector<Chart> charts;
     std::vector<TexelRecord> texels;  // only texels that cover some chart triangle

@@ -798,7 +798,10 @@ void settings_changed(Scene& scene, const LightmapSettings& before) {
     check_photon_budget(scene);
     const LightmapSettings& after = scene.settings.lightmap;
     if (after.texel_size != before.texel_size || after.crease_angle != before.crease_angle ||
-        after.chart_cone != before.chart_cone || after.gutter != before.gutter)
+        after.chart_cone != before.chart_cone || after.gutter != before.gutter ||
+        after.refine_factor != before.refine_factor ||
+        after.refine_distance != before.refine_distance ||
+        after.refine_budget != before.refine_budget)
         make_surfaces_and_atlas(scene);
 }
 

@@ -83,6 +83,11 @@ struct LightmapSettings {
     float crease_angle = 30.0f;  // degrees: adjacent faces closer than this share a surface
     float chart_cone = 30.0f;    // degrees: a chart's normals stay within this of its mean
     int gutter = 1;              // free texels around every chart in the atlas
+    // Adaptive density (docs/fidelity.md): charts that touch dynamic objects get texel_size /
+    // refine_factor, nearest first, while the atlas stays within refine_budget × the uniform one.
+    int refine_factor = 1;         // 1 = one texel size everywhere
+    float refine_distance = 1.0f;  // contact: within this many base texels of a partner
+    float refine_budget = 2.0f;    // at most this × the uniform layout's texels
 };
 
 struct AimSettings {
@@ -270,6 +275,12 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<float>{"chart_cone", s.lightmap.chart_cone, 1, 60,
                          "degrees; chart normals stay within this of the chart axis"});
     v.field(Field<int>{"gutter", s.lightmap.gutter, 1, 16, "free texels around every chart"});
+    v.field(Field<int>{"refine_factor", s.lightmap.refine_factor, 1, 16,
+                       "texel subdivision on charts touching dynamic objects; 1 = uniform"});
+    v.field(Field<float>{"refine_distance", s.lightmap.refine_distance, 0, 1e6,
+                         "contact distance, in texels of texel_size"});
+    v.field(Field<float>{"refine_budget", s.lightmap.refine_budget, 1, 1e6,
+                         "atlas texels at most this times the uniform layout's"});
     v.end_section();
     v.section("aim", "approximated illumination maps, Larsen ch. 10");
     v.field(Field<int>{"knn", s.aim.knn, 1, 10000, "nearest photon hits per texel"});

@@ -53,6 +53,10 @@ ag_cli_test(render_needs_exr 2 "ending in .exr" render scenes/cornell.json -o x.
 add_test(NAME cli.fidelity_cornell COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_test.sh
          ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.fidelity_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+# Adaptive lightmap density: contact regions at 48² (docs/fidelity.md, issue #12 item 4).
+add_test(NAME cli.fidelity_density COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_density_test.sh
+         ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.fidelity_density PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 ag_cli_test(fidelity_bad_reference 1 "no_such.indirect.exr" fidelity scenes/cornell.json
             --reference no_such.exr)
 # Values above half float's 65504 survive in the EXR; compare refuses NaN/Inf images (exit 1).

@@ -68,6 +68,28 @@ Mesh make_spiral_ramp(float turns, int segments_per_turn, float rise_per_turn) {
     return mesh;
 }
 
+// A static floor (object 0) with a dynamic box standing on it and a static wall standing apart;
+// adaptive density subdivides `refine_factor` times the charts that touch the box.
+Scene make_contact_scene(int refine_factor, float budget) {
+    Scene scene;
+    const auto add = [&](const char* name, Mesh mesh, glm::vec3 at, bool dynamic) {
+        Object object;
+        object.name = name;
+        object.mesh = std::move(mesh);
+        object.transform.translation = at;
+        object.dynamic = dynamic;
+        scene.objects.push_back(std::move(object));
+    };
+    add("floor", make_quad(8.0f, 8.0f), {0, 0, 0}, false);
+    add("box", make_box({2.0f, 2.0f, 2.0f}), {0, 1, 0}, true);
+    add("wall", make_quad(4.0f, 4.0f), {20, 0, 0}, false);
+    scene.settings.lightmap.texel_size = 0.5f;
+    scene.settings.lightmap.refine_factor = refine_factor;
+    scene.settings.lightmap.refine_budget = budget;
+    make_surfaces_and_atlas(scene);
+    return scene;
+}
+
 Scene make_scene(std::vector<Mesh> meshes, float texel_size) {
     Scene scene;
     for (size_t i = 0; i < meshes.size(); ++i) {
@@ -95,6 +117,7 @@ std::vector<std::pair<std::string, Scene>> invariant_scenes() {
         "mixed", make_scene({make_face_split_box({2.0f, 1.0f, 1.0f}), make_sphere(0.7f, 2),
                              make_folded_quads(90.0f), make_bumpy_plane(3.0f, 2.0f, 20, 0.2f, 3)},
                             0.0f));
+    scenes.emplace_back("adaptive", make_contact_scene(2, 4.0f));
     return scenes;
 }
 
@@ -264,8 +287,7 @@ TEST(Charts, NormalsStayWithinTheCone) {
 TEST(Charts, TexelWorldSizeWithin25Percent) {
     for (const auto& [name, scene] : invariant_scenes()) {
         SCOPED_TRACE(name);
-        const double ts = scene.atlas.texel_size;
-        ASSERT_GT(ts, 0.0);
+        ASSERT_GT(scene.atlas.texel_size, 0.0f);
         double worst = 0.0;
         for (const Chart& chart : scene.atlas.charts)
             for (int t : chart.triangles) {
@@ -273,7 +295,7 @@ TEST(Charts, TexelWorldSizeWithin25Percent) {
                 const double texel_area = 0.5 * cross2(q[1] - q[0], q[2] - q[0]);
                 ASSERT_GT(texel_area, 0.0) << "chart triangles keep their winding";
                 const double world = triangle_area(scene.objects[size_t(chart.object)].mesh, t);
-                const double size = std::sqrt(world / texel_area) / ts;
+                const double size = std::sqrt(world / texel_area) / chart.texel_size;
                 worst = std::max(worst, std::abs(size - 1.0));
             }
         EXPECT_LE(worst, 0.25);
@@ -359,9 +381,9 @@ TEST(Atlas, TexelPositionsLieOnTheirChartTriangle) {
     int snapped = 0;
     for (const auto& [name, scene] : invariant_scenes()) {
         SCOPED_TRACE(name);
-        const double ts = scene.atlas.texel_size;
         for (const TexelRecord& r : scene.atlas.texels) {
             const Chart& chart = scene.atlas.charts[size_t(r.chart)];
+            const double ts = chart.texel_size;
             const Mesh& mesh = scene.objects[size_t(r.object)].mesh;
             EXPECT_EQ(r.object, chart.object);
             EXPECT_EQ(r.surface, chart.surface);
@@ -427,7 +449,8 @@ bool same_atlas(const LightmapAtlas& a, const LightmapAtlas& b) {
     for (size_t i = 0; i < a.charts.size(); ++i) {
         const Chart &x = a.charts[i], &y = b.charts[i];
         if (x.triangles != y.triangles || x.axis != y.axis || x.origin != y.origin || x.x != y.x ||
-            x.y != y.y || x.width != y.width || x.height != y.height)
+            x.y != y.y || x.width != y.width || x.height != y.height ||
+            x.texel_size != y.texel_size)
             return false;
     }
     for (size_t i = 0; i < a.texels.size(); ++i) {
@@ -437,6 +460,51 @@ bool same_atlas(const LightmapAtlas& a, const LightmapAtlas& b) {
             return false;
     }
     return true;
+}
+
+// Adaptive density (issue #12 item 4): the floor under the dynamic box and the box's faces that
+// reach the floor get half-size texels; the box's top (2 above the floor, beyond the one-texel
+// contact distance) and the wall standing apart keep the base size; a budget that cannot afford
+// the floor leaves it coarse; refine_factor 1 is the uniform layout. Fails if density is uniform.
+TEST(Atlas, ChartsTouchingADynamicObjectGetFinerTexels) {
+    const Scene uniform = make_contact_scene(1, 4.0f);
+    for (const Chart& c : uniform.atlas.charts) EXPECT_EQ(c.texel_size, 0.5f);
+    const Scene scene = make_contact_scene(2, 4.0f);
+    int finer_box_faces = 0;
+    for (const Chart& c : scene.atlas.charts) {
+        const std::string& name = scene.objects[size_t(c.object)].name;
+        SCOPED_TRACE(name);
+        if (name == "floor") {
+            EXPECT_EQ(c.texel_size, 0.25f);
+        } else if (name == "wall") {
+            EXPECT_EQ(c.texel_size, 0.5f);
+        } else if (c.axis.y > 0.9f) {
+            EXPECT_EQ(c.texel_size, 0.5f) << "the box's top touches nothing";
+        } else {
+            finer_box_faces += c.texel_size == 0.25f;
+        }
+    }
+    EXPECT_GE(finer_box_faces, 4) << "the four sides reach the floor";
+    // Texel records follow: about four times as many on the floor (17² → 33² with the margins).
+    const auto floor_texels = [](const Scene& s) {
+        int n = 0;
+        for (const TexelRecord& r : s.atlas.texels) n += r.object == 0;
+        return n;
+    };
+    EXPECT_GT(floor_texels(scene), 3.5 * floor_texels(uniform));
+    // The budget holds: the floor alone (16² → 32² texels) is over 1.5× the uniform atlas.
+    const Scene tight = make_contact_scene(2, 1.5f);
+    double uniform_total = 0.0, tight_total = 0.0;
+    for (const Chart& c : uniform.atlas.charts)
+        uniform_total += double(c.width + 2) * double(c.height + 2);
+    for (const Chart& c : tight.atlas.charts) {
+        tight_total += double(c.width + 2) * double(c.height + 2);
+        if (tight.objects[size_t(c.object)].name == "floor") {
+            EXPECT_EQ(c.texel_size, 0.5f);
+        }
+    }
+    EXPECT_LE(tight_total, 1.5 * uniform_total);
+    EXPECT_GT(tight_total, uniform_total) << "the box's faces still fit";
 }
 
 TEST(Atlas, Deterministic) {

@@ -31,6 +31,23 @@ std::string fmt_vec(const glm::vec3& v) {
     std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v.x), double(v.y), double(v.z));
     return buf;
 }
+// ", N finer (object: texel size, ...)" for the charts adaptive density subdivided.
+std::string refined_charts(const Scene& scene) {
+    std::ostringstream out;
+    int finer = 0;
+    for (const Chart& c : scene.atlas.charts) finer += c.texel_size < scene.atlas.texel_size;
+    if (finer == 0) return "";
+    out << ", " << finer << " finer (";
+    bool first = true;
+    for (const Chart& c : scene.atlas.charts)
+        if (c.texel_size < scene.atlas.texel_size) {
+            out << (first ? "" : ", ") << scene.objects[size_t(c.object)].name << " "
+                << c.texel_size;
+            first = false;
+        }
+    out << ")";
+    return out.str();
+}
 
 }  // namespace
 
@@ -48,7 +65,7 @@ int run_info(const Args& args) {
         << "triangles  " << scene.triangle_count() << "\n"
         << "objects    " << scene.objects.size() << " (" << dynamic << " dynamic)\n"
         << "surfaces   " << scene.surfaces.size() << "\n"
-        << "charts     " << scene.atlas.charts.size() << "\n"
+        << "charts     " << scene.atlas.charts.size() << refined_charts(scene) << "\n"
         << "atlas      " << scene.atlas.width << " x " << scene.atlas.height
         << " texels, texel size " << scene.atlas.texel_size << " " << scene.length_unit
         << ", gutter " << scene.atlas.gutter << "\n"

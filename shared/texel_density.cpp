@@ -1,0 +1,137 @@
+#include "shared/texel_density.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace ag {
+namespace {
+
+// Closest point of triangle (a, b, c) to p (Ericson, Real-Time Collision Detection §5.1.5).
+glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
+                               const glm::dvec3& c) {
+    const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+    const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+    if (d1 <= 0.0 && d2 <= 0.0) return a;
+    const glm::dvec3 bp = p - b;
+    const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+    if (d3 >= 0.0 && d4 <= d3) return b;
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return a + ab * (d1 / (d1 - d3));
+    const glm::dvec3 cp = p - c;
+    const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+    if (d6 >= 0.0 && d5 <= d6) return c;
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return a + ac * (d2 / (d2 - d6));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+        return b + (c - b) * ((d4 - d3) / ((d4 - d3) + (d5 - d6)));
+    const double denom = 1.0 / (va + vb + vc);
+    return a + ab * (vb * denom) + ac * (vc * denom);
+}
+
+struct WorldTriangle {
+    glm::dvec3 a, b, c, lo, hi;
+};
+
+}  // namespace
+
+glm::ivec2 chart_texel_extent(glm::dvec2 extent, double texel_size) {
+    const glm::dvec2 texels = extent / texel_size + 2.0 * kChartMargin;
+    return {std::max(1, int(std::ceil(texels.x))), std::max(1, int(std::ceil(texels.y)))};
+}
+
+double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
+                              double spacing) {
+    const Object& own = scene.objects[size_t(chart.object)];
+    // The partners' triangles in world space, with bounds grown by `distance` for a quick reject.
+    std::vector<WorldTriangle> partners;
+    for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
+        const Object& o = scene.objects[size_t(oi)];
+        if (oi == chart.object || !(own.dynamic || o.dynamic)) continue;
+        for (const glm::uvec3& f : o.mesh.triangles) {
+            WorldTriangle t;
+            t.a = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.x]));
+            t.b = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.y]));
+            t.c = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.z]));
+            t.lo = glm::min(glm::min(t.a, t.b), t.c) - distance;
+            t.hi = glm::max(glm::max(t.a, t.b), t.c) + distance;
+            partners.push_back(t);
+        }
+    }
+    if (partners.empty()) return 0.0;
+
+    // Sample each chart triangle at the centroids of an n×n split into equal sub-triangles.
+    double near_area = 0.0, total_area = 0.0;
+    const double d2 = distance * distance;
+    for (int tri : chart.triangles) {
+        const glm::uvec3 f = own.mesh.triangles[size_t(tri)];
+        const glm::dvec3 a(own.transform.apply_point(own.mesh.positions[f.x]));
+        const glm::dvec3 b(own.transform.apply_point(own.mesh.positions[f.y]));
+        const glm::dvec3 c(own.transform.apply_point(own.mesh.positions[f.z]));
+        const double area = 0.5 * glm::length(glm::cross(b - a, c - a));
+        if (!(area > 0.0)) continue;
+        const double longest =
+            std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+        const int n = std::clamp(int(std::ceil(longest / spacing)), 1, 64);
+        const double piece = area / double(n * n);
+        const auto sample = [&](double u, double v) {
+            const glm::dvec3 p = a + (b - a) * (u / n) + (c - a) * (v / n);
+            total_area += piece;
+            for (const WorldTriangle& t : partners) {
+                if (glm::any(glm::lessThan(p, t.lo)) || glm::any(glm::greaterThan(p, t.hi)))
+                    continue;
+                const glm::dvec3 q = closest_on_triangle(p, t.a, t.b, t.c);
+                if (glm::dot(q - p, q - p) <= d2) {
+                    near_area += piece;
+                    return;
+                }
+            }
+        };
+        for (int i = 0; i < n; ++i)
+            for (int j = 0; i + j < n; ++j) {
+                sample(i + 1.0 / 3.0, j + 1.0 / 3.0);
+                if (i + j < n - 1) sample(i + 2.0 / 3.0, j + 2.0 / 3.0);
+            }
+    }
+    return total_area > 0.0 ? near_area / total_area : 0.0;
+}
+
+std::vector<int> choose_chart_subdivision(const Scene& scene, const std::vector<Chart>& charts,
+                                          const std::vector<glm::dvec2>& extents,
+                                          double base_texel_size, int gutter) {
+    const LightmapSettings& ls = scene.settings.lightmap;
+    const int count = int(charts.size());
+    std::vector<int> subdivision(static_cast<size_t>(count), 1);
+    if (ls.refine_factor <= 1 || count == 0) return subdivision;
+    // In doubles: an atlas too large for ints is refused after this, naming the texel size.
+    const auto texels = [&](int c, int factor) {
+        const glm::dvec2 e = glm::max(
+            glm::ceil(extents[size_t(c)] * double(factor) / base_texel_size + 2.0 * kChartMargin),
+            glm::dvec2(1.0));
+        return (e.x + 2.0 * gutter) * (e.y + 2.0 * gutter);
+    };
+    std::vector<double> fraction(static_cast<size_t>(count));
+    double total = 0.0;
+    for (int c = 0; c < count; ++c) {
+        fraction[size_t(c)] = chart_contact_fraction(scene, charts[size_t(c)],
+                                                     double(ls.refine_distance) * base_texel_size,
+                                                     0.25 * base_texel_size);
+        total += texels(c, 1);
+    }
+    const double budget = double(ls.refine_budget) * total;
+    std::vector<int> order(static_cast<size_t>(count));
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](int a, int b) { return fraction[size_t(a)] > fraction[size_t(b)]; });
+    for (int c : order) {
+        if (!(fraction[size_t(c)] > 0.0)) break;
+        const double finer = total - texels(c, 1) + texels(c, ls.refine_factor);
+        if (finer > budget) continue;
+        total = finer;
+        subdivision[size_t(c)] = ls.refine_factor;
+    }
+    return subdivision;
+}
+
+}  // namespace ag
