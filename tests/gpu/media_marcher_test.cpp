@@ -59,6 +59,8 @@ TEST_F(MediaMarcherTest, BendsBySnellsLawWithinHalfADegree) {
         const float refracted = glm::degrees(std::atan2(d.y, d.x));
         const float expected = glm::degrees(std::asin(std::sin(glm::radians(incidence)) / 1.5f));
         EXPECT_NEAR(refracted, expected, 0.5f) << "incidence " << incidence;
+        std::printf("incidence %.0f°: refracted %.4f°, Snell %.4f°\n", incidence, refracted,
+                    expected);
     }
 }
 
