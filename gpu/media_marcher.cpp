@@ -200,6 +200,21 @@ void main() {
         vec3 x1 = x;
         ray_step(x1, v, n, step);  // eqs. 2.10/2.11
         vec3 g1 = (x1 - grid_min) / voxel;
+        bool leaving = any(lessThan(g1, vec3(0.0))) || any(greaterThanEqual(g1, vec3(size)));
+        if (leaving) {
+            // The last step ends on the box: the medium (and the grid) ends there, and the part
+            // outside would take ½ a step's attenuation too many on average (1% of the power
+            // a mirror under 1/16-voxel fog sends back).
+            vec3 dg = g1 - g;
+            float t = 1.0;
+            for (int k = 0; k < 3; ++k) {
+                if (dg[k] < 0.0) t = min(t, -g[k] / dg[k]);
+                else if (dg[k] > 0.0) t = min(t, (float(size[k]) - g[k]) / dg[k]);
+            }
+            t = clamp(t, 0.0, 1.0);
+            x1 = x + t * (x1 - x);
+            g1 = g + t * dg;
+        }
         // The segment's mean power under Beer–Lambert, σ_t taken constant over it.
         float optical = nearest_sigma_t(0.5 * (g + g1)) * length(x1 - x);
         float mean_power = optical > 1e-6 ? power * (1.0 - exp(-optical)) / optical : power;
@@ -207,7 +222,8 @@ void main() {
         power *= exp(-optical);
         x = x1;
         g = g1;
-        if (any(lessThan(g, vec3(0.0))) || any(greaterThanEqual(g, vec3(size)))) {
+        if (leaving) {
+            x += 1e-3 * min(voxel.x, min(voxel.y, voxel.z)) * normalize(v);  // just outside
             inside = 0.0;
             break;
         }
