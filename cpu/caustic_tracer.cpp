@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "cpu/media_tracking.h"
 #include "cpu/sampling.h"
 #include "shared/qmc.h"
 
@@ -68,7 +69,7 @@ std::vector<CausticTracer::Cone> CausticTracer::discs() const {
 }
 
 CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vector<Cone>& cone_cache,
-                                          bool& hit_specular) const {
+                                          const MediaTracker& media, bool& hit_specular) const {
     hit_specular = false;
     const Light& l = scene_.lights[size_t(light)];
     if (!l.enabled) return {};
@@ -142,11 +143,20 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
 
     const float eps = rays_->epsilon();
     bool specular_seen = false;
+    int inside = -1;  // the glass object the photon is in (its interior medium), or none
+    // Ratio tracking's numbers in perturbed media (closed form in homogeneous ones).
+    HashedStream more(mix64((uint64_t(light) << 32) ^ k ^ (uint64_t(scene_.settings.seed) << 48)));
     for (int bounce = 0; bounce <= kMaxSpecularBounces; ++bounce) {
         ray.tmin = 0.0f;
         ray.tmax = 1e30f;
         const RayHit hit = rays_->intersect(ray);
         if (!hit.hit) return {};
+        // Beer–Lambert along the segment through the media it crosses (Pfeuti's surface caustic
+        // seen through fog; the glass's interior medium inside it).
+        if (!media.empty()) {
+            power *= media.transmittance(ray, hit.t, inside, more);
+            if (power == glm::vec3(0.0f)) return {};
+        }
         const Material& m = scene_.objects[size_t(hit.object)].material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
         const glm::vec3 facing = front ? hit.normal : -hit.normal;
@@ -160,7 +170,12 @@ CausticPhoton CausticTracer::trace_photon(int light, int index, const std::vecto
             m.type == MaterialType::glass
                 ? float(halton.sample(k, 5 + std::min(bounce, kMaxSpecularBounces - 1)))
                 : 0.0f;
+        const glm::vec3 before = ray.direction;
         ray = specular_bounce(m, hit, ray.direction, fresnel_u, eps);
+        // Through the surface (the same side of it as before): into or out of the glass.
+        if (m.type == MaterialType::glass &&
+            (glm::dot(ray.direction, hit.normal) < 0.0f) == (glm::dot(before, hit.normal) < 0.0f))
+            inside = front ? hit.object : -1;
     }
     return {};
 }
@@ -175,13 +190,14 @@ CausticStats CausticTracer::trace_slice(int slice, int slices) {
     for (const Light& l : scene_.lights)
         light_cones.push_back(l.type == LightType::sun ? discs() : cones(l.center()));
     std::vector<char> specular(jobs.size(), 0);
+    const MediaTracker media(scene_);
     pool_.parallel_for(
         jobs.size(),
         [&](size_t j) {
             bool hit = false;
             const int light = jobs[j] / n;
             photons_[size_t(jobs[j])] =
-                trace_photon(light, jobs[j] % n, light_cones[size_t(light)], hit);
+                trace_photon(light, jobs[j] % n, light_cones[size_t(light)], media, hit);
             specular[j] = hit;
         },
         64);

@@ -1,14 +1,15 @@
 // Caustic photons (Larsen ch. 12): per light, QMC photons aimed only at the specular objects (the
 // cones their bounding spheres subtend, each carrying its share of the light's flux), followed
 // through mirrors and glass and stored at the first diffuse hit after at least one specular
-// bounce (paths L S+ D). Progressive: each frame re-traces 1/N of the photons, so a moving glass
-// object leaves at most an N-frame trail.
+// bounce (paths L S+ D), attenuated by Beer–Lambert through the scene's media. Progressive: each
+// frame re-traces 1/N of the photons, so a moving glass object leaves at most an N-frame trail.
 #pragma once
 
 #include <cstdint>
 #include <glm/glm.hpp>
 #include <vector>
 
+#include "cpu/media_tracking.h"
 #include "cpu/ray_tracer.h"
 #include "shared/parallel.h"
 #include "shared/qmc.h"
@@ -56,7 +57,7 @@ private:
     std::vector<Cone> discs() const;
     CausticStats trace_slice(int slice, int slices);
     CausticPhoton trace_photon(int light, int index, const std::vector<Cone>& cones,
-                               bool& hit_specular) const;
+                               const MediaTracker& media, bool& hit_specular) const;
 
     const Scene& scene_;
     ThreadPool& pool_;

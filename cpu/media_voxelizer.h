@@ -9,10 +9,12 @@
 
 namespace ag::cpu {
 
-// The grid of `size` voxels over `bounds`: sub² rows of rays along +x per voxel row, each giving
-// the exact length inside each glass object (between odd and even crossings: ray parity); a voxel
-// mixes by that coverage the object (index ior + ior_noise, interior medium) and the outside (n =
-// 1, the world medium whose box holds the centre). Glass meshes must be closed.
+// The grid of `size` voxels over `bounds`: sub² rows of rays per voxel row along each of x, y
+// and z, each giving the exact length inside each glass object (between odd and even crossings:
+// ray parity); each voxel's coverage weighs the three axes' estimates by the squared normal
+// components (the axis along the normal is exact, the others come in steps of 1/sub). A voxel
+// mixes by that coverage the object (index ior + ior_noise, interior medium) and the outside
+// (n = 1, the world medium whose box holds the centre). Glass meshes must be closed.
 MediaGrid voxelize_media(const Scene& scene, const RayTracer& rays, const Bounds& bounds,
                          const glm::ivec3& size, int sub = 8);
 

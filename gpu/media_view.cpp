@@ -1,6 +1,9 @@
 #include "gpu/media_view.h"
 
 #include <algorithm>
+#include <string>
+
+#include "gpu/media_ray_step.h"
 
 namespace ag::gpu {
 
@@ -49,13 +52,18 @@ vec4 tri_light(vec3 g) {
     }
     return r;
 }
-vec3 gradient_n(vec3 g) {
+float index_at(vec3 g) { return tri_optics(g).x; }
+vec3 index_gradient(vec3 g) {
     vec3 d;
-    d.x = tri_optics(g + vec3(0.5, 0, 0)).x - tri_optics(g - vec3(0.5, 0, 0)).x;
-    d.y = tri_optics(g + vec3(0, 0.5, 0)).x - tri_optics(g - vec3(0, 0.5, 0)).x;
-    d.z = tri_optics(g + vec3(0, 0, 0.5)).x - tri_optics(g - vec3(0, 0, 0.5)).x;
+    d.x = index_at(g + vec3(0.5, 0, 0)) - index_at(g - vec3(0.5, 0, 0));
+    d.y = index_at(g + vec3(0, 0.5, 0)) - index_at(g - vec3(0, 0.5, 0));
+    d.z = index_at(g + vec3(0, 0, 0.5)) - index_at(g - vec3(0, 0, 0.5));
     return d / voxel;
 }
+)";
+
+// The ray step (gpu/media_ray_step.h) comes between the two halves.
+const char* kViewMarch = R"(
 
 void main() {
     int id = int(gl_GlobalInvocationID.x);
@@ -73,22 +81,24 @@ void main() {
         vec3 x = eye + t0 * d;
         vec3 g = clamp((x - grid_min) / voxel, vec3(1e-4), vec3(size) - 1e-4);
         float travelled = t0;
-        float n = tri_optics(g).x;
-        vec3 grad = gradient_n(g);
+        float n = index_at(g);
         vec3 v = n * d;
         float transmittance = 1.0;
         for (int i = 0; i < max_steps; ++i) {
-            vec3 x1 = x + (step / n) * v;  // eq. 2.10
+            vec3 x1 = x, v1 = v;
+            float n1 = n;
+            ray_step(x1, v1, n1, step);  // eqs. 2.10/2.11
             float seg = length(x1 - x);
+            vec3 along = (x1 - x) / seg;
             if (travelled + seg > max_distance) {
                 seg = max_distance - travelled;
-                x1 = x + seg * normalize(v);
+                x1 = x + seg * along;
             }
             vec3 gm = 0.5 * (g + (x1 - grid_min) / voxel);
             vec4 o = tri_optics(gm);
             vec4 l = tri_light(gm);
             float flow_length = length(l.yzw);
-            float c = flow_length > 0.0 ? dot(l.yzw / flow_length, -normalize(v)) : 0.0;
+            float c = flow_length > 0.0 ? dot(l.yzw / flow_length, -along) : 0.0;
             float denom = 1.0 - phase_k * c;
             float phase = (1.0 - phase_k * phase_k) / (4.0 * kPi * denom * denom);
             // ∫ T σ_s p φ over the segment with σ constant: T (1 − e^{−σ_t ℓ}) / σ_t.
@@ -98,21 +108,11 @@ void main() {
             transmittance *= exp(-sigma_t * seg);
             travelled += seg;
             if (travelled >= max_distance) break;
-            v += step * grad;  // eq. 2.11
             x = x1;
+            v = v1;
+            n = n1;
             g = (x - grid_min) / voxel;
             if (any(lessThan(g, vec3(0.0))) || any(greaterThanEqual(g, vec3(size)))) break;
-            n = tri_optics(g).x;
-            grad = gradient_n(g);
-            // |v| = n restored along ∇n, as in the photon march.
-            float grad_length = length(grad);
-            if (grad_length > 1e-6) {
-                vec3 normal = grad / grad_length;
-                float along = dot(v, normal);
-                vec3 across = v - along * normal;
-                float rest = n * n - dot(across, across);
-                if (rest > 0.0) v = across + (along >= 0.0 ? 1.0 : -1.0) * sqrt(rest) * normal;
-            }
         }
     }
     rays[id] = vec4(radiance, 0.0);
@@ -121,7 +121,8 @@ void main() {
 
 }  // namespace
 
-MediaView::MediaView() : program_("media view march", kViewCompute) {}
+MediaView::MediaView()
+    : program_("media view march", std::string(kViewCompute) + kMediaRayStep + kViewMarch) {}
 
 Image MediaView::render(const MediaGrid& grid, const std::vector<float>& fluence,
                         const std::vector<glm::vec3>& flow, const Camera& camera,

@@ -4,6 +4,7 @@
 #include <array>
 #include <chrono>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 
 #include "cpu/media_voxelizer.h"
@@ -25,6 +26,54 @@ double since(Clock::time_point start) {
 float hash_unit(uint32_t seed, uint32_t a, uint32_t b) {
     return float(hash_u32(hash_u32(seed * 0x9E3779B9u + a) ^ (b * 0x85EBCA6Bu))) *
            (1.0f / 4294967296.0f);
+}
+
+// The photons that left the grid and met an opaque surface, going on from it (the light surfaces
+// send into the media, MediaMethodSettings::surface_bounces): a mirror reflects, anything else
+// scatters by the cosine about the normal on the photon's side; each carries its power × the
+// surface's grey albedo and starts where its new path enters the grid's box. Outside the box
+// there is no medium, so nothing attenuates it on the way. A photon whose surface is glass (the
+// grid covers glass, so only at its border) or that meets nothing is gone.
+std::vector<MediaPhoton> surface_photons(const Scene& scene, const cpu::RayTracer& rays,
+                                         const Bounds& bounds, float voxel,
+                                         const std::vector<MediaPhoton>& left, uint32_t seed,
+                                         int bounce) {
+    std::vector<MediaPhoton> out;
+    for (size_t i = 0; i < left.size(); ++i) {
+        const MediaPhoton& p = left[i];
+        const bool inside = glm::all(glm::greaterThanEqual(p.position, bounds.min)) &&
+                            glm::all(glm::lessThan(p.position, bounds.max));
+        if (!(p.power > 0.0f) || inside) continue;  // absorbed, or out of steps
+        const glm::vec3 d = glm::normalize(p.direction);
+        // From a voxel back, where the path was still in the grid and straight (n = 1 there).
+        const cpu::RayHit hit = rays.intersect({p.position - voxel * d, d});
+        if (!hit.hit) continue;
+        const Material& m = scene.objects[size_t(hit.object)].material;
+        if (m.type == MaterialType::glass) continue;
+        const float albedo = glm::dot(m.albedo, glm::vec3(1.0f / 3.0f));
+        if (!(albedo > 0.0f)) continue;
+        const glm::vec3 normal = glm::dot(hit.normal, d) < 0.0f ? hit.normal : -hit.normal;
+        glm::vec3 direction;
+        if (m.type == MaterialType::mirror) {
+            direction = glm::reflect(d, normal);
+        } else {
+            const uint32_t index = uint32_t(i), stream = uint32_t(2 * bounce);
+            const float u1 = hash_unit(seed, index, stream),
+                        u2 = hash_unit(seed, index, stream + 1);
+            const float r = std::sqrt(u1), phi = 2.0f * std::numbers::pi_v<float> * u2;
+            const glm::vec3 t = std::abs(normal.x) > 0.5f
+                                    ? glm::normalize(glm::cross(normal, glm::vec3(0, 1, 0)))
+                                    : glm::normalize(glm::cross(normal, glm::vec3(1, 0, 0)));
+            const glm::vec3 b = glm::cross(normal, t);
+            direction = r * std::cos(phi) * t + r * std::sin(phi) * b +
+                        std::sqrt(std::max(0.0f, 1.0f - u1)) * normal;
+        }
+        float enter = 0.0f, exit = 0.0f;
+        if (!ray_box(bounds, hit.position, direction, 0.0f, 1e30f, enter, exit) || !(exit > enter))
+            continue;
+        out.push_back({hit.position + enter * direction, direction, p.power * albedo});
+    }
+    return out;
 }
 
 // Phase 1 (ch. 3.2.2): the density over the photon plane from the pilots' statistics, summed
@@ -276,6 +325,25 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         result.timing.photon_generation = since(start);
         marched = marcher.march(grid, photons, march);
         result.timing.photon_marching = marched.seconds;
+        for (float f : marched.fluence)
+            result.power_deposited += double(f) * double(voxel) * voxel * voxel;
+        std::vector<MediaPhoton> left = std::move(marched.photons);
+        for (int bounce = 0; bounce < settings.surface_bounces; ++bounce) {
+            start = Clock::now();
+            std::vector<MediaPhoton> from_surfaces =
+                surface_photons(scene, rays, bounds, voxel, left, settings.seed, bounce);
+            result.timing.photon_generation += since(start);
+            if (from_surfaces.empty()) break;
+            gpu::MediaMarchResult again = marcher.march(grid, from_surfaces, march);
+            result.timing.photon_marching += again.seconds;
+            result.photons_bounced += from_surfaces.size();
+            for (size_t i = 0; i < marched.fluence.size(); ++i) {
+                marched.fluence[i] += again.fluence[i];
+                marched.flow[i] += again.flow[i];
+                result.power_bounced += double(again.fluence[i]) * double(voxel) * voxel * voxel;
+            }
+            left = std::move(again.photons);
+        }
     } else {
         if (light->type == LightType::quad)
             throw std::invalid_argument(
@@ -284,9 +352,6 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         marched = march_adaptive(grid, photon_source(light->position, intensity, bounds), settings,
                                  march, marcher, result);
     }
-    if (!settings.adaptive.enabled)
-        for (float f : marched.fluence)
-            result.power_deposited += double(f) * double(voxel) * voxel * voxel;
     if (!with_view) {
         result.grids = std::move(grid);
         result.fluence = std::move(marched.fluence);

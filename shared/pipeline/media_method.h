@@ -47,6 +47,12 @@ struct MediaMethodSettings {
     MediaAdaptiveSettings adaptive;  // `photons` then counts the importance-sampled photons
     // The order of the uniform photons of a point light (his Table 4.1); Hammersley by default.
     PlaneSampling sampling = PlaneSampling::hammersley;
+    // Light the scene's opaque surfaces send into the media (not his: his photons stop at the
+    // grid): photons leaving the grid go on from the surface they meet — mirrored by a mirror,
+    // cosine-distributed by a diffuse surface, carrying its grey albedo — and are marched again,
+    // up to this many times. The reference pipeline only (the adaptive one ignores it).
+    int surface_bounces = 2;
+    uint32_t seed = 0;  // the bounced photons' directions
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no octree, no copy: the grids are SSBOs).
@@ -67,7 +73,10 @@ struct MediaMethodResult {
     glm::ivec3 grid{0};
     size_t photons_marched = 0;    // photons of the plane that meet the grid
     size_t pilots_marched = 0;     // adaptive: pilot photons that meet the grid
-    double power_deposited = 0.0;  // Σ over voxels of fluence × voxel volume (before filtering)
+    size_t photons_bounced = 0;    // photons sent on from surfaces (all bounces)
+    double power_deposited = 0.0;  // Σ over voxels of fluence × voxel volume (before filtering),
+                                   // the light's photons only
+    double power_bounced = 0.0;    // the same for the photons from surfaces (surface_bounces)
     std::vector<double> density;   // adaptive: the photon density over the plane (side², mean 1)
     std::vector<uint8_t> levels;   // adaptive: the mipmap level each voxel read
     MediaGrid grids;               // n (smoothed), σ_s, σ_t, for slice views

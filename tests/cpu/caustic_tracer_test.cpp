@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "ball_lens.h"
@@ -196,6 +198,73 @@ TEST(CausticTracer, IndependentOfThreadCount) {
         EXPECT_EQ(a.photons()[i].position, b.photons()[i].position);
         EXPECT_EQ(a.photons()[i].power, b.photons()[i].power);
     }
+}
+
+}  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// Caustic photons through fog (Pfeuti's surface caustic seen through the medium): a light beside
+// a vertical mirror, the caustic on the floor, all in a fog box. Each photon's path light →
+// mirror → floor is as long as the straight line from the light's mirror image to where it lands,
+// so the photon arrives with exp(−σ_t |p − L'|) of its power without fog, photon by photon (same
+// QMC index, same path). Fails if the photons ignore the fog, attenuate only one segment or use σ_s
+// for σ_t.
+TEST(CausticTracer, PhotonsThroughFogLoseBeerLambert) {
+    const glm::vec3 lamp(3.0f, 2.5f, 0.0f), image(-3.0f, 2.5f, 0.0f);
+    const auto scene = [&](bool fog) {
+        Scene s;
+        s.path = "mirror_in_fog";
+        Object mirror;
+        mirror.name = "mirror";
+        mirror.mesh = make_quad(4.0f, 4.0f);  // normal +y, turned to +x
+        mirror.material.type = MaterialType::mirror;
+        mirror.material.albedo = glm::vec3(1.0f);
+        mirror.transform.rotation = glm::angleAxis(glm::radians(-90.0f), glm::vec3(0, 0, 1));
+        mirror.transform.translation = {0.0f, 2.0f, 0.0f};
+        s.objects.push_back(mirror);
+        Object floor;
+        floor.name = "floor";
+        floor.mesh = make_quad(20.0f, 20.0f);
+        s.objects.push_back(floor);
+        Light l;
+        l.name = "lamp";
+        l.position = lamp;
+        l.intensity = glm::vec3(100.0f);
+        s.lights.push_back(l);
+        if (fog) {
+            Medium m;
+            m.bounds.min = glm::vec3(-10.0f);
+            m.bounds.max = glm::vec3(10.0f);
+            m.sigma_s = 0.1f;
+            m.sigma_a = 0.05f;
+            s.media.push_back(m);
+        }
+        s.settings.caustics.photons = 8000;
+        s.settings.lightmap.texel_size = 2.0f;
+        init_versions(s);
+        make_surfaces_and_atlas(s);
+        return s;
+    };
+    ThreadPool pool(2);
+    const Scene clear = scene(false), foggy = scene(true);
+    CausticTracer clear_tracer(clear, pool), fog_tracer(foggy, pool);
+    clear_tracer.trace_all();
+    fog_tracer.trace_all();
+    int compared = 0;
+    double worst = 0.0;
+    for (size_t i = 0; i < clear_tracer.photons().size(); ++i) {
+        const CausticPhoton &a = clear_tracer.photons()[i], &b = fog_tracer.photons()[i];
+        ASSERT_EQ(a.power == glm::vec3(0.0f), b.power == glm::vec3(0.0f)) << "photon " << i;
+        if (a.power == glm::vec3(0.0f)) continue;
+        ASSERT_EQ(a.position, b.position);
+        const double expected = std::exp(-0.15 * double(glm::length(b.position - image)));
+        worst = std::max(worst, std::abs(double(b.power.x) / double(a.power.x) / expected - 1.0));
+        ++compared;
+    }
+    std::printf("%d caustic photons through fog: worst relative error %.2g\n", compared, worst);
+    EXPECT_GT(compared, 500);
+    EXPECT_LT(worst, 1e-4);
 }
 
 }  // namespace ag::cpu

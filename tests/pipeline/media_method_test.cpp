@@ -248,6 +248,79 @@ TEST_F(MediaViewTest, SliceViewShowsTheGrids) {
     for (float v : level.pixels) ASSERT_EQ(v, 0.0f);
 }
 
+// Light a mirror sends into the fog (MediaMethodSettings::surface_bounces): a fog slab
+// [-1, 1] × [0, 1] × [-1, 1] on a mirror of albedo 0.8, a point light in it. Unfolded by the
+// mirror, the reflected photons are those of an image light 0.8 times as bright below the floor in
+// a fog box twice as tall, with no mirror: the bounced photons' fluence (with bounces minus
+// without) must be that scene's upper half — in total and in each 8 × 4 × 8-voxel block (Monte
+// Carlo: the two photon sets are different Hammersley points). Fails if the photons do not go on
+// from the mirror, lose or double the albedo, leave in another direction or start elsewhere.
+Scene fog_over(bool mirror, glm::vec3 light_position, float intensity, float bottom) {
+    Scene s;
+    s.path = mirror ? "fog_over_mirror" : "fog_unfolded";
+    Object floor;
+    floor.name = "floor";
+    floor.mesh = make_quad(2.0f, 2.0f);
+    floor.material.type = MaterialType::mirror;
+    floor.material.albedo = glm::vec3(0.7f, 0.8f, 0.9f);  // grey 0.8
+    if (!mirror) {  // the scene needs an object: a black quad far away
+        floor.material.type = MaterialType::diffuse;
+        floor.material.albedo = glm::vec3(0.0f);
+        floor.transform.translation = {0.0f, -100.0f, 0.0f};
+    }
+    s.objects.push_back(floor);
+    Light light;
+    light.name = "lamp";
+    light.position = light_position;
+    light.intensity = glm::vec3(intensity);
+    s.lights.push_back(light);
+    Medium fog;
+    fog.bounds.min = glm::vec3(-1.0f, bottom, -1.0f);
+    fog.bounds.max = glm::vec3(1.0f, 1.0f, 1.0f);
+    fog.sigma_s = 0.5f;
+    fog.sigma_a = 0.2f;
+    s.media.push_back(fog);
+    return s;
+}
+
+TEST_F(MediaViewTest, MirrorSendsLightIntoTheFogAsAnImageLight) {
+    const glm::vec3 lamp(0.2f, 0.6f, -0.1f);
+    MediaMethodSettings settings;
+    settings.grid = 32;  // voxels of 1/16 in both scenes, the upper half aligned
+    settings.photons = 100000;
+    settings.march_step = 0.5f;  // n = 1: straight photons
+    const Scene mirror = fog_over(true, lamp, 20.0f, 0.0f);
+    const MediaMethodResult bounced = render_media(mirror, settings, false);
+    settings.surface_bounces = 0;
+    const MediaMethodResult direct = render_media(mirror, settings, false);
+    const Scene unfolded = fog_over(false, {lamp.x, -lamp.y, lamp.z}, 0.8f * 20.0f, -1.0f);
+    const MediaMethodResult image = render_media(unfolded, settings, false);
+    ASSERT_EQ(bounced.grid, glm::ivec3(32, 16, 32));
+    ASSERT_EQ(image.grid, glm::ivec3(32, 32, 32));
+    EXPECT_GT(bounced.photons_bounced, 0u);
+    std::vector<double> blocks_bounced(4 * 4 * 4, 0.0), blocks_image(4 * 4 * 4, 0.0);
+    double total_bounced = 0.0, total_image = 0.0;
+    for (int z = 0; z < 32; ++z)
+        for (int y = 0; y < 16; ++y)
+            for (int x = 0; x < 32; ++x) {
+                const size_t i = bounced.grids.index(x, y, z);
+                const double b = double(bounced.fluence[i]) - double(direct.fluence[i]);
+                const double m = image.fluence[image.grids.index(x, y + 16, z)];
+                const size_t block = size_t((z / 8) * 16 + (y / 4) * 4 + x / 8);
+                blocks_bounced[block] += b;
+                blocks_image[block] += m;
+                total_bounced += b;
+                total_image += m;
+            }
+    double worst = 0.0;
+    for (size_t k = 0; k < blocks_image.size(); ++k)
+        worst = std::max(worst, std::abs(blocks_bounced[k] / blocks_image[k] - 1.0));
+    std::printf("mirror: bounced fluence %.5f against the image light's %.5f, worst block %.4f\n",
+                total_bounced, total_image, worst);
+    EXPECT_NEAR(total_bounced, total_image, 0.01 * total_image);
+    EXPECT_LT(worst, 0.03);
+}
+
 }  // namespace
 
 }  // namespace ag::gpu

@@ -157,6 +157,9 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
     const bool full = args.has("full");
     MediaMethodSettings base;
     base.grid = args.get_int("grid", full ? 128 : 64);
+    // His pipelines as he measured them: photons from the light only (the adaptive pipeline
+    // does not bounce photons off surfaces, so the reference must not either).
+    base.surface_bounces = 0;
     std::printf(
         "bench media: %s at %dx%d, %d voxels along the longest side (llvmpipe timings: a "
         "software rasteriser on shared CPU cores, not a GPU)\n",

@@ -29,6 +29,11 @@ const Command kMediaCommand{
                 MediaMethodSettings{}.photons),
         choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
         number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
+        integer("surface-bounces", "N",
+                "photons leaving the grid go on from the opaque surface they meet (mirror: "
+                "reflected; else cosine, times the grey albedo) and are marched again, up to N "
+                "times (0: light from the light only, as his)",
+                0, 16, MediaMethodSettings{}.surface_bounces),
         flag("adaptive",
              "his adaptive pipeline (ch. 3.2): pilot photons, importance-sampled photons "
              "(--photons of them), per-voxel mipmap filtering"),
@@ -38,7 +43,9 @@ const Command kMediaCommand{
                1e-4, 1.0, MediaAdaptiveSettings{}.background),
         number("delta-weight", "W", "adaptive: photon weight per mipmap level", 1e-12, 1.0,
                MediaAdaptiveSettings{}.delta_weight),
-        integer("seed", "N", "adaptive: pilot jitter and Hammersley rotation", 0, 1 << 30, 0),
+        integer("seed", "N",
+                "adaptive: pilot jitter and Hammersley rotation; the bounced photons' directions",
+                0, 1 << 30, 0),
         size_option("image size (default: the scene camera's resolution)"),
         flag("slices",
              "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre"),
@@ -62,6 +69,7 @@ int run_media(const Args& args) {
     settings.grid = args.get_int("grid");
     settings.photons = args.get_int("photons");
     settings.march_step = float(args.get_double("step"));
+    settings.surface_bounces = args.get_int("surface-bounces");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
     settings.adaptive.enabled = args.has("adaptive");
@@ -69,6 +77,7 @@ int run_media(const Args& args) {
     settings.adaptive.background = float(args.get_double("background"));
     settings.adaptive.delta_weight = float(args.get_double("delta-weight"));
     settings.adaptive.seed = uint32_t(args.get_int("seed"));
+    settings.seed = settings.adaptive.seed;
     auto context = gpu::make_gl_context(args.gl_backend());
     // A scene without media or a point light is bad input: exit 1 with its message.
     const MediaMethodResult result = render_media(scene, settings);
@@ -92,12 +101,13 @@ int run_media(const Args& args) {
             result.pilots_marched, 1e3 * t.pilot_generation, 1e3 * t.pilot_marching,
             1e3 * t.distribution, 1e3 * t.reconstruction);
     std::printf(
-        "media: grid %dx%dx%d, %zu photons marched, %dx%d pixels on %s\n"
+        "media: grid %dx%dx%d, %zu photons marched (+%zu from surfaces), %dx%d pixels on %s\n"
         "  voxelisation %.1f ms, smoothing %.1f ms, photon generation %.1f ms, photon marching "
         "%.1f ms, viewing %.1f ms, total %.1f ms\n",
-        result.grid.x, result.grid.y, result.grid.z, result.photons_marched, scene.camera.width,
-        scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation, 1e3 * t.smoothing,
-        1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing, 1e3 * t.total());
+        result.grid.x, result.grid.y, result.grid.z, result.photons_marched, result.photons_bounced,
+        scene.camera.width, scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation,
+        1e3 * t.smoothing, 1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing,
+        1e3 * t.total());
     if (!result.levels.empty() && args.has("slices")) {
         std::vector<float> levels(result.levels.begin(), result.levels.end());
         write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),
