@@ -515,6 +515,8 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
                  {"type", "torus"}, {"radius", 1}, {"tube_radius", 0.3}, {"rings", 2}};
          },
          "/objects/1/shape/rings", "expected an integer in [3, 4096], got 2"},
+        {"decimate_shape", [](Json& j) { j["objects"][1]["decimate"] = 100; },
+         "/objects/1/decimate", "decimate applies to meshes only"},
         {"torus_missing_tube",
          [](Json& j) {
              j["objects"][1]["shape"] = {{"type", "torus"}, {"radius", 1}};
