@@ -129,8 +129,10 @@ void table_rooms(const Args& args, const std::string& scene_path, int width, int
                 const uint64_t before = t_maps.vertices_transformed();
                 const double ms = best_ms(repeat, [&] {
                     slide();
-                    t_maps.render(next, k);
-                    next = c > 0 ? (next + k) % c : 0;
+                    const int run = std::min(k, c - next);  // round robin, wrapping to 0
+                    t_maps.render(next, run);
+                    t_maps.render(0, k - run);
+                    next = (next + k) % c;
                     t_gather.shade(t_maps, vs.clamp, scale);
                 });
                 const double mverts =
