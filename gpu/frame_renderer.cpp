@@ -12,6 +12,8 @@ namespace ag::gpu {
 
 namespace {
 
+constexpr int kLightMapUnit = 6;  // direct.method vpl: the light samples' shadow maps
+
 const char* kLightsGlsl = R"(
 uniform int light_count;
 uniform vec3 light_position[kMaxLightSamples];
@@ -200,6 +202,36 @@ void main() {
 }
 )";
 
+// One light sample shadowed by its hemispherical shadow map (direct.method vpl, Barczak §4.2):
+// layer `map_layer` about the sample's normal, or for a two-sided sample `map_layer` + 1 on the
+// other side; −1: a sun, no map (drawn with the stencil of its shadow volumes).
+const std::string kLightingMappedFragment = std::string(kLightsGlsl) + kAlbedoGlsl + kVplMapGlsl +
+                                            R"(
+in vec3 v_world;
+in vec3 v_normal;
+in vec2 v_uv;
+uniform vec3 albedo;
+uniform int light_index;
+uniform sampler2DArray light_maps;
+uniform int map_layer, map_layers, map_kind;
+uniform float offset_scale, relative_bias;
+layout(location = 0) out vec4 out_direct;
+void main() {
+    vec3 n = normalize(v_normal);
+    if (map_layer >= 0) {
+        int layer = map_layer;
+        vec3 d = v_world - vpl_position(layer);
+        if (map_layers == 2 && dot(d, vpl_normal(layer)) < 0.0) layer += 1;
+        if (!vpl_map_visible(light_maps, layer, v_world, n, length(d), map_kind, offset_scale,
+                             relative_bias)) {
+            out_direct = vec4(0.0);
+            return;
+        }
+    }
+    out_direct = vec4(direct_from(light_index, v_world, n, surface_albedo(albedo)), 0.0);
+}
+)";
+
 const char* kVolumeVertex = R"(
 layout(location = 0) in vec4 position;
 uniform mat4 view_projection;
@@ -348,6 +380,8 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gbuffer_specular_ =
         Program("frame g-buffer, mirrors and glass", kSceneVertex, kGbufferSpecularFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
+    lighting_mapped_ =
+        Program("frame lighting, shadow maps", kSceneVertex, kLightingMappedFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
     environment_ = Program("cube-map environment", kSceneVertex, kEnvironmentFragment);
     inner_ = Program("glass inner map", kSceneVertex, kInnerFragment);
@@ -464,6 +498,7 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
                               {0, 0, -1}, {0, -1, 0}, {0, -1, 0}};
     // Infinite far plane, as in the frame: shadow volumes extruded to w = 0 are never clipped.
     const glm::mat4 projection = glm::infinitePerspective(glm::radians(90.0f), 1.0f, near_);
+    update_light_maps(lights);  // binds its own framebuffer: before the faces' passes
     gl::BindFramebuffer(GL_FRAMEBUFFER, cube_fbo_.get());
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
                                 cube_depth_.get());
@@ -531,14 +566,48 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
     gl::DrawArrays(GL_TRIANGLES, 0, GLsizei(triangles.size()));
 }
 
+bool FrameRenderer::update_light_maps(const std::vector<LightSample>& lights) {
+    const DirectSettings& direct = scene_.settings.direct;
+    if (direct.method != DirectMethod::vpl || !direct.shadows) return false;
+    if (!light_maps_ || light_maps_->size() != direct.map_size) {
+        light_maps_ = std::make_unique<VplShadowMaps>(
+            scene_, meshes_, direct.map_size, VplMapKind::octahedral, 1e-4f * scene_.diagonal());
+        maps_valid_ = false;
+    }
+    if (maps_valid_ && mapped_version_ == scene_.version && mapped_lights_ == lights) return true;
+    // A map's record: the sample's position and the normal its hemisphere is about (power unused).
+    std::vector<Vpl> records;
+    light_map_layer_.assign(lights.size(), -1);
+    for (size_t i = 0; i < lights.size(); ++i) {
+        const LightSample& l = lights[i];
+        if (l.directional) continue;
+        light_map_layer_[i] = int(records.size());
+        const glm::vec3 up = l.one_sided || glm::length(l.normal) > 0.5f ? glm::normalize(l.normal)
+                                                                         : glm::vec3(0, 1, 0);
+        records.push_back({l.position, up, glm::vec3(0.0f)});
+        if (!l.one_sided) records.push_back({l.position, -up, glm::vec3(0.0f)});
+    }
+    light_maps_->set_vpls(records);
+    light_maps_->render_all();
+    mapped_lights_ = lights;
+    mapped_version_ = scene_.version;
+    maps_valid_ = true;
+    return true;
+}
+
 void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
                                      const glm::mat4& view_projection, GLenum draw_buffer) {
+    // With shadow maps they were rendered for these samples before the pass began.
+    const bool mapped = light_maps_ && maps_valid_ &&
+                        scene_.settings.direct.method == DirectMethod::vpl &&
+                        scene_.settings.direct.shadows && mapped_lights_ == lights;
     gl::DepthMask(GL_FALSE);
     gl::Enable(GL_STENCIL_TEST);
     gl::Enable(GL_DEPTH_CLAMP);
     for (size_t i = 0; i < lights.size(); ++i) {
         gl::Clear(GL_STENCIL_BUFFER_BIT);
-        if (scene_.settings.direct.shadows) {
+        const int layer = mapped ? light_map_layer_[i] : -1;
+        if (scene_.settings.direct.shadows && layer < 0) {
             gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
             gl::DepthFunc(GL_LESS);
             gl::StencilFunc(GL_ALWAYS, 0, 0xFF);
@@ -553,16 +622,29 @@ void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
         gl::DepthFunc(GL_LEQUAL);
         gl::Enable(GL_BLEND);
         gl::BlendFunc(GL_ONE, GL_ONE);  // alpha + 0: a cube map's distances stay
-        lighting_.use();
-        lighting_.set("view_projection", view_projection);
-        set_light_uniforms(lighting_, {lights[i]});
-        lighting_.set("light_index", 0);
+        const Program& program = mapped ? lighting_mapped_ : lighting_;
+        program.use();
+        program.set("view_projection", view_projection);
+        set_light_uniforms(program, {lights[i]});
+        program.set("light_index", 0);
+        if (mapped) {
+            light_maps_->bind_buffer();
+            gl::ActiveTexture(GL_TEXTURE0 + kLightMapUnit);
+            gl::BindTexture(GL_TEXTURE_2D_ARRAY, light_maps_->texture());
+            gl::ActiveTexture(GL_TEXTURE0);
+            program.set("light_maps", int(kLightMapUnit));
+            program.set("map_layer", layer);
+            program.set("map_layers", lights[i].one_sided ? 1 : 2);
+            program.set("map_kind", int(light_maps_->kind()));
+            program.set("offset_scale", light_maps_->offset_scale());
+            program.set("relative_bias", VplShadowMaps::kRelativeBias);
+        }
         for (size_t o = 0; o < scene_.objects.size(); ++o) {
             const Object& obj = scene_.objects[o];
             if (obj.material.type != MaterialType::diffuse) continue;
-            lighting_.set("model", model_matrix(obj));
-            lighting_.set("albedo", base_albedo(obj));
-            meshes_.bind_albedo(lighting_, o, kAlbedoUnit);
+            program.set("model", model_matrix(obj));
+            program.set("albedo", base_albedo(obj));
+            meshes_.bind_albedo(program, o, kAlbedoUnit);
             meshes_.draw(o);
         }
         gl::Disable(GL_BLEND);
@@ -579,19 +661,13 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
 
 std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirect,
                                                      const std::vector<LightSample>& lights) {
-    auto same = [](const LightSample& a, const LightSample& b) {
-        return a.position == b.position && a.intensity == b.intensity && a.normal == b.normal &&
-               a.one_sided == b.one_sided && a.directional == b.directional && a.cone == b.cone;
-    };
     const CubeMapKey& k = cube_key_;
     // A new term texture (or none yet) is rendered whole at once; edits of the scene or the
     // lights, and new revisions of the term, move the generation on.
     const bool all = !k.valid || indirect.revision == 0 || k.texture != indirect.texture ||
                      k.space != indirect.space;
-    bool moved_on = k.scene_version != scene_.version || k.revision != indirect.revision ||
-                    k.lights.size() != lights.size();
-    for (size_t i = 0; !moved_on && i < lights.size(); ++i)
-        moved_on = !same(k.lights[i], lights[i]);
+    const bool moved_on =
+        k.scene_version != scene_.version || k.revision != indirect.revision || k.lights != lights;
     cube_key_ = {scene_.version, indirect.revision, indirect.texture, indirect.space, lights, true};
     if (moved_on || all) ++generation_;
     std::vector<int> faces;
@@ -729,6 +805,12 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     const GLenum all[kFrameTermCount] = {GL_COLOR_ATTACHMENT0, GL_COLOR_ATTACHMENT1,
                                          GL_COLOR_ATTACHMENT2, GL_COLOR_ATTACHMENT3,
                                          GL_COLOR_ATTACHMENT4};
+    // This frame's light samples (moved within their strata while the direct term accumulates)
+    // and, with direct.method vpl, their shadow maps, rendered before the frame's passes.
+    const bool move_lights = area && direct.accumulate_frames > 1 && k > 0;
+    const std::vector<LightSample> frame_lights =
+        move_lights ? light_samples(scene_, light_sample_jitter(k)) : lights;
+    if (fresh) update_light_maps(frame_lights);
     begin_scene_pass(fbo_.get(), kFrameTermCount, width_, height_, glm::vec4(0, 0, 0, 1));
 
     // 1. G-buffer: depth, emission, indirect, specular, caustics.
@@ -777,11 +859,9 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     //    count is zero (eq. 13.2). While the scene stands still, each frame moves the area
     //    lights' samples within their strata and the direct term is the mean over the frames:
     //    n² samples a frame, n²·k after k frames; once the mean is complete, it is kept.
-    if (fresh) {
-        const bool move_lights = area && direct.accumulate_frames > 1 && k > 0;
-        add_direct_light(move_lights ? light_samples(scene_, light_sample_jitter(k)) : lights,
-                         view_projection, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
-    }
+    if (fresh)
+        add_direct_light(frame_lights, view_projection,
+                         GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
     if (accumulating)
         accumulate(fresh, all_terms);
     else

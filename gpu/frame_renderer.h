@@ -7,11 +7,13 @@
 #pragma once
 
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
 #include "gpu/gl_objects.h"
 #include "gpu/scene_meshes.h"
 #include "gpu/shadow_volumes.h"
+#include "gpu/vpl_shadow_maps.h"
 #include "shared/frame_terms.h"
 #include "shared/host_device_shared.h"
 #include "shared/image.h"
@@ -30,6 +32,7 @@ struct LightSample {
     bool one_sided = false;
     bool directional = false;
     glm::vec2 cone{-2.0f, -1.0f};  // spot: (cos outer, cos inner); a cone of every direction else
+    bool operator==(const LightSample&) const = default;
 };
 
 // The enabled lights as point samples (quad lights: an n×n grid, n² ≈ area_light_samples; mesh
@@ -111,6 +114,11 @@ private:
     void add_direct_light(const std::vector<LightSample>& lights, const glm::mat4& view_projection,
                           GLenum draw_buffer);
     void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
+    // direct.method vpl (Barczak §4.2): renders a hemispherical shadow map for each light sample
+    // that is not a sun (one about a one-sided sample's normal, two back to back for a point
+    // light) unless the maps already show these samples in this scene version. Call outside a
+    // scene pass: it binds its own framebuffer. Returns whether the samples have maps.
+    bool update_light_maps(const std::vector<LightSample>& lights);
     void set_light_uniforms(const Program& p, const std::vector<LightSample>& lights) const;
     // Progressive accumulation: this frame's terms (the direct one alone, or all of them)
     // averaged into the running mean of the frames since the last restart, which then replaces
@@ -133,6 +141,13 @@ private:
     Renderbuffer depth_stencil_;
     Framebuffer fbo_;
     std::vector<ShadowCaster> casters_;
+    // direct.method vpl: the light samples' shadow maps (made on first use) and what they show.
+    std::unique_ptr<VplShadowMaps> light_maps_;
+    std::vector<LightSample> mapped_lights_;
+    std::vector<int> light_map_layer_;  // per light sample: its first layer, −1 for a sun
+    uint64_t mapped_version_ = 0;
+    bool maps_valid_ = false;
+    Program lighting_mapped_;
     Buffer volume_vbo_;
     VertexArray volume_vao_;
     // Cube maps, one per specular object (index by object; empty for diffuse objects).

@@ -26,16 +26,9 @@ vec3 contribution(int i, vec3 x, vec3 n, bool lookup) {
     float inv = inversesqrt(d2);
     float cos_x = dot(n, d) * inv, cos_l = -dot(vpl_normal(i), d) * inv;
     if (cos_x <= 0.0 || cos_l <= 0.0) return vec3(0.0);
-    if (visibility != 0 && lookup) {
-        // The point moved off its surface by about a texel's footprint at its distance
-        // (normal offset), compared with a small relative bias: no self-shadowing acne.
-        float r = d2 * inv;
-        vec3 p = vpl_local(i, x + n * (r * offset_scale) - vpl_position(i));
-        if (p.z > 0.0) {
-            float stored = texture(maps, vec3(vpl_map_uv(p, kind), float(i))).r;
-            if (length(p) > stored * (1.0 + relative_bias)) return vec3(0.0);
-        }
-    }
+    if (visibility != 0 && lookup &&
+        !vpl_map_visible(maps, i, x, n, d2 * inv, kind, offset_scale, relative_bias))
+        return vec3(0.0);
     return vpl_power(i) * (cos_x * cos_l / max(d2, clamp2));
 }
 void main() {
@@ -299,9 +292,8 @@ void VplGather::shade(const VplShadowMaps& maps, float clamp, float scale, bool 
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, 3, tile_entries_.get());
     program_.set("clamp2", clamp * clamp);
     program_.set("scale", scale * glm::one_over_pi<float>());
-    // Half a texel's angle (the map spans about π over `size` texels) at unit distance.
-    program_.set("offset_scale", 2.0f / float(maps.size()));
-    program_.set("relative_bias", 0.01f);
+    program_.set("offset_scale", maps.offset_scale());
+    program_.set("relative_bias", VplShadowMaps::kRelativeBias);
     gl::BindVertexArray(empty_vao_.get());
     gl::DrawArrays(GL_TRIANGLES, 0, 3);
     if (interleaved) {

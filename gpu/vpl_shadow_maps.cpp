@@ -36,6 +36,17 @@ vec2 vpl_map_uv(vec3 p, int kind) {
     vec3 d = normalize(p);
     return 0.5 * d.xy / (1.0 + d.z) + 0.5;
 }
+// Whether VPL i's map (layer i of `maps`) sees the point x with normal n at distance r from it.
+// The point is moved off its surface by about a texel's footprint at that distance (normal
+// offset: `offset_scale` is half a texel's angle) and compared with a small relative bias: no
+// self-shadowing acne. Points behind the VPL's plane are not in its map (seen).
+bool vpl_map_visible(sampler2DArray maps, int i, vec3 x, vec3 n, float r, int kind,
+                     float offset_scale, float relative_bias) {
+    vec3 p = vpl_local(i, x + n * (r * offset_scale) - vpl_position(i));
+    if (p.z <= 0.0) return true;
+    float stored = texture(maps, vec3(vpl_map_uv(p, kind), float(i))).r;
+    return length(p) <= stored * (1.0 + relative_bias);
+}
 )";
 
 namespace {

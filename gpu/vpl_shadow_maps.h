@@ -47,6 +47,10 @@ public:
     int count() const { return count_; }
     VplMapKind kind() const { return kind_; }
     float far_distance() const { return far_; }
+    // What a reader passes to `vpl_map_visible` (kVplMapGlsl): half a texel's angle (a map spans
+    // about π over `size` texels) at unit distance, and the relative depth bias.
+    float offset_scale() const { return 2.0f / float(size_); }
+    static constexpr float kRelativeBias = 0.01f;
     // Object vertices transformed by map passes since construction (the thesis's cost measure:
     // each vertex once per face and VPL).
     uint64_t vertices_transformed() const { return vertices_; }

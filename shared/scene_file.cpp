@@ -16,6 +16,7 @@
 #include "shared/charts.h"
 #include "shared/input_error.h"
 #include "shared/json_read.h"
+#include "shared/mesh_decimate.h"
 #include "shared/mesh_io.h"
 #include "shared/model_io.h"
 #include "shared/scene_edit.h"
@@ -30,8 +31,9 @@ namespace fs = std::filesystem;
 
 constexpr double kMaxSigma = 1e6;     // per scene unit
 constexpr double kMaxPhaseK = 0.999;  // Schlick k; |k| → 1 is a delta peak
-constexpr std::array kShapeNames = {"box", "sphere", "quad", "bumpy_plane", "lumpy_sphere"};
-enum class ShapeType { box, sphere, quad, bumpy_plane, lumpy_sphere };
+constexpr std::array kShapeNames = {"box",         "sphere",       "quad",
+                                    "bumpy_plane", "lumpy_sphere", "torus"};
+enum class ShapeType { box, sphere, quad, bumpy_plane, lumpy_sphere, torus };
 
 std::string format_vec(const glm::vec3& v) {
     return "[" + JsonInput::format_number(v.x) + ", " + JsonInput::format_number(v.y) + ", " +
@@ -432,8 +434,8 @@ private:
             const std::string opath = JsonInput::child(path, i);
             const Json& o = in_.object(json[i], opath);
             in_.check_keys(o, opath,
-                           {"name", "material", "materials", "dynamic", "mesh", "scale", "shape",
-                            "offset", "transform"});
+                           {"name", "material", "materials", "dynamic", "mesh", "scale", "decimate",
+                            "shape", "offset", "transform"});
             Object object;
             object.name =
                 in_.string(in_.require(o, opath, "name", "a unique object name"), opath + "/name");
@@ -451,6 +453,10 @@ private:
             const Json* material = JsonInput::find(o, "material");
             std::vector<Object> parts;
             if (mesh && !material && JsonInput::find(o, "shape") == nullptr) {
+                if (JsonInput::find(o, "decimate"))
+                    in_.fail(opath + "/decimate",
+                             "decimate applies to a mesh read as one object; expected a "
+                             "\"material\" beside it");
                 parts = read_model(o, opath, object, transform);
             } else {
                 if (JsonInput::find(o, "materials"))
@@ -586,9 +592,24 @@ private:
                 in_.fail(opath + "/mesh", std::string("expected a usable mesh; ") + e.what());
             }
             object.source = mesh->get<std::string>();
+            if (const Json* v = JsonInput::find(o, "decimate")) {
+                // Quadric-error decimation to at most this many vertices (Barczak's ~3000-vertex
+                // bunny from the 35k-vertex scan).
+                const long long target = in_.integer(*v, opath + "/decimate", 4, 1000000000ll);
+                if (size_t(target) < object.mesh.positions.size()) {
+                    try {
+                        object.mesh = decimate_mesh(object.mesh, size_t(target));
+                    } catch (const std::invalid_argument& e) {
+                        in_.fail(opath + "/decimate",
+                                 std::string("expected a manifold mesh to decimate; ") + e.what());
+                    }
+                }
+            }
             finish_mesh(o, opath, object);
             return;
         }
+        if (JsonInput::find(o, "decimate"))
+            in_.fail(opath + "/decimate", "decimate applies to meshes only; expected a \"mesh\"");
         if (JsonInput::find(o, "scale"))
             in_.fail(opath + "/scale",
                      "scale applies to meshes only; expected the size in "
@@ -648,9 +669,10 @@ private:
 
     Mesh read_shape(const Json& json, const std::string& path) {
         in_.object(json, path);
-        const auto type = ShapeType(in_.choice(
-            in_.require(json, path, "type", "box, sphere, quad, bumpy_plane or lumpy_sphere"),
-            path + "/type", kShapeNames));
+        const auto type = ShapeType(
+            in_.choice(in_.require(json, path, "type",
+                                   "box, sphere, quad, bumpy_plane, lumpy_sphere or torus"),
+                       path + "/type", kShapeNames));
         Mesh mesh;
         switch (type) {
             case ShapeType::box: {
@@ -711,6 +733,22 @@ private:
                     seed = in_.integer(*v, path + "/seed", 0, 4294967295ll);
                 mesh = make_lumpy_sphere(float(radius), lumpy_sphere_cells(triangles),
                                          float(amplitude), uint32_t(seed));
+                break;
+            }
+            case ShapeType::torus: {
+                in_.check_keys(json, path, {"type", "radius", "tube_radius", "rings", "sides"});
+                const double radius = in_.number(in_.require(json, path, "radius", "a number > 0"),
+                                                 path + "/radius", 0, kMaxCoordinate, true);
+                // A tube as thick as the ring's radius would meet itself at the axis.
+                const double tube =
+                    in_.number(in_.require(json, path, "tube_radius", "a number > 0 and < radius"),
+                               path + "/tube_radius", 0, radius, true, true);
+                long long rings = 41, sides = 20;  // Barczak's torus: 820 vertices
+                if (const Json* v = JsonInput::find(json, "rings"))
+                    rings = in_.integer(*v, path + "/rings", 3, 4096);
+                if (const Json* v = JsonInput::find(json, "sides"))
+                    sides = in_.integer(*v, path + "/sides", 3, 4096);
+                mesh = make_torus(float(radius), float(tube), int(rings), int(sides));
                 break;
             }
         }

@@ -195,9 +195,17 @@ struct CausticSettings {
     int tile_size = 32;  // screen tile edge for occlusion-query culling, pixels
 };
 
+// How the direct term finds each light sample's shadow: `shadow_volumes`, stencil shadow volumes
+// (Larsen ch. 13: exact per sample); `vpl`, a hemispherical octahedral shadow map per sample
+// (Barczak 2006 §4.2: an area light as many point lights, soft shadows; suns keep their volumes).
+enum class DirectMethod { shadow_volumes, vpl };
+inline constexpr std::array kDirectMethodNames = {"shadow_volumes", "vpl"};
+
 struct DirectSettings {
     int area_light_samples = 16;  // point lights standing in for one quad light
-    bool shadows = true;          // stencil shadow volumes (ch. 13)
+    bool shadows = true;          // shadows at all (off: every sample lights everything it faces)
+    DirectMethod method = DirectMethod::shadow_volumes;
+    int map_size = 256;  // vpl: shadow-map texels across, per light sample (two for a point light)
     // While nothing changes, each frame moves the quad and mesh lights' samples within their
     // strata and the direct term averages this many frames (then it is kept); 1 = a fixed set.
     int accumulate_frames = 64;
@@ -403,7 +411,11 @@ void visit_settings(Settings& s, Visitor& v) {
     v.section("direct", "direct light and shadow volumes, Larsen ch. 13");
     v.field(Field<int>{"area_light_samples", s.direct.area_light_samples, 1, 4096,
                        "point lights per quad light"});
-    v.field(Field<bool>{"shadows", s.direct.shadows, 0, 1, "stencil shadow volumes"});
+    v.field(Field<bool>{"shadows", s.direct.shadows, 0, 1, "shadows (volumes or maps)"});
+    v.field(EnumField<DirectMethod, kDirectMethodNames.size()>{
+        "method", s.direct.method, kDirectMethodNames, "shadow_volumes | vpl (shadow maps)"});
+    v.field(Field<int>{"map_size", s.direct.map_size, 8, 4096,
+                       "vpl: shadow-map texels across per light sample"});
     v.field(Field<int>{"accumulate_frames", s.direct.accumulate_frames, 1, 65536,
                        "frames of moved area-light samples the direct term averages"});
     v.end_section();

@@ -248,4 +248,29 @@ Mesh make_lumpy_sphere(float radius, int cells, float amplitude, uint32_t seed) 
     return mesh;
 }
 
+Mesh make_torus(float radius, float tube_radius, int rings, int sides) {
+    Mesh mesh;
+    mesh.positions.reserve(size_t(rings) * size_t(sides));
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < sides; ++j) {
+            const float u = 2.0f * std::numbers::pi_v<float> * float(i) / float(rings);
+            const float v = 2.0f * std::numbers::pi_v<float> * float(j) / float(sides);
+            const glm::vec3 c(std::cos(u), 0.0f, std::sin(u));  // towards the tube's centre line
+            mesh.positions.push_back(
+                radius * c + tube_radius * (std::cos(v) * c + glm::vec3(0, std::sin(v), 0)));
+        }
+    mesh.triangles.reserve(2 * size_t(rings) * size_t(sides));
+    for (int i = 0; i < rings; ++i)
+        for (int j = 0; j < sides; ++j) {
+            const unsigned v00 = unsigned(i * sides + j);
+            const unsigned v10 = unsigned(((i + 1) % rings) * sides + j);
+            const unsigned v11 = unsigned(((i + 1) % rings) * sides + (j + 1) % sides);
+            const unsigned v01 = unsigned(i * sides + (j + 1) % sides);
+            // u turns from +X to +Z, v from outward to +Y: (u, v, then u) faces out of the tube.
+            mesh.triangles.push_back({v00, v11, v10});
+            mesh.triangles.push_back({v00, v01, v11});
+        }
+    return mesh;
+}
+
 }  // namespace ag

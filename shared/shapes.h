@@ -26,5 +26,10 @@ int lumpy_sphere_cells(long long triangles);
 // of `radius` with smooth lumps of up to ±`amplitude` (< radius) along the normal; the same seed
 // gives the same lumps everywhere.
 Mesh make_lumpy_sphere(float radius, int cells, float amplitude, uint32_t seed);
+// Torus about the Y axis: a tube of `tube_radius` round the circle of `radius` in the XZ plane
+// (tube_radius < radius), `rings` steps round the circle × `sides` round the tube, one vertex
+// each (rings · sides; watertight), 2 · rings · sides triangles. Barczak's mover (2006, §5.2):
+// 41 × 20 = 820 vertices.
+Mesh make_torus(float radius, float tube_radius, int rings, int sides);
 
 }  // namespace ag

@@ -501,8 +501,27 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
          "/objects/1/shape/radius", "expected a number in (0, 10000000], got 0"},
         {"subdivisions", [](Json& j) { j["objects"][1]["shape"]["subdivisions"] = 9; },
          "/objects/1/shape/subdivisions", "expected an integer in [0, 7], got 9"},
-        {"shape_type", [](Json& j) { j["objects"][1]["shape"]["type"] = "torus"; },
-         "/objects/1/shape/type", "expected one of box, sphere, quad, bumpy_plane, lumpy_sphere"},
+        {"shape_type", [](Json& j) { j["objects"][1]["shape"]["type"] = "donut"; },
+         "/objects/1/shape/type",
+         "expected one of box, sphere, quad, bumpy_plane, lumpy_sphere, torus"},
+        {"torus_tube",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {{"type", "torus"}, {"radius", 1}, {"tube_radius", 1}};
+         },
+         "/objects/1/shape/tube_radius", "expected a number in (0, 1), got 1"},
+        {"torus_rings",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {
+                 {"type", "torus"}, {"radius", 1}, {"tube_radius", 0.3}, {"rings", 2}};
+         },
+         "/objects/1/shape/rings", "expected an integer in [3, 4096], got 2"},
+        {"decimate_shape", [](Json& j) { j["objects"][1]["decimate"] = 100; },
+         "/objects/1/decimate", "decimate applies to meshes only"},
+        {"torus_missing_tube",
+         [](Json& j) {
+             j["objects"][1]["shape"] = {{"type", "torus"}, {"radius", 1}};
+         },
+         "/objects/1/shape", "tube_radius"},
         {"lumpy_triangles",
          [](Json& j) {
              j["objects"][1]["shape"] = {{"type", "lumpy_sphere"}, {"radius", 1}, {"triangles", 5}};

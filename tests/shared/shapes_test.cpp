@@ -139,5 +139,34 @@ TEST(Shapes, LumpySphereHitsItsTriangleTargetClosedOutwardAndWithinItsAmplitude)
               make_lumpy_sphere(2.0f, 8, 0.3f, 6).positions);
 }
 
+// Barczak's mover: 41 × 20 = 820 vertices. Fails if the tube is not closed (a seam where u or v
+// wraps), a face points into the tube, or the surface is not where the radii put it.
+TEST(Shapes, TorusIsClosedOutwardOfItsTubeAndOnItsSurface) {
+    const float big = 0.7f, tube = 0.3f;
+    const Mesh torus = make_torus(big, tube, 41, 20);
+    EXPECT_EQ(torus.positions.size(), 820u);
+    EXPECT_EQ(torus.triangles.size(), 2u * 820);
+    expect_closed_and_consistent(torus);
+    for (const glm::vec3& p : torus.positions) {  // (√(x²+z²) − R)² + y² = r²
+        const float ring = std::sqrt(p.x * p.x + p.z * p.z) - big;
+        EXPECT_NEAR(ring * ring + p.y * p.y, tube * tube, 1e-5f);
+    }
+    for (int t = 0; t < int(torus.triangles.size()); ++t) {  // away from the tube's centre line
+        const glm::uvec3 tri = torus.triangles[size_t(t)];
+        const glm::vec3 c =
+            (torus.positions[tri.x] + torus.positions[tri.y] + torus.positions[tri.z]) / 3.0f;
+        const glm::vec3 axis_point = big * glm::normalize(glm::vec3(c.x, 0.0f, c.z));
+        ASSERT_GT(glm::dot(triangle_normal(torus, t), c - axis_point), 0.0f) << "triangle " << t;
+    }
+    // Enclosed volume 2π²Rr² (the polygon's a little less).
+    double volume = 0.0;
+    for (const glm::uvec3& t : torus.triangles)
+        volume +=
+            glm::dot(torus.positions[t.x], glm::cross(torus.positions[t.y], torus.positions[t.z])) /
+            6.0;
+    const double exact = 2.0 * std::numbers::pi * std::numbers::pi * big * tube * tube;
+    EXPECT_NEAR(volume, exact, 0.03 * exact);
+}
+
 }  // namespace
 }  // namespace ag

@@ -62,7 +62,9 @@ const Command kBenchCommand{
     "the VPL path "
     "at --size (default 256x192): 300 VPLs naive (every shadow map and every pixel) against K = "
     "150/100/50 map updates a frame, static maps, no visibility and exact CPU rays; fps against "
-    "25-1000 VPLs; shadow-map cost against a mover's vertex count (docs/vpl.md). "
+    "25-1000 VPLs; shadow-map cost against a mover's vertex count; the thesis's table rooms "
+    "(SCENE's folder: vpl_table_bunny.json, vpl_table_torus.json) with the mover sliding, "
+    "100-300 VPLs, all maps against K = 150/100/50 a frame (--rooms: only these) (docs/vpl.md). "
     "'irradiance_cache [SCENE]' (default "
     "scenes/cube_in_a_box.json): Gautron 2006 Tables 5.1 and 5.2 at --size WxH (default 128x128) "
     "over --frames (default 400): temporal radiance caching as the scene sets it against a new "
@@ -136,6 +138,7 @@ const Command kBenchCommand{
         integer("budget-frames", "N",
                 "'gpu_pm': --budget: frames per probe, whose median is its time (default 9)", 1,
                 10000),
+        flag("rooms", "'vpl': only the thesis's table rooms (bunny, torus) with a sliding mover"),
         flag("no-direct",
              "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
         integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),

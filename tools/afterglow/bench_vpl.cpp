@@ -15,6 +15,7 @@
 #include "gpu/vpl_gather.h"
 #include "gpu/vpl_shadow_maps.h"
 #include "shared/charts.h"
+#include "shared/mesh_decimate.h"
 #include "shared/mesh_io.h"
 #include "shared/metrics.h"
 #include "shared/scene_edit.h"
@@ -65,9 +66,100 @@ std::pair<double, double> errors(const std::vector<glm::vec3>& x, const std::vec
     return {mse / double(3 * std::max<size_t>(1, x.size())), norm > 0.0 ? l1 / norm : 0.0};
 }
 
+// The thesis's table room (§5.2, §5.4) with each of its movers sliding 8 mm a frame across the
+// table: whole frames (K map updates round robin + the per-pixel sum) against the number of
+// lights and K. The G-buffer points stay those of the first frame (the maps see the mover move;
+// the points it uncovers are not re-cast): the cost of the frame's parts, not its image.
+// "Mverts": vertices the map passes transformed per frame (millions), the thesis's cost measure,
+// a count that does not move with the machine's load.
+void table_rooms(const Args& args, const std::string& scene_path, int width, int height, int repeat,
+                 ThreadPool& pool) {
+    const std::filesystem::path folder = std::filesystem::path(scene_path).parent_path();
+    for (const char* room : {"vpl_table_bunny.json", "vpl_table_torus.json"}) {
+        const std::string room_path = (folder / room).string();
+        Scene t;
+        try {
+            t = load_scene(room_path);
+        } catch (const std::exception& e) {
+            std::printf("\n(%s left out: %s)\n", room, e.what());
+            continue;
+        }
+        args.apply_settings(t);
+        const VplSettings& vs = t.settings.vpl;
+        const float scale = glm::one_over_pi<float>();
+        int mover = -1;
+        for (size_t o = 0; o < t.objects.size(); ++o)
+            if (t.objects[o].dynamic) mover = int(o);
+        if (mover < 0) continue;
+        cpu::RayTracer t_rays(t);
+        const std::vector<Vpl> t_all = cpu::random_walk_vpls(t, t_rays, 300, 5, t.settings.seed);
+        const std::vector<cpu::SurfacePoint> t_points =
+            cpu::camera_points(t, t_rays, width, height, pool);
+        gpu::SceneMeshes t_meshes(t);
+        Bounds tb;
+        for (const Object& o : t.objects)
+            for (const glm::vec3& p : o.mesh.positions) tb.add(o.transform.apply_point(p));
+        gpu::VplShadowMaps t_maps(t, t_meshes, vs.map_size, vs.map,
+                                  1e-4f * glm::length(tb.extent()));
+        gpu::VplGather t_gather(width, height);
+        t_gather.set_points(column(t_points, width, height, false),
+                            column(t_points, width, height, true));
+        int frame = 0;
+        auto slide = [&] {  // 8 mm a frame, 100 frames one way and back
+            const float step = (frame++ / 100) % 2 == 0 ? 0.008f : -0.008f;
+            translate_object(t, mover, glm::vec3(step, 0.0f, 0.0f));
+        };
+        std::printf("\n%s: %zu triangles, mover '%s' %zu vertices, %zu random-walk VPLs\n", room,
+                    t.triangle_count(), t.objects[size_t(mover)].name.c_str(),
+                    t.objects[size_t(mover)].mesh.positions.size(), t_all.size());
+        std::printf("%8s %-22s %10s %8s %10s\n", "VPLs", "map updates a frame", "ms/frame", "fps",
+                    "Mverts");
+        for (size_t count : {100, 200, 300}) {
+            if (count > t_all.size()) break;
+            const std::vector<Vpl> v(t_all.begin(), t_all.begin() + std::ptrdiff_t(count));
+            t_maps.set_vpls(v);
+            t_maps.render_all();
+            const int c = int(v.size());
+            std::vector<int> updates{c};  // all of them: the naive row
+            for (int k : {150, 100, 50})
+                if (k < c) updates.push_back(k);
+            updates.push_back(0);  // static maps
+            for (int k : updates) {
+                int next = 0;
+                const uint64_t before = t_maps.vertices_transformed();
+                const double ms = best_ms(repeat, [&] {
+                    slide();
+                    const int run = std::min(k, c - next);  // round robin, wrapping to 0
+                    t_maps.render(next, run);
+                    t_maps.render(0, k - run);
+                    next = (next + k) % c;
+                    t_gather.shade(t_maps, vs.clamp, scale);
+                });
+                const double mverts =
+                    double(t_maps.vertices_transformed() - before) / double(repeat + 1) / 1e6;
+                char label[48];
+                if (k == c)
+                    std::snprintf(label, sizeof label, "all %d (naive)", c);
+                else if (k == 0)
+                    std::snprintf(label, sizeof label, "none (static maps)");
+                else
+                    std::snprintf(label, sizeof label, "K = %d", k);
+                std::printf("%8zu %-22s %10.2f %8.2f %10.2f\n", count, label, ms, 1000.0 / ms,
+                            mverts);
+                std::fflush(stdout);
+            }
+        }
+    }
+}
+
 }  // namespace
 
 int bench_vpl(const Args& args, const std::string& scene_path, int width, int height, int repeat) {
+    if (args.has("rooms")) {
+        ThreadPool pool(0);
+        table_rooms(args, scene_path, width, height, repeat, pool);
+        return 0;
+    }
     Scene scene = load_scene(scene_path);
     args.apply_settings(scene);
     const VplSettings& vs = scene.settings.vpl;
@@ -297,31 +389,17 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
     for (int s : {1, 2, 3, 4})
         movers.emplace_back("sphere subdivision " + std::to_string(s), make_sphere(1.0f, s));
     {
-        // The thesis's movers: a torus of 41 × 20 = 820 vertices, and the Stanford bunny (ours:
-        // the full-resolution scan; the thesis's had about 3000 vertices).
-        Mesh torus;
-        const int rings = 41, sides = 20;
-        for (int i = 0; i < rings; ++i)
-            for (int j = 0; j < sides; ++j) {
-                const float u = 6.2831853f * float(i) / float(rings);
-                const float v = 6.2831853f * float(j) / float(sides);
-                const glm::vec3 c(std::cos(u), 0.0f, std::sin(u));
-                const glm::vec3 nrm = std::cos(v) * c + glm::vec3(0.0f, std::sin(v), 0.0f);
-                torus.positions.push_back(0.7f * c + 0.3f * nrm);
-                const uint32_t v00 = uint32_t(i * sides + j);
-                const uint32_t v10 = uint32_t(((i + 1) % rings) * sides + j);
-                const uint32_t v11 = uint32_t(((i + 1) % rings) * sides + (j + 1) % sides);
-                const uint32_t v01 = uint32_t(i * sides + (j + 1) % sides);
-                torus.triangles.emplace_back(v00, v11, v10);
-                torus.triangles.emplace_back(v00, v01, v11);
-            }
-        movers.emplace_back("torus", torus);
+        // The thesis's movers: a torus of 41 × 20 = 820 vertices, and the Stanford bunny (the
+        // full-resolution scan, and decimated to the thesis's ~3000 vertices).
+        movers.emplace_back("torus", make_torus(0.7f, 0.3f, 41, 20));
         // Where the scenes find it: ../../shared/external-scenes from the scene's folder.
         const std::string bunny = (std::filesystem::path(scene_path).parent_path() /
                                    "../../shared/external-scenes/stanford-bunny/bun_zipper.ply")
                                       .string();
         try {
             movers.emplace_back("stanford bunny", load_mesh(bunny));
+            movers.emplace_back("bunny decimated to 3000",
+                                decimate_mesh(movers.back().second, 3000));
         } catch (const std::exception& e) {
             std::printf("(bunny left out: %s)\n", e.what());
         }
@@ -350,6 +428,8 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
                     1000.0 * ms / (300.0 * double(verts) / 1000.0));
     }
     std::printf("(best of %d; GL timings include glFinish)\n", repeat);
+
+    table_rooms(args, scene_path, width, height, repeat, pool);
     return 0;
 }
 
