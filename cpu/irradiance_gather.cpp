@@ -21,11 +21,13 @@ RecordRadiance aim_radiance_source(const Scene& scene, const std::vector<glm::ve
 RecordRadiance direct_radiance_source(const Scene& scene, const RayTracer& rays,
                                       int shadow_samples) {
     return [&scene, &rays, shadow_samples](const RayHit& hit) {
-        const Material& m = scene.objects[size_t(hit.object)].material;
+        // The albedo there, its texture included (pt's albedo at a hit).
+        const glm::vec3 albedo =
+            albedo_at(scene.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
         // A fixed lattice rotation: the hit points of one record already vary.
         const glm::vec3 e =
             direct_irradiance(scene, rays, hit.position, hit.normal, shadow_samples, 0.5f, 0.5f);
-        return m.albedo * e * float(std::numbers::inv_pi);
+        return albedo * e * float(std::numbers::inv_pi);
     };
 }
 
@@ -96,7 +98,9 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
                     hit.object,
                     to_local * (hit.position - tr.translation),
                     to_local * hit.normal,
-                    mat.type == MaterialType::diffuse && glm::dot(d, hit.normal) < 0.0f};
+                    mat.type == MaterialType::diffuse && glm::dot(d, hit.normal) < 0.0f,
+                    hit.triangle,
+                    hit.barycentric};
             }
             sum += radiance_jk;
             // Ward & Heckbert eq. 8: tilting n towards azimuth u raises cos θ of this sample by
@@ -172,6 +176,8 @@ glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<Rec
             RayHit hit;
             hit.hit = true;
             hit.object = s.object;
+            hit.triangle = s.triangle;
+            hit.barycentric = s.barycentric;
             hit.position = x;
             hit.normal = glm::normalize(to.rotation * s.local_normal);  // rigid transforms
             return (*next_radiance)(hit);

@@ -43,6 +43,8 @@ struct RecordSample {
     glm::vec3 local{0.0f};
     glm::vec3 local_normal{0.0f};  // the hit's geometric normal, object space
     bool shaded = false;           // a diffuse front face (the source gave its radiance)
+    int triangle = -1;             // for the albedo (texture) when shaded again
+    glm::vec2 barycentric{0.0f};
 };
 
 struct RecordGatherStats {
