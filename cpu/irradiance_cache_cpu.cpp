@@ -49,12 +49,24 @@ CpuCacheFrame render_irradiance_cache_cpu(const Scene& scene, const RayTracer& r
                                           const RecordRadiance& radiance,
                                           const RecordGatherOptions& options, float accuracy,
                                           int width, int height) {
+    const Clock::time_point t0 = Clock::now();
+    std::vector<SplatPixel> pixels = eye_ray_pixels(scene, rays, width, height);
+    const double eye_ms = ms_since(t0);
+    CpuCacheFrame f = render_irradiance_cache_cpu(scene, std::move(pixels), gather, radiance,
+                                                  options, accuracy, width, height);
+    f.eye_ms = eye_ms;
+    return f;
+}
+
+CpuCacheFrame render_irradiance_cache_cpu(const Scene& scene, std::vector<SplatPixel> pixels,
+                                          const IrradianceGather& gather,
+                                          const RecordRadiance& radiance,
+                                          const RecordGatherOptions& options, float accuracy,
+                                          int width, int height) {
     CpuCacheFrame f;
     f.width = width;
     f.height = height;
-    const Clock::time_point t0 = Clock::now();
-    f.pixels = eye_ray_pixels(scene, rays, width, height);
-    f.eye_ms = ms_since(t0);
+    f.pixels = std::move(pixels);
     const Clock::time_point t1 = Clock::now();
     IrradianceOctree octree = scene_octree(scene, accuracy);
     f.term.assign(f.pixels.size(), glm::vec3(0.0f));

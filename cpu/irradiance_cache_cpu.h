@@ -38,6 +38,13 @@ CpuCacheFrame render_irradiance_cache_cpu(const Scene& scene, const RayTracer& r
                                           const RecordGatherOptions& options, float accuracy,
                                           int width, int height);
 
+// The same on given pixels (another G-buffer; eye_ms stays 0).
+CpuCacheFrame render_irradiance_cache_cpu(const Scene& scene, std::vector<SplatPixel> pixels,
+                                          const IrradianceGather& gather,
+                                          const RecordRadiance& radiance,
+                                          const RecordGatherOptions& options, float accuracy,
+                                          int width, int height);
+
 // Σ w E / Σ w of `records` at every pixel by octree lookups (the interpolation alone).
 std::vector<glm::vec3> interpolate_cpu(const Scene& scene,
                                        const std::vector<IrradianceRecord>& records,

@@ -310,6 +310,7 @@ int bench_irradiance_cache_versus_cpu(const Args& args, const std::string& scene
     const gpu::SceneMeshes meshes(scene);
     std::vector<glm::vec3> gpu_term;
     std::vector<IrradianceRecord> gpu_records;
+    std::vector<SplatPixel> gl_pixels;  // the GL G-buffer, rows top-down
     double gpu_splat_ms = 0.0;
     Row ours[2];
     for (int scan = 0; scan < 2; ++scan) {
@@ -334,6 +335,12 @@ int bench_irradiance_cache_versus_cpu(const Args& args, const std::string& scene
             gpu_splat_ms = method.last_stats().splat_ms;
             gpu_term = flip_rows(method.splat().read_term(), width, height);
             gpu_records = method.records();
+            const std::vector<SplatPixel> up = method.splat().read_gbuffer();
+            gl_pixels.resize(up.size());
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x)
+                    gl_pixels[size_t(height - 1 - y) * size_t(width) + size_t(x)] =
+                        up[size_t(y) * size_t(width) + size_t(x)];
         }
     }
     const cpu::RecordGatherOptions options = [&] {
@@ -355,6 +362,21 @@ int bench_irradiance_cache_versus_cpu(const Args& args, const std::string& scene
     print("CPU (Radiance's way)", radiance_row, nullptr);
     print("GL splat, GPU scan", ours[0], &radiance_row);
     print("GL splat, CPU scan", ours[1], &radiance_row);
+    {
+        // Radiance's way on the GL G-buffer's points and normals: tells whether a difference in
+        // record cost comes from the points gathered at or from the path around the gather.
+        const double c = cpu_ms_now();
+        const Clock::time_point t = Clock::now();
+        const cpu::CpuCacheFrame g = cpu::render_irradiance_cache_cpu(
+            scene, gl_pixels, gather, radiance, options, a, width, height);
+        Row row;
+        row.records = int(g.records.size());
+        row.record_ms = g.record_ms;
+        row.interp_ms =
+            std::chrono::duration<double, std::milli>(Clock::now() - t).count() - g.record_ms;
+        row.cpu_ms = cpu_ms_now() - c;
+        print("CPU, GL G-buffer", row, &radiance_row);
+    }
 
     // The same records (the GPU scan's) interpolated both ways.
     const std::vector<SplatPixel> eye = cpu::eye_ray_pixels(scene, rays, width, height);
