@@ -21,11 +21,13 @@ RecordRadiance aim_radiance_source(const Scene& scene, const std::vector<glm::ve
 RecordRadiance direct_radiance_source(const Scene& scene, const RayTracer& rays,
                                       int shadow_samples) {
     return [&scene, &rays, shadow_samples](const RayHit& hit) {
-        const Material& m = scene.objects[size_t(hit.object)].material;
+        // The albedo there, its texture included (pt's albedo at a hit).
+        const glm::vec3 albedo =
+            albedo_at(scene.objects[size_t(hit.object)], hit.triangle, hit.barycentric);
         // A fixed lattice rotation: the hit points of one record already vary.
         const glm::vec3 e =
             direct_irradiance(scene, rays, hit.position, hit.normal, shadow_samples, 0.5f, 0.5f);
-        return m.albedo * e * float(std::numbers::inv_pi);
+        return albedo * e * float(std::numbers::inv_pi);
     };
 }
 
@@ -88,8 +90,17 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
             dist[at] = r;
             if (samples && hit.hit) {
                 const Transform& tr = scene_.objects[size_t(hit.object)].transform;
-                (*samples)[at] = {radiance_jk, hit.t, hit.object,
-                                  glm::inverse(tr.rotation) * (hit.position - tr.translation)};
+                const glm::quat to_local = glm::inverse(tr.rotation);
+                const Material& mat = scene_.objects[size_t(hit.object)].material;
+                (*samples)[at] = {
+                    radiance_jk,
+                    hit.t,
+                    hit.object,
+                    to_local * (hit.position - tr.translation),
+                    to_local * hit.normal,
+                    mat.type == MaterialType::diffuse && glm::dot(d, hit.normal) < 0.0f,
+                    hit.triangle,
+                    hit.barycentric};
             }
             sum += radiance_jk;
             // Ward & Heckbert eq. 8: tilting n towards azimuth u raises cos θ of this sample by
@@ -142,7 +153,7 @@ IrradianceRecord IrradianceGather::gather_one(const GatherPoint& point,
 
 glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
                            const std::vector<Transform>& now, const std::vector<Transform>& next,
-                           int theta, int phi) {
+                           int theta, int phi, const RecordRadiance* next_radiance) {
     const int m = std::max(1, theta), n_phi = std::max(3, phi);
     const glm::vec3 n = record.normal;
     glm::vec3 t, b;
@@ -159,10 +170,22 @@ glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<Rec
         }
         const Transform& to = next[size_t(s.object)];
         const Transform& from = now[size_t(s.object)];
+        // The hit's radiance at t0+1: shaded again where it lands, or carried.
+        auto radiance_next = [&](const glm::vec3& x) {
+            if (!next_radiance || !s.shaded) return s.radiance;
+            RayHit hit;
+            hit.hit = true;
+            hit.object = s.object;
+            hit.triangle = s.triangle;
+            hit.barycentric = s.barycentric;
+            hit.position = x;
+            hit.normal = glm::normalize(to.rotation * s.local_normal);  // rigid transforms
+            return (*next_radiance)(hit);
+        };
         if (to.translation == from.translation && to.rotation == from.rotation) {
             if (s.distance < depth[i]) {
                 depth[i] = s.distance;
-                value[i] = s.radiance;
+                value[i] = radiance_next(to.apply_point(s.local));
             }
             continue;
         }
@@ -182,7 +205,7 @@ glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<Rec
         const size_t at = size_t(j) * size_t(n_phi) + size_t(k);
         if (dist < depth[at]) {  // the Z-test of the point splat
             depth[at] = dist;
-            value[at] = s.radiance;
+            value[at] = radiance_next(x);
         }
     }
     glm::vec3 sum(0.0f);

@@ -41,6 +41,10 @@ struct RecordSample {
     float distance = 0.0f;
     int object = -1;
     glm::vec3 local{0.0f};
+    glm::vec3 local_normal{0.0f};  // the hit's geometric normal, object space
+    bool shaded = false;           // a diffuse front face (the source gave its radiance)
+    int triangle = -1;             // for the albedo (texture) when shaded again
+    glm::vec2 barycentric{0.0f};
 };
 
 struct RecordGatherStats {
@@ -73,9 +77,12 @@ private:
 // transforms; hits on objects that stay keep their stratum exactly) and
 // carries its radiance; per stratum the nearest arrival wins; strata nothing lands in take the
 // farthest of their neighbours (the background, Gautron's hole filling) or keep their own value.
+// With `next_radiance` (the source at t0+1: the next frame's lights and materials) each moved
+// hit is shaded again there, as Gautron's GPU reprojection shades the reprojected points at
+// t+1 (§5.2.4), so a moving light's change is foreseen too; without it each keeps its radiance.
 glm::vec3 reproject_record(const IrradianceRecord& record, const std::vector<RecordSample>& samples,
                            const std::vector<Transform>& now, const std::vector<Transform>& next,
-                           int theta, int phi);
+                           int theta, int phi, const RecordRadiance* next_radiance = nullptr);
 
 // Gautron eq. 5.5-5.8: the frames a record made now may live, min(δt_max, a^t / |τ − 1|) with
 // τ = E(t0+1)/E(t0) on luminance, at least 1.

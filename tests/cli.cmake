@@ -174,6 +174,16 @@ add_test(NAME cli.bench_irradiance_cache
                  irradiance_cache --frames 6 --size 24x24 --ref-spp 1 --threads 1
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.bench_irradiance_cache PROPERTIES LABELS gl)
+# Table 4.2's stand-in: the CPU cache in Radiance's manner and the GL splat interpolate the same
+# records to under 1% relative RMS (fails if the octree misses records or the two disagree), and
+# AIM records are refused with the setting to use.
+add_test(NAME cli.bench_irradiance_cache_versus_cpu
+         COMMAND ${AG_EXPECT} 0 "GL records vs GL splat 0[.]00[0-9]" ${AG_BIN} bench
+                 irradiance_cache --versus-cpu --size 24x24
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.bench_irradiance_cache_versus_cpu PROPERTIES LABELS gl)
+ag_cli_test(bench_irradiance_cache_versus_cpu_aim 2 "add --set rc.source=direct" bench
+            irradiance_cache scenes/cornell.json --versus-cpu --size 8x8)
 ag_cli_test(rc_bad_source 2 "rc/source: expected one of aim, direct" render scenes/cornell.json -o x.exr
             --set rc.source=glossy)
 # Participating media (docs/media.md): pm refuses media; the media method needs media and a

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <limits>
+#include <optional>
 
 #include "gpu/gl.h"
 #include "shared/input_error.h"
@@ -24,6 +25,21 @@ Bounds world_bounds(const Object& o) {
 
 bool inside(const Bounds& b, const glm::vec3& p) {
     return glm::all(glm::greaterThanEqual(p, b.min)) && glm::all(glm::lessThanEqual(p, b.max));
+}
+
+// Whether a light differs between the frame and the next (then shading the reprojected hits again
+// tells something; otherwise it repeats the same shading).
+bool lights_move(const Scene& now, const Scene& next) {
+    if (now.lights.size() != next.lights.size()) return true;
+    for (size_t i = 0; i < now.lights.size(); ++i) {
+        const Light &a = now.lights[i], &b = next.lights[i];
+        if (a.position != b.position || a.intensity != b.intensity || a.radiance != b.radiance ||
+            a.corners != b.corners || a.enabled != b.enabled || a.direction != b.direction ||
+            a.irradiance != b.irradiance || a.cone_inner != b.cone_inner ||
+            a.cone_outer != b.cone_outer)
+            return true;
+    }
+    return false;
 }
 }  // namespace
 
@@ -102,8 +118,15 @@ IrradianceRecord IrradianceCacheMethod::make_record(const GatherPoint& at, int f
         std::vector<Transform> now, next;
         for (const Object& o : scene_.objects) now.push_back(o.transform);
         for (const Object& o : lookahead_->objects) next.push_back(o.transform);
+        // Direct-light records shade the moved hits again with the next frame's lights (shadow
+        // rays against this frame's geometry) when the lights change; AIM records carry theirs
+        // (the AIMs of t+1 are not known yet).
+        std::optional<cpu::RecordRadiance> next_radiance;
+        if (rc.source == RcSource::direct && lights_move(scene_, *lookahead_))
+            next_radiance = cpu::direct_radiance_source(*lookahead_, rays_, rc.shadow_samples);
         const glm::vec3 predicted =
-            cpu::reproject_record(r, samples, now, next, options.theta, options.phi);
+            cpu::reproject_record(r, samples, now, next, options.theta, options.phi,
+                                  next_radiance ? &*next_radiance : nullptr);
         life = cpu::record_lifespan(r.iim, predicted, rc.temporal_accuracy, rc.max_lifespan);
         // Extrapolated temporal gradient (Gautron eq. 5.12): the change over the next frame.
         r.temporal_gradient = predicted - r.iim;
@@ -141,7 +164,15 @@ void IrradianceCacheMethod::read_changes() {
                     if (!temporal || inside(b, r.position)) r.expires = now;
                 break;
             }
-            default:  // materials and lights change what every record saw
+            case ChangeKind::light_position:
+            case ChangeKind::light_power:
+            case ChangeKind::light_enabled:
+                // Direct-light records made with a look-ahead were shaded at t+1 with the next
+                // frame's lights: their lifespans foresaw it (as for object transforms).
+                if (temporal && lookahead_ && scene_.settings.rc.source == RcSource::direct) break;
+                for (IrradianceRecord& r : records_) r.expires = now;
+                break;
+            default:  // materials change what every record saw
                 for (IrradianceRecord& r : records_) r.expires = now;
                 break;
         }

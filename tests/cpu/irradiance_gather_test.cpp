@@ -175,4 +175,50 @@ TEST(IrradianceGather, ReprojectionFollowsAMovingEmitter) {
     EXPECT_LT(record_lifespan(r.iim, glm::vec3(moved), 0.05f, 20), 2);
 }
 
+// Gautron §5.2.4 with the hits shaded again at t+1: a record under a ceiling sees a floor lit by
+// a point light that moves; the reprojection that shades the hits with the next frame's light
+// predicts the gather at t+1 (same strata), the one that carries each hit's radiance does not.
+// Fails if the re-shading is dropped, uses this frame's light or maps the normals wrongly.
+TEST(IrradianceGather, ReprojectionShadesAgainForAMovingLight) {
+    Scene s;
+    s.path = "point light over a floor";
+    s.objects.push_back(quad_object("floor", 6.0f, glm::vec3(0.0f)));
+    s.objects.push_back(quad_object("ceiling", 6.0f, glm::vec3(0.0f, 1.0f, 0.0f), kFacingDown));
+    Light lamp;
+    lamp.name = "lamp";
+    lamp.type = LightType::point;
+    lamp.position = glm::vec3(0.4f, 0.5f, 0.0f);
+    lamp.intensity = glm::vec3(1.0f);
+    s.lights.push_back(lamp);
+    const Scene scene = finish(s, 0.5f);
+    Scene next_scene = scene;
+    next_scene.lights[0].position += glm::vec3(-0.15f, 0.0f, 0.1f);  // a frame's move
+
+    RayTracer rays(scene);
+    ThreadPool pool(1);
+    IrradianceGather gather(scene, rays, pool);
+    RecordGatherOptions o;
+    o.theta = 16;
+    o.phi = 64;
+    const GatherPoint at{glm::vec3(0.1f, 1.0f, 0.2f), glm::vec3(0.0f, -1.0f, 0.0f), 5};
+    std::vector<RecordSample> samples;
+    const IrradianceRecord r =
+        gather.gather_one(at, direct_radiance_source(scene, rays, 1), o, &samples);
+    const IrradianceRecord truth =
+        gather.gather_one(at, direct_radiance_source(next_scene, rays, 1), o);
+    ASSERT_GT(std::abs(truth.iim.x - r.iim.x), 0.05f * truth.iim.x);  // a real change
+
+    std::vector<Transform> now;
+    for (const Object& obj : scene.objects) now.push_back(obj.transform);
+    const RecordRadiance next_radiance = direct_radiance_source(next_scene, rays, 1);
+    const glm::vec3 shaded = reproject_record(r, samples, now, now, o.theta, o.phi, &next_radiance);
+    const glm::vec3 carried = reproject_record(r, samples, now, now, o.theta, o.phi);
+    EXPECT_NEAR(shaded.x, truth.iim.x, 0.005f * truth.iim.x);
+    EXPECT_NEAR(carried.x, r.iim.x, 1e-5f * r.iim.x);  // the same sum in another order
+    // τ from the shaded prediction shortens the life as the light's move demands.
+    EXPECT_NEAR(record_lifespan(r.iim, shaded, 0.05f, 20),
+                record_lifespan(r.iim, truth.iim, 0.05f, 20), 1);
+    EXPECT_LT(record_lifespan(r.iim, shaded, 0.05f, 20), 20);
+}
+
 }  // namespace ag::cpu

@@ -130,6 +130,23 @@ def test_errors_carry_the_cli_messages(afterglow_bin, tmp_path):
     assert "/objects/0/shape/size" in str(e.value)
 
 
+def test_refused_pipeline_leaves_the_scene_settings_as_they_were(cornell):
+    """Pipeline(scene, settings=...) applies the settings to the scene before the pipeline is
+    built; when the pipeline refuses them (here rc.gather gl with rc.source direct), the scene
+    gets its own settings back (fails if the bad settings stay on the scene)."""
+    before = cornell.settings
+    bad = {"indirect": {"method": "irradiance_cache"}, "rc": {"gather": "gl", "source": "direct"}}
+    with pytest.raises(afterglow.InputError, match="rc.source"):
+        afterglow.Pipeline(cornell, size=(8, 8), settings=bad)
+    assert cornell.settings == before
+    with pytest.raises(ValueError, match="mode"):
+        afterglow.Pipeline(cornell, size=(8, 8), mode="fastest", settings={"seed": 99})
+    assert cornell.settings == before
+    # The scene still builds a pipeline, and the good settings of one that is built stay.
+    afterglow.Pipeline(cornell, size=(8, 8), settings={"seed": 98}).run(1)
+    assert cornell.settings["seed"] == 98
+
+
 def test_errors_for_bad_edits_and_settings(cornell):
     with pytest.raises(afterglow.InputError, match=r"no object named 'nope' \(the scene has: "
                                                    r"floor, ceiling"):

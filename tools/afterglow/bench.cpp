@@ -143,6 +143,10 @@ const Command kBenchCommand{
              "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
         integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),
         flag("full", "'media': a 128^3 grid (his), one more photon count each, Tables 4.3/4.4"),
+        flag("versus-cpu",
+             "'irradiance_cache': Gautron's Table 4.2 without Radiance: one frame by a CPU "
+             "irradiance cache in Radiance's manner (eye rays, octree lookups, records on a miss) "
+             "against GL splatting, same records gather and a (needs rc.source direct)"),
         flag("no-prime",
              "'settle': start each run from nothing instead of the converged state of frame 0"),
     },
@@ -553,10 +557,11 @@ int run_bench(const Args& args) {
     if (what == "irradiance_cache") {
         int width = 0, height = 0;
         bench_size(args, 128, 128, width, height);
-        return bench_irradiance_cache(
-            args,
-            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cube_in_a_box.json",
-            width, height);
+        const std::string scene =
+            args.positionals().size() > 1 ? args.positionals()[1] : "scenes/cube_in_a_box.json";
+        if (args.has("versus-cpu"))
+            return bench_irradiance_cache_versus_cpu(args, scene, width, height);
+        return bench_irradiance_cache(args, scene, width, height);
     }
     if (what == "media") {
         auto context = bench_context(args);

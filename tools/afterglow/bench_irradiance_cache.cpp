@@ -4,12 +4,17 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <ctime>
 #include <optional>
 
+#include "cpu/irradiance_cache_cpu.h"
 #include "cpu/reference/reference.h"
+#include "gpu/gl.h"
 #include "gpu/gl_context.h"
+#include "gpu/scene_meshes.h"
 #include "shared/metrics.h"
 #include "shared/pipeline/frame_loop.h"
+#include "shared/pipeline/irradiance_cache_method.h"
 #include "shared/scene_file.h"
 #include "shared/script.h"
 
@@ -228,6 +233,166 @@ int bench_irradiance_cache(const Args& args, const std::string& scene_path, int 
                 100.0 * mean(r.not_reprojected), 100.0 * median(r.not_reprojected),
                 100.0 * *std::max_element(r.not_reprojected.begin(), r.not_reprojected.end()));
     }
+    return 0;
+}
+
+namespace {
+
+// Relative RMS difference of two E/π images over the pixels where both are lit (luminance).
+double relative_rms(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b) {
+    double num = 0.0, den = 0.0;
+    for (size_t i = 0; i < a.size() && i < b.size(); ++i) {
+        const double x = luminance(a[i]), y = luminance(b[i]);
+        if (x <= 0.0 || y <= 0.0) continue;
+        num += (x - y) * (x - y);
+        den += y * y;
+    }
+    return den > 0.0 ? std::sqrt(num / den) : 0.0;
+}
+
+// GL rows bottom-up → top-down.
+std::vector<glm::vec3> flip_rows(const std::vector<glm::vec3>& v, int width, int height) {
+    std::vector<glm::vec3> out(v.size());
+    for (int y = 0; y < height; ++y)
+        for (int x = 0; x < width; ++x)
+            out[size_t(height - 1 - y) * size_t(width) + size_t(x)] =
+                v[size_t(y) * size_t(width) + size_t(x)];
+    return out;
+}
+
+}  // namespace
+
+int bench_irradiance_cache_versus_cpu(const Args& args, const std::string& scene_path, int width,
+                                      int height) {
+    auto context = gpu::make_gl_context(args.gl_backend());
+    Scene scene = load_scene(scene_path);
+    args.apply_settings(scene);
+    scene.settings.indirect.method = IndirectMethodKind::irradiance_cache;
+    if (scene.settings.rc.source != RcSource::direct)
+        throw CliError(
+            "afterglow bench irradiance_cache --versus-cpu: compares single-bounce records (as "
+            "Gautron's Table 4.2 does): add --set rc.source=direct");
+    scene.settings.rc.records_per_frame = 1 << 30;
+    scene.settings.rc.max_lifespan = 0;
+    scene.camera.width = width;
+    scene.camera.height = height;
+    const float a = scene.settings.rc.accuracy;
+    std::printf(
+        "%s, %dx%d, a %.3f, %d x %d strata per record, rc.source direct, one thread for records; "
+        "Gautron's Table 4.2 at 1000x1000: Sponza a 0.1, Radiance 645 s, splatting 13.7 s "
+        "(47.1x); Sibenik a 0.15, 425 s, 14.3 s (29.7x)\n",
+        scene_path.c_str(), width, height, a, scene.settings.rc.theta_strata,
+        scene.settings.rc.phi_strata);
+
+    // Ours: GL G-buffer, records where the GPU scan finds cache misses, GPU splat (twice: the
+    // first frame builds the cache; the second splats the full cache once, as a still frame).
+    const std::vector<glm::vec3> no_aim;
+    // Wall times (ms) by phase, and the process's CPU time over the whole frame (every thread,
+    // llvmpipe's included): on a shared machine the CPU time is the steadier measure of work.
+    std::printf("%-22s %8s %11s %10s %10s %10s %9s %10s %9s\n", "", "records", "records_ms",
+                "ms/record", "interp_ms", "total_ms", "speed-up", "cpu_ms", "speed-up");
+    struct Row {
+        int records = 0;
+        double record_ms = 0.0, interp_ms = 0.0, cpu_ms = 0.0;
+        double total() const { return record_ms + interp_ms; }
+    };
+    auto print = [&](const char* name, const Row& r, const Row* baseline) {
+        std::printf("%-22s %8d %11.1f %10.3f %10.1f %10.1f %8.2fx %10.1f %8.2fx\n", name, r.records,
+                    r.record_ms, r.record_ms / std::max(1, r.records), r.interp_ms, r.total(),
+                    baseline ? baseline->total() / r.total() : 1.0, r.cpu_ms,
+                    baseline ? baseline->cpu_ms / std::max(1e-9, r.cpu_ms) : 1.0);
+    };
+    auto cpu_ms_now = [] { return 1000.0 * double(std::clock()) / double(CLOCKS_PER_SEC); };
+
+    cpu::RayTracer rays(scene);
+    ThreadPool pool(1);
+    cpu::IrradianceGather gather(scene, rays, pool);
+    const gpu::SceneMeshes meshes(scene);
+    std::vector<glm::vec3> gpu_term;
+    std::vector<IrradianceRecord> gpu_records;
+    std::vector<SplatPixel> gl_pixels;  // the GL G-buffer, rows top-down
+    double gpu_splat_ms = 0.0;
+    Row ours[2];
+    for (int scan = 0; scan < 2; ++scan) {
+        Scene s = scene;
+        s.settings.rc.scan = scan == 0 ? RcScan::gpu : RcScan::cpu;
+        IrradianceCacheMethod method(s, meshes, no_aim, width, height);
+        PipelineStats stats;
+        IndirectInputs in;
+        const double c0 = cpu_ms_now();
+        const Clock::time_point t0 = Clock::now();
+        method.update(in, stats);
+        gpu::gl::Finish();
+        const double wall = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+        ours[scan].cpu_ms = cpu_ms_now() - c0;
+        const IrradianceCacheStats first = method.last_stats();
+        ours[scan].records = first.records;
+        ours[scan].record_ms = first.gather_ms;
+        ours[scan].interp_ms = wall - first.gather_ms;  // G-buffer, splats, scans, normalise
+        if (scan == 0) {
+            in.frame = 1;
+            method.update(in, stats);
+            gpu_splat_ms = method.last_stats().splat_ms;
+            gpu_term = flip_rows(method.splat().read_term(), width, height);
+            gpu_records = method.records();
+            const std::vector<SplatPixel> up = method.splat().read_gbuffer();
+            gl_pixels.resize(up.size());
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x)
+                    gl_pixels[size_t(height - 1 - y) * size_t(width) + size_t(x)] =
+                        up[size_t(y) * size_t(width) + size_t(x)];
+        }
+    }
+    const cpu::RecordGatherOptions options = [&] {
+        IrradianceCacheMethod m(scene, meshes, no_aim, 8, 8);
+        return m.gather_options();
+    }();
+    const cpu::RecordRadiance radiance =
+        cpu::direct_radiance_source(scene, rays, scene.settings.rc.shadow_samples);
+    const double c1 = cpu_ms_now();
+    const Clock::time_point t1 = Clock::now();
+    const cpu::CpuCacheFrame cpu_frame =
+        cpu::render_irradiance_cache_cpu(scene, rays, gather, radiance, options, a, width, height);
+    const double cpu_wall = std::chrono::duration<double, std::milli>(Clock::now() - t1).count();
+    Row radiance_row;
+    radiance_row.records = int(cpu_frame.records.size());
+    radiance_row.record_ms = cpu_frame.record_ms;
+    radiance_row.interp_ms = cpu_wall - cpu_frame.record_ms;  // eye rays, lookups, inserts
+    radiance_row.cpu_ms = cpu_ms_now() - c1;
+    print("CPU (Radiance's way)", radiance_row, nullptr);
+    print("GL splat, GPU scan", ours[0], &radiance_row);
+    print("GL splat, CPU scan", ours[1], &radiance_row);
+    {
+        // Radiance's way on the GL G-buffer's points and normals: tells whether a difference in
+        // record cost comes from the points gathered at or from the path around the gather.
+        const double c = cpu_ms_now();
+        const Clock::time_point t = Clock::now();
+        const cpu::CpuCacheFrame g = cpu::render_irradiance_cache_cpu(
+            scene, gl_pixels, gather, radiance, options, a, width, height);
+        Row row;
+        row.records = int(g.records.size());
+        row.record_ms = g.record_ms;
+        row.interp_ms =
+            std::chrono::duration<double, std::milli>(Clock::now() - t).count() - g.record_ms;
+        row.cpu_ms = cpu_ms_now() - c;
+        print("CPU, GL G-buffer", row, &radiance_row);
+    }
+
+    // The same records (the GPU scan's) interpolated both ways.
+    const std::vector<SplatPixel> eye = cpu::eye_ray_pixels(scene, rays, width, height);
+    const Clock::time_point t2 = Clock::now();
+    const std::vector<glm::vec3> cpu_same = cpu::interpolate_cpu(scene, gpu_records, eye, a);
+    const double cpu_interp_ms =
+        std::chrono::duration<double, std::milli>(Clock::now() - t2).count();
+    std::printf(
+        "same %zu records, interpolation alone: CPU octree lookups %.1f ms, GL G-buffer + splat "
+        "%.1f ms (%.2fx); eye rays %.1f ms\n",
+        gpu_records.size(), cpu_interp_ms, gpu_splat_ms,
+        cpu_interp_ms / std::max(1e-9, gpu_splat_ms), cpu_frame.eye_ms);
+    std::printf(
+        "E/pi relative RMS: CPU (own records) vs GL splat %.4f; CPU interpolation of the GL "
+        "records vs GL splat %.4f\n",
+        relative_rms(cpu_frame.term, gpu_term), relative_rms(cpu_same, gpu_term));
     return 0;
 }
 

@@ -14,4 +14,11 @@ namespace ag::cli {
 // the reprojection error of the next frame's irradiance (Table 5.1).
 int bench_irradiance_cache(const Args& args, const std::string& scene_path, int width, int height);
 
+// --versus-cpu: Gautron's Table 4.2 without Radiance: one still frame by an irradiance cache in
+// Radiance's manner (eye rays, scanline order, octree lookups, records gathered at once on a miss,
+// all on the CPU) against our GL G-buffer, GPU scan and splatting with the same record gather and
+// the same a; records, record and interpolation time, speed-up, and how far the terms differ.
+int bench_irradiance_cache_versus_cpu(const Args& args, const std::string& scene_path, int width,
+                                      int height);
+
 }  // namespace ag::cli

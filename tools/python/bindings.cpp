@@ -198,7 +198,32 @@ public:
                std::optional<std::string> script)
         : holder_(std::move(holder)) {
         Scene& scene = holder_->for_edit();
+        // A pipeline that refuses its settings must leave the scene as it was: the settings go
+        // back (through apply_settings_json, so a changed lightmap is rebuilt back too).
+        const std::string settings_before = settings_to_json_value(scene.settings).dump();
         apply_settings(scene, settings);
+        try {
+            build(scene, size, threads, mode, gl, script);
+        } catch (...) {
+            loop_.reset();
+            if (context_) context_->make_current();
+            pipeline_.reset();
+            context_.reset();
+            apply_settings_json(scene, settings_before, "settings");
+            throw;
+        }
+    }
+
+    ~PyPipeline() {
+        if (!context_) return;
+        context_->make_current();
+        loop_.reset();
+        pipeline_.reset();
+    }
+
+private:
+    void build(Scene& scene, std::optional<std::array<int, 2>> size, std::optional<int> threads,
+               const std::string& mode, const std::string& gl, std::optional<std::string> script) {
         int width = scene.camera.width, height = scene.camera.height;
         if (size) {
             width = (*size)[0], height = (*size)[1];
@@ -219,13 +244,7 @@ public:
         };
     }
 
-    ~PyPipeline() {
-        if (!context_) return;
-        context_->make_current();
-        loop_.reset();
-        pipeline_.reset();
-    }
-
+public:
     py::dict run(int frames) {
         if (frames < 0) throw py::value_error("frames: expected a count >= 0");
         {
