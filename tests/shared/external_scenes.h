@@ -41,8 +41,8 @@ inline std::vector<std::string> missing_external_meshes(const std::filesystem::p
 }
 
 // The scene with every external mesh replaced by a unit box (same name, material, dynamic flag,
-// offset and transform; the mesh's scale dropped; a grey "stand_in" material where the mesh
-// brought its own). Everything else is read as load_scene reads it.
+// offset and transform; the mesh's scale and decimation dropped; a grey "stand_in" material where
+// the mesh brought its own). Everything else is read as load_scene reads it.
 inline Scene load_scene_with_stand_ins(const std::filesystem::path& scene_file) {
     nlohmann::json j = read_scene_json(scene_file);
     for (nlohmann::json& o : j.at("objects")) {
@@ -50,6 +50,7 @@ inline Scene load_scene_with_stand_ins(const std::filesystem::path& scene_file) 
         o.erase("mesh");
         o.erase("scale");
         o.erase("materials");
+        o.erase("decimate");            // applies to meshes only
         if (!o.contains("material")) {  // a mesh bringing its own materials
             j["materials"]["stand_in"] = {{"albedo", 0.5}};
             o["material"] = "stand_in";

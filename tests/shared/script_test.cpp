@@ -67,12 +67,17 @@ fs::path scene_for(const fs::path& script_path) {
     const struct {
         const char* prefix;
         const char* scene;
-    } scenes[] = {
-        {"cornell_", "cornell.json"},           {"two_rooms_", "two_rooms.json"},
-        {"conference_", "conference.json"},     {"sponza_", "sponza.json"},
-        {"bumpy_133k_", "bumpy_133k_box.json"}, {"cube_in_a_box", "cube_in_a_box.json"},
-        {"compare_edits", "compare.json"},      {"vpl_table_bunny", "vpl_table_bunny.json"},
-        {"moving_light", "moving_light.json"},  {"spheres_66", "spheres_66.json"}};
+    } scenes[] = {{"cornell_", "cornell.json"},
+                  {"two_rooms_", "two_rooms.json"},
+                  {"conference_", "conference.json"},
+                  {"sponza_", "sponza.json"},
+                  {"bumpy_133k_", "bumpy_133k_box.json"},
+                  {"cube_in_a_box", "cube_in_a_box.json"},
+                  {"compare_edits", "compare.json"},
+                  {"vpl_table_bunny", "vpl_table_bunny.json"},
+                  {"vpl_table_torus", "vpl_table_torus.json"},
+                  {"moving_light", "moving_light.json"},
+                  {"spheres_66", "spheres_66.json"}};
     for (const auto& s : scenes)
         if (name.rfind(s.prefix, 0) == 0) return kScenes / s.scene;
     return {};
