@@ -52,6 +52,10 @@ const Command kMediaCommand{
                1.0, MediaAdaptiveSettings{}.shadow),
         flag("no-filter",
              "adaptive: the importance-sampled deposits as they are (no mipmap levels)"),
+        number("dense-cut", "X",
+               "adaptive, a light inside the grid: cells whose density exceeds the floor by more "
+               "than X of the peak's excess form the dense set",
+               0.0, 1.0, MediaAdaptiveSettings{}.dense_cut),
         flag("his-sphere",
              "adaptive, a light inside the grid: his pipeline (thresholds and filter on the "
              "fluence itself, one set of photons through the smooth density) instead of ours"),
@@ -92,6 +96,7 @@ int run_media(const Args& args) {
     settings.adaptive.reconstruct = !args.has("no-filter");
     settings.adaptive.free_space = !args.has("his-sphere");
     settings.adaptive.stratified = !args.has("his-sphere");
+    settings.adaptive.dense_cut = float(args.get_double("dense-cut"));
     auto context = gpu::make_gl_context(args.gl_backend());
     // A scene without media or a point light is bad input: exit 1 with its message.
     const MediaMethodResult result = render_media(scene, settings);
