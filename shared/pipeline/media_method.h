@@ -40,6 +40,7 @@ struct MediaAdaptiveSettings {
     // Photon-weight filter: level ⌊w / Δweight⌋ with w = 1/(N p) his photon weight (N photons,
     // p the density at the photon's origin, mean 1): level k where the photons are as sparse as
     // 1/(k Δweight) uniform ones or sparser (2e-5: level 1 below 50,000-photon density).
+    // For a 64-voxel grid; scaled by 64 / (voxels along the longest side).
     float delta_weight = 2e-5f;
     int max_level = 4;        // highest mipmap level read
     bool reconstruct = true;  // false: the raw importance-sampled deposits (for the bias tests)

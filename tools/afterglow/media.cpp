@@ -41,8 +41,10 @@ const Command kMediaCommand{
                 MediaAdaptiveSettings{}.pilot_side),
         number("background", "X", "adaptive: density of unselected cells, relative to the peak",
                1e-4, 1.0, MediaAdaptiveSettings{}.background),
-        number("delta-weight", "W", "adaptive: photon weight per mipmap level", 1e-12, 1.0,
-               MediaAdaptiveSettings{}.delta_weight),
+        number(
+            "delta-weight", "W",
+            "adaptive: photon weight per mipmap level, for a 64-voxel grid (scaled by 64 / --grid)",
+            1e-12, 1.0, MediaAdaptiveSettings{}.delta_weight),
         number("gradient", "X",
                "adaptive: a coarse voxel is sampled tightly where its fluence gradient times its "
                "size reaches X times the mean fluence",
