@@ -28,9 +28,19 @@ struct MediaAdaptiveSettings {
     float gradient = 0.5f;
     float shadow = 0.2f;
     float background = 0.1f;  // density of unselected cells, relative to the densest cell
+    // For a light inside the grid (photons over the sphere of directions; not his, docs/media.md
+    // "A light inside the grid"): the thresholds and the filter see fluence × r², r the distance
+    // to the light, so that the light's own 1/r² falloff is neither an edge, nor a shadow, nor
+    // blurred; and the photons are a uniform Hammersley set at the density's floor plus a set
+    // through the cells whose excess over the floor is above dense_cut of the peak's (a
+    // two-level density). False: his pipeline there too. On a photon plane, his pipeline.
+    bool free_space = true;
+    bool stratified = true;
+    float dense_cut = 0.1f;
     // Photon-weight filter: level ⌊w / Δweight⌋ with w = 1/(N p) his photon weight (N photons,
     // p the density at the photon's origin, mean 1): level k where the photons are as sparse as
     // 1/(k Δweight) uniform ones or sparser (2e-5: level 1 below 50,000-photon density).
+    // For a 64-voxel grid; scaled by 64 / (voxels along the longest side).
     float delta_weight = 2e-5f;
     int max_level = 4;        // highest mipmap level read
     bool reconstruct = true;  // false: the raw importance-sampled deposits (for the bias tests)

@@ -251,6 +251,8 @@ TEST_F(MediaMarcherTest, PhotonPlanePowerIsTheGridsSolidAngle) {
     const std::vector<MediaPhoton> photons = plane_photons(light, intensity, b, 40000);
     const double expected = intensity * box_solid_angle(b, light);
     const MediaMarchResult r = marcher.march(grid, photons, MediaMarchSettings{});
+    std::printf("photon plane: entered %.6f, I * solid angle %.6f; absorbed + escaped %.6f\n",
+                r.entered, expected, r.absorbed + r.escaped);
     EXPECT_NEAR(r.entered, expected, 0.005 * expected);
     EXPECT_NEAR(r.absorbed + r.escaped, r.entered, 1e-4 * r.entered);
     EXPECT_GT(r.absorbed, 0.3 * r.entered);

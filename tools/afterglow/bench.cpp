@@ -74,7 +74,8 @@ const Command kBenchCommand{
     "scenes/media_glass_fog_point.json): Pfeuti 2009 at --size (default 48x48) and --grid "
     "(default 64): the reference and adaptive pipelines' RMSE against a --ref-photons (default "
     "2M marched) reference at doubling photon counts and the photons each needs at equal RMSE, "
-    "Table 4.2's passes, Table 4.1's sampling orders; --full: 128^3, one more count each and "
+    "Table 4.2's passes, Table 4.1's sampling orders, Table 4.5's uniform / adaptive / "
+    "complement marching; --full: 128^3, one more count each and "
     "Tables 4.3/4.4 on our cube and bunny scenes (docs/media.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),

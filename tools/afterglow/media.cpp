@@ -41,14 +41,31 @@ const Command kMediaCommand{
                 MediaAdaptiveSettings{}.pilot_side),
         number("background", "X", "adaptive: density of unselected cells, relative to the peak",
                1e-4, 1.0, MediaAdaptiveSettings{}.background),
-        number("delta-weight", "W", "adaptive: photon weight per mipmap level", 1e-12, 1.0,
-               MediaAdaptiveSettings{}.delta_weight),
-        integer("seed", "N",
-                "adaptive: pilot jitter and Hammersley rotation; the bounced photons' directions",
-                0, 1 << 30, 0),
+        number(
+            "delta-weight", "W",
+            "adaptive: photon weight per mipmap level, for a 64-voxel grid (scaled by 64 / --grid)",
+            1e-12, 1.0, MediaAdaptiveSettings{}.delta_weight),
+        number("gradient", "X",
+               "adaptive: a coarse voxel is sampled tightly where its fluence gradient times its "
+               "size reaches X times the mean fluence",
+               0.0, 1e6, MediaAdaptiveSettings{}.gradient),
+        number("shadow", "X",
+               "adaptive: ... or where its fluence is at most X times the mean (0: never)", 0.0,
+               1.0, MediaAdaptiveSettings{}.shadow),
+        flag("no-filter",
+             "adaptive: the importance-sampled deposits as they are (no mipmap levels)"),
+        number("dense-cut", "X",
+               "adaptive, a light inside the grid: cells whose density exceeds the floor by more "
+               "than X of the peak's excess form the dense set",
+               0.0, 1.0, MediaAdaptiveSettings{}.dense_cut),
+        flag("his-sphere",
+             "adaptive, a light inside the grid: his pipeline (thresholds and filter on the "
+             "fluence itself, one set of photons through the smooth density) instead of ours"),
         size_option("image size (default: the scene camera's resolution)"),
-        flag("slices",
-             "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre"),
+        flag(
+            "slices",
+            "also write OUT.{n,sigma_s,fluence}.exr: x-y slices through the grid centre (adaptive: "
+            "OUT.level.exr and the photon density OUT.density.exr)"),
         number("exposure", "STOPS", "PNG exposure", -20.0, 20.0, 0.0),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
@@ -76,8 +93,12 @@ int run_media(const Args& args) {
     settings.adaptive.pilot_side = args.get_int("pilots");
     settings.adaptive.background = float(args.get_double("background"));
     settings.adaptive.delta_weight = float(args.get_double("delta-weight"));
-    settings.adaptive.seed = uint32_t(args.get_int("seed"));
-    settings.seed = settings.adaptive.seed;
+    settings.adaptive.gradient = float(args.get_double("gradient"));
+    settings.adaptive.shadow = float(args.get_double("shadow"));
+    settings.adaptive.reconstruct = !args.has("no-filter");
+    settings.adaptive.free_space = !args.has("his-sphere");
+    settings.adaptive.stratified = !args.has("his-sphere");
+    settings.adaptive.dense_cut = float(args.get_double("dense-cut"));
     auto context = gpu::make_gl_context(args.gl_backend());
     // A scene without media or a point light is bad input: exit 1 with its message.
     const MediaMethodResult result = render_media(scene, settings);
@@ -112,6 +133,13 @@ int run_media(const Args& args) {
         std::vector<float> levels(result.levels.begin(), result.levels.end());
         write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),
                     out.substr(0, out.size() - 4) + ".level.exr");
+        // The photon density over the plane (or the sphere of directions), SIDE x SIDE.
+        const int side = settings.adaptive.pilot_side;
+        Image density(side, side);
+        for (int y = 0; y < side; ++y)
+            for (int x = 0; x < side; ++x)
+                density.set_rgb(x, y, glm::vec3(float(result.density[size_t(y * side + x)])));
+        write_image(density, out.substr(0, out.size() - 4) + ".density.exr");
     }
     std::cerr << where << ": wrote " << out << " and " << png << "\n";
     return 0;
