@@ -20,8 +20,8 @@ constexpr int kTextureSubsamples = 4;  // per texel side, for its mean albedo
 // spiral, each point standing for 1/64 of the disc's area. A fixed pattern keeps the AIM
 // deterministic and the same for a rebuild from the same hits.
 constexpr int kDiscSamples = 64;
-// The least disc fraction an estimate is divided by: a texel deep inside a solid (the floor under
-// a box) reaches out to the photons beside it, and a handful of open points must not blow it up.
+// The least disc fraction an estimate is divided by (a quarter disc in a right-angled corner is
+// 0.25; sharper corners of a chart must not blow the estimate up).
 constexpr double kMinDiscFraction = 0.125;
 
 const std::array<glm::vec2, kDiscSamples>& disc_pattern() {
@@ -35,10 +35,6 @@ const std::array<glm::vec2, kDiscSamples>& disc_pattern() {
         return p;
     }();
     return pattern;
-}
-
-bool contains(const Bounds& b, const glm::vec3& p) {
-    return glm::all(glm::greaterThanEqual(p, b.min)) && glm::all(glm::lessThanEqual(p, b.max));
 }
 
 // The mean of the object's albedo texture over texel `t`: n × n points of the texel square in
@@ -71,10 +67,8 @@ glm::vec3 texel_texture_mean(const Scene& scene, const TexelRecord& t) {
 
 }  // namespace
 
-Aim::Aim(const Scene& scene, ThreadPool& pool, const RayTracer& rays)
-    : scene_(scene), pool_(pool), rays_(rays) {
+Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     if (scene_.settings.aim.boundary_correction) coverage_ = texel_coverage_masks(scene_);
-    for (const Object& o : scene_.objects) object_bounds_.push_back(mesh_bounds(o.mesh));
     surface_texels_.resize(scene_.surfaces.size());
     for (int i = 0; i < int(scene_.atlas.texels.size()); ++i)
         surface_texels_[size_t(scene_.atlas.texels[size_t(i)].surface)].push_back(i);
@@ -94,8 +88,7 @@ Aim::Aim(const Scene& scene, ThreadPool& pool, const RayTracer& rays)
 int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     SurfaceHits& s = maps.surface(surface);
     const std::vector<int>& texels = surface_texels_[size_t(surface)];
-    const int object_index = scene_.surfaces[size_t(surface)].object;
-    const Object& object = scene_.objects[size_t(object_index)];
+    const Object& object = scene_.objects[size_t(scene_.surfaces[size_t(surface)].object)];
     const glm::vec3 albedo =
         object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
 
@@ -106,29 +99,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     const int k = scene_.settings.aim.knn;
     const bool correct = scene_.settings.aim.boundary_correction;
 
-    // World bounds of the other objects as placed now, a little wider: only disc points inside
-    // one of them can lie inside a solid, and only those cast a ray.
-    std::vector<Bounds> solids;
-    if (correct)
-        for (size_t o = 0; o < scene_.objects.size(); ++o) {
-            if (int(o) == object_index || object_bounds_[o].empty()) continue;
-            Bounds b;
-            const Bounds& ob = object_bounds_[o];
-            for (int c = 0; c < 8; ++c)
-                b.add(scene_.objects[o].transform.apply_point({c & 1 ? ob.max.x : ob.min.x,
-                                                               c & 2 ? ob.max.y : ob.min.y,
-                                                               c & 4 ? ob.max.z : ob.min.z}));
-            const float margin = 1e-3f * glm::length(b.extent()) + 4.0f * rays_.epsilon();
-            b.min -= margin;
-            b.max += margin;
-            solids.push_back(b);
-        }
-
     std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
         indirect(texels.size(), glm::vec3(0.0f));
-    std::vector<double> open_area(texels.size());
-    for (size_t i = 0; i < texels.size(); ++i)
-        open_area[i] = double(scene_.atlas.texels[size_t(texels[i])].area);
     pool_.parallel_for(
         texels.size(),
         [&](size_t i) {
@@ -143,12 +115,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
                 const double texel = scene_.atlas.charts[size_t(t.chart)].texel_size;
                 r2 = texel * texel / std::numbers::pi;
             }
-            // Only the part of the disc that photons can reach holds them: divide by its area.
-            if (correct) {
-                const DiscCoverage c = disc_coverage(texels[i], std::sqrt(r2), solids);
-                r2 *= c.disc;
-                open_area[i] *= c.footprint;
-            }
+            // Only the part of the disc on the surface holds photons: divide by its area.
+            if (correct) r2 *= disc_on_surface(texels[i], std::sqrt(r2));
             glm::dvec3 sum(0.0), bounced(0.0);
             for (int j = 0; j < n; ++j) {
                 const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];
@@ -160,13 +128,14 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         },
         16);
 
-    // Scale the surface's estimates so that their integral over the area photons can reach,
-    // Σ E·area (texels inside solids left out), equals the flux its photon hits actually carry:
-    // the AIM conserves energy per surface. Without the boundary correction the kNN disc reaches
-    // past the surface's edges and the estimate falls there (to about ½ on an edge, ¼ in a
-    // corner), and this scale lifts the whole surface instead, leaving its edges dark.
+    // Scale the surface's estimates so that their integral, Σ E·area, equals the flux its photon
+    // hits actually carry: the AIM conserves energy per surface. Without the boundary correction
+    // the kNN disc reaches past the surface's edges and the estimate falls there (to about ½ on
+    // an edge, ¼ in a corner), and this scale lifts the whole surface instead, leaving its edges
+    // dark and its middle bright.
     glm::dvec3 estimated(0.0);
-    for (size_t i = 0; i < texels.size(); ++i) estimated += glm::dvec3(e[i]) * open_area[i];
+    for (size_t i = 0; i < texels.size(); ++i)
+        estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(texels[i])].area);
     for (int c = 0; c < 3; ++c) {
         const double scale = estimated[c] > 0.0 ? s.flux[c] / estimated[c] : 0.0;
         for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
@@ -194,50 +163,22 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     return int(texels.size());
 }
 
-Aim::DiscCoverage Aim::disc_coverage(int record, double radius,
-                                     const std::vector<Bounds>& solids) const {
+double Aim::disc_on_surface(int record, double radius) const {
     const LightmapAtlas& atlas = scene_.atlas;
     const TexelRecord& t = atlas.texels[size_t(record)];
     const Chart& chart = atlas.charts[size_t(t.chart)];
-    const Transform& transform = scene_.objects[size_t(t.object)].transform;
     // Past the chart's edge a surface of several charts may go on in another chart (elsewhere in
     // the atlas): there the disc is taken to lie on the surface.
-    const bool whole_surface = scene_.surfaces[size_t(t.surface)].charts.size() == 1;
+    if (scene_.surfaces[size_t(t.surface)].charts.size() != 1) return 1.0;
     const glm::vec3 n = t.normal;
     const glm::vec3 a = std::abs(n.x) > 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1, 0, 0);
     const glm::vec3 b1 = glm::normalize(a - n * glm::dot(n, a)), b2 = glm::cross(n, b1);
-    const glm::vec3 wn = transform.apply_vector(n);
-    // Inside a closed solid the first surface a ray meets is a back face.
-    auto open = [&](const glm::vec3& p) {
-        const glm::vec3 w = transform.apply_point(p);
-        if (std::none_of(solids.begin(), solids.end(),
-                         [&](const Bounds& b) { return contains(b, w); }))
-            return true;
-        const RayHit h = rays_.intersect({w + rays_.epsilon() * wn, wn, 0.0f, 1e30f});
-        return !(h.hit && glm::dot(h.normal, wn) > 0.0f);
-    };
-    auto count = [&](double r, int* on, int* open_count) {
-        *on = *open_count = 0;
-        for (const glm::vec2& s : disc_pattern()) {
-            const glm::vec3 p = t.position + float(r) * (s.x * b1 + s.y * b2);
-            if (!on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p)) &&
-                whole_surface)
-                continue;
-            ++*on;
-            if (open(p)) ++*open_count;
-        }
-    };
-    DiscCoverage c;
-    int on = 0, open_count = 0;
-    count(radius, &on, &open_count);
-    c.disc = std::max(kMinDiscFraction, double(open_count) / double(kDiscSamples));
-    if (!solids.empty()) {
-        // The texel's own footprint: a disc of its area; the part off the chart is already
-        // outside the texel's area.
-        count(double(chart.texel_size) / std::sqrt(std::numbers::pi), &on, &open_count);
-        c.footprint = on > 0 ? double(open_count) / double(on) : 1.0;
+    int on = 0;
+    for (const glm::vec2& s : disc_pattern()) {
+        const glm::vec3 p = t.position + float(radius) * (s.x * b1 + s.y * b2);
+        if (on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) ++on;
     }
-    return c;
+    return std::max(kMinDiscFraction, double(on) / double(kDiscSamples));
 }
 
 int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {

@@ -1,16 +1,15 @@
 // Approximated illumination maps (Larsen ch. 10): per texel, an N-nearest-neighbour density
 // estimate over the photon hits of the texel's own surface, E = ΣΦ / (π r² f), stored as the
 // diffusely reflected radiance L = ρ/π · E in the shared atlas layout. f is the fraction of the
-// disc that can receive photons: on the surface's chart and outside every solid (the kNN
-// estimate's boundary bias, which otherwise darkens chart edges and contacts). Surfaces are
-// rebuilt in order of Δf / area, above a threshold, under a per-frame budget.
+// disc that lies on the surface's chart (the kNN estimate's boundary bias, which otherwise
+// halves the estimate along chart edges: the room's creases and corners). Surfaces are rebuilt
+// in order of Δf / area, above a threshold, under a per-frame budget.
 #pragma once
 
 #include <glm/glm.hpp>
 #include <vector>
 
 #include "cpu/photon_map.h"
-#include "cpu/ray_tracer.h"
 #include "shared/parallel.h"
 #include "shared/scene.h"
 
@@ -18,10 +17,7 @@ namespace ag::cpu {
 
 class Aim {
 public:
-    // `rays` finds the parts of a texel's disc inside other solids (the floor under a box); it
-    // must be up to date with the scene whenever a surface is rebuilt (the photon simulation's
-    // is: AIMs are rebuilt after the photons of the same frame).
-    Aim(const Scene& scene, ThreadPool& pool, const RayTracer& rays);
+    Aim(const Scene& scene, ThreadPool& pool);
 
     // Rebuilds the most-changed surfaces (Δf / area, above aim.delta_threshold relative to the
     // surface's flux) up to aim.surfaces_per_frame. Resets those surfaces' Δf. Returns texels
@@ -51,22 +47,13 @@ public:
     const std::vector<float>& indirect_floors() const { return indirect_floor_; }
 
 private:
-    // The fraction of the disc of radius `radius` around texel record `record` (in its tangent
-    // plane) that lies on the surface and outside every solid, and the fraction of the texel's
-    // own footprint (a disc of its area) outside every solid. Deterministic: a fixed pattern.
-    struct DiscCoverage {
-        double disc = 1.0;
-        double footprint = 1.0;
-    };
-    DiscCoverage disc_coverage(int record, double radius,
-                               const std::vector<Bounds>& solid_bounds) const;
+    // The fraction of the disc of radius `radius` around texel record `record`, in its tangent
+    // plane, that lies on the surface (its chart). Deterministic: a fixed pattern of points.
+    double disc_on_surface(int record, double radius) const;
 
     const Scene& scene_;
     ThreadPool& pool_;
-    const RayTracer& rays_;
-    std::vector<uint16_t>
-        coverage_;  // texel_coverage_masks: which parts of a texel are on its chart
-    std::vector<Bounds> object_bounds_;             // per object, object space
+    std::vector<uint16_t> coverage_;  // texel_coverage_masks: which parts of texels are on charts
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
     std::vector<float> indirect_;        // per record: indirect irradiance (energy), −1 = never

@@ -103,7 +103,7 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
 
     cpu::PhotonSimulation photons(scene, pool);
     photons.trace_all();
-    cpu::Aim aim(scene, pool, photons.rays());
+    cpu::Aim aim(scene, pool);
     aim.rebuild_all(photons.maps());
     const std::vector<glm::vec3>& aim_radiance = aim.radiance();
     const cpu::RayTracer rays(scene);

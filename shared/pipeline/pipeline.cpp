@@ -52,7 +52,7 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     media_settings_.width = width;
     media_settings_.height = height;
     photons_ = std::make_unique<cpu::PhotonSimulation>(scene_, pool_);
-    aim_ = std::make_unique<cpu::Aim>(scene_, pool_, photons_->rays());
+    aim_ = std::make_unique<cpu::Aim>(scene_, pool_);
     caustic_tracer_ = std::make_unique<cpu::CausticTracer>(scene_, pool_);
     meshes_ = std::make_unique<gpu::SceneMeshes>(scene_);
     renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);

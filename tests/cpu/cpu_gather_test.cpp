@@ -44,7 +44,7 @@ struct Simulated {
         if (tweak) tweak(scene);
         sim = std::make_unique<PhotonSimulation>(scene, pool);
         sim->trace_all();
-        aim = std::make_unique<Aim>(scene, pool, sim->rays());
+        aim = std::make_unique<Aim>(scene, pool);
         aim->rebuild_all(sim->maps());
     }
 };

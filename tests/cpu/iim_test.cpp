@@ -28,7 +28,7 @@ struct Cornell {
         scene.settings.gather.refine_passes = refine_passes;
         sim = std::make_unique<PhotonSimulation>(scene, pool);
         sim->trace_all();
-        aim = std::make_unique<Aim>(scene, pool, sim->rays());
+        aim = std::make_unique<Aim>(scene, pool);
         aim->rebuild_all(sim->maps());
         scene.settings.seed = seed;  // the gather's ray sets only: photons and AIMs are the same
     }

@@ -469,7 +469,7 @@ TEST(SelectiveTracing, DeltaBookkeepingIsExact) {
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     settle(sim);
-    Aim aim(scene, pool, sim.rays());
+    Aim aim(scene, pool);
     aim.rebuild_all(sim.maps());  // resets every Δ
     std::vector<glm::dvec3> flux0;
     for (int s = 0; s < int(sim.maps().surface_count()); ++s) {

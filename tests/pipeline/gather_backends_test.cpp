@@ -173,7 +173,7 @@ TEST_P(GatherBackendTest, ResultsDoNotDependOnTheBatch) {
     ThreadPool pool(2);
     cpu::PhotonSimulation sim(scene, pool);
     sim.trace_all();
-    cpu::Aim aim(scene, pool, sim.rays());
+    cpu::Aim aim(scene, pool);
     aim.rebuild_all(sim.maps());
     Backend backend(GetParam(), scene, aim.radiance());
     const std::vector<int> all = all_texels(scene);
@@ -208,7 +208,7 @@ TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
     ThreadPool pool(2);
     cpu::PhotonSimulation sim(scene, pool);
     sim.trace_all();
-    cpu::Aim aim(scene, pool, sim.rays());
+    cpu::Aim aim(scene, pool);
     aim.rebuild_all(sim.maps());
 
     const std::vector<int> all = all_texels(scene);

@@ -127,7 +127,7 @@ TEST_F(IrradianceCacheMethodTest, GlHemiPlaneRecordsAgreeWithTheRays) {
     ThreadPool pool(2);
     cpu::PhotonSimulation sim(scene, pool);
     sim.trace_all();
-    cpu::Aim aim(scene, pool, sim.rays());
+    cpu::Aim aim(scene, pool);
     aim.rebuild_all(sim.maps());
 
     std::vector<GatherPoint> points;

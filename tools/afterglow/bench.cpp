@@ -327,7 +327,7 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
         ThreadPool pool(1);
         cpu::PhotonSimulation sim(scene, pool);
         sim.trace_all();
-        cpu::Aim aim(scene, pool, sim.rays());
+        cpu::Aim aim(scene, pool);
         aim.rebuild_all(sim.maps());
         gpu::SceneMeshes meshes(scene);
         gpu::LightmapTexture aim_texture(scene.atlas);

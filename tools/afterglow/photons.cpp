@@ -56,7 +56,7 @@ int run_photons(const Args& args) {
     ThreadPool pool(threads);
     cpu::PhotonSimulation sim(scene, pool);
     sim.set_query_invalidation(!args.has("no-query"));
-    cpu::Aim aim(scene, pool, sim.rays());
+    cpu::Aim aim(scene, pool);
     std::optional<Script> script;
     if (args.has("script"))
         script.emplace(args.get("script"));  // a syntax error stops here (exit 1)
