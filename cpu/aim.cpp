@@ -1,17 +1,41 @@
 #include "cpu/aim.h"
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <limits>
 #include <numbers>
 #include <numeric>
 
 #include "cpu/knn.h"
+#include "shared/charts.h"
 
 namespace ag::cpu {
 
 namespace {
 
 constexpr int kTextureSubsamples = 4;  // per texel side, for its mean albedo
+
+// Points of the disc that measure how much of it can receive photons: a sunflower (Vogel)
+// spiral, each point standing for 1/64 of the disc's area. A fixed pattern keeps the AIM
+// deterministic and the same for a rebuild from the same hits.
+constexpr int kDiscSamples = 64;
+// The least disc fraction an estimate is divided by (a quarter disc in a right-angled corner is
+// 0.25; sharper corners of a chart must not blow the estimate up).
+constexpr double kMinDiscFraction = 0.125;
+
+const std::array<glm::vec2, kDiscSamples>& disc_pattern() {
+    static const std::array<glm::vec2, kDiscSamples> pattern = [] {
+        std::array<glm::vec2, kDiscSamples> p{};
+        const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+        for (int i = 0; i < kDiscSamples; ++i) {
+            const double r = std::sqrt((i + 0.5) / kDiscSamples), a = golden * i;
+            p[size_t(i)] = glm::vec2(float(r * std::cos(a)), float(r * std::sin(a)));
+        }
+        return p;
+    }();
+    return pattern;
+}
 
 // The mean of the object's albedo texture over texel `t`: n × n points of the texel square in
 // atlas space, each mapped onto the record's triangle by its atlas-space barycentrics (clamped
@@ -44,6 +68,7 @@ glm::vec3 texel_texture_mean(const Scene& scene, const TexelRecord& t) {
 }  // namespace
 
 Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
+    if (scene_.settings.aim.boundary_correction) coverage_ = texel_coverage_masks(scene_);
     surface_texels_.resize(scene_.surfaces.size());
     for (int i = 0; i < int(scene_.atlas.texels.size()); ++i)
         surface_texels_[size_t(scene_.atlas.texels[size_t(i)].surface)].push_back(i);
@@ -72,6 +97,7 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     KnnIndex index;
     index.build(points);
     const int k = scene_.settings.aim.knn;
+    const bool correct = scene_.settings.aim.boundary_correction;
 
     std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
         indirect(texels.size(), glm::vec3(0.0f));
@@ -89,6 +115,8 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
                 const double texel = scene_.atlas.charts[size_t(t.chart)].texel_size;
                 r2 = texel * texel / std::numbers::pi;
             }
+            // Only the part of the disc on the surface holds photons: divide by its area.
+            if (correct) r2 *= disc_on_surface(texels[i], std::sqrt(r2));
             glm::dvec3 sum(0.0), bounced(0.0);
             for (int j = 0; j < n; ++j) {
                 const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];
@@ -100,10 +128,11 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         },
         16);
 
-    // Near a surface's edges the kNN disc reaches past the surface and the estimate falls (to
-    // about ½ on an edge, ¼ in a corner); with a few texels per wall most texels sit there.
     // Scale the surface's estimates so that their integral, Σ E·area, equals the flux its photon
-    // hits actually carry: the AIM keeps the kNN shape and conserves energy per surface.
+    // hits actually carry: the AIM conserves energy per surface. Without the boundary correction
+    // the kNN disc reaches past the surface's edges and the estimate falls there (to about ½ on
+    // an edge, ¼ in a corner), and this scale lifts the whole surface instead, leaving its edges
+    // dark and its middle bright.
     glm::dvec3 estimated(0.0);
     for (size_t i = 0; i < texels.size(); ++i)
         estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(texels[i])].area);
@@ -132,6 +161,24 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     s.delta_f = 0.0;
     s.signed_delta = glm::dvec3(0.0);
     return int(texels.size());
+}
+
+double Aim::disc_on_surface(int record, double radius) const {
+    const LightmapAtlas& atlas = scene_.atlas;
+    const TexelRecord& t = atlas.texels[size_t(record)];
+    const Chart& chart = atlas.charts[size_t(t.chart)];
+    // Past the chart's edge a surface of several charts may go on in another chart (elsewhere in
+    // the atlas): there the disc is taken to lie on the surface.
+    if (scene_.surfaces[size_t(t.surface)].charts.size() != 1) return 1.0;
+    const glm::vec3 n = t.normal;
+    const glm::vec3 a = std::abs(n.x) > 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1, 0, 0);
+    const glm::vec3 b1 = glm::normalize(a - n * glm::dot(n, a)), b2 = glm::cross(n, b1);
+    int on = 0;
+    for (const glm::vec2& s : disc_pattern()) {
+        const glm::vec3 p = t.position + float(radius) * (s.x * b1 + s.y * b2);
+        if (on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) ++on;
+    }
+    return std::max(kMinDiscFraction, double(on) / double(kDiscSamples));
 }
 
 int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {

@@ -1,7 +1,9 @@
 // Approximated illumination maps (Larsen ch. 10): per texel, an N-nearest-neighbour density
-// estimate over the photon hits of the texel's own surface, E = ΣΦ / (π r²), stored as the
-// diffusely reflected radiance L = ρ/π · E in the shared atlas layout. Surfaces are rebuilt in
-// order of Δf / area, above a threshold, under a per-frame budget.
+// estimate over the photon hits of the texel's own surface, E = ΣΦ / (π r² f), stored as the
+// diffusely reflected radiance L = ρ/π · E in the shared atlas layout. f is the fraction of the
+// disc that lies on the surface's chart (the kNN estimate's boundary bias, which otherwise
+// halves the estimate along chart edges: the room's creases and corners). Surfaces are rebuilt
+// in order of Δf / area, above a threshold, under a per-frame budget.
 #pragma once
 
 #include <glm/glm.hpp>
@@ -45,8 +47,13 @@ public:
     const std::vector<float>& indirect_floors() const { return indirect_floor_; }
 
 private:
+    // The fraction of the disc of radius `radius` around texel record `record`, in its tangent
+    // plane, that lies on the surface (its chart). Deterministic: a fixed pattern of points.
+    double disc_on_surface(int record, double radius) const;
+
     const Scene& scene_;
     ThreadPool& pool_;
+    std::vector<uint16_t> coverage_;  // texel_coverage_masks: which parts of texels are on charts
     std::vector<std::vector<int>> surface_texels_;  // per surface: indices into atlas.texels
     std::vector<glm::vec3> radiance_, irradiance_;
     std::vector<float> indirect_;        // per record: indirect irradiance (energy), −1 = never

@@ -979,4 +979,55 @@ std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int recor
     return out;
 }
 
+std::vector<uint16_t> texel_coverage_masks(const Scene& scene) {
+    const LightmapAtlas& atlas = scene.atlas;
+    constexpr int n = kCoverageSubdivision;
+    std::vector<uint16_t> masks(size_t(atlas.width) * size_t(atlas.height), 0);
+    for (const Chart& chart : atlas.charts) {
+        const std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(chart.object)];
+        for (int tri : chart.triangles) {
+            const glm::dvec2 a(uvs[3 * size_t(tri)]), b(uvs[3 * size_t(tri) + 1]),
+                c(uvs[3 * size_t(tri) + 2]);
+            const double det = cross2(b - a, c - a);
+            if (std::abs(det) < 1e-12) continue;
+            const glm::dvec2 lo = glm::min(glm::min(a, b), c), hi = glm::max(glm::max(a, b), c);
+            const int x0 = std::max(chart.x, int(std::floor(lo.x))),
+                      x1 = std::min(chart.x + chart.width - 1, int(std::floor(hi.x)));
+            const int y0 = std::max(chart.y, int(std::floor(lo.y))),
+                      y1 = std::min(chart.y + chart.height - 1, int(std::floor(hi.y)));
+            for (int y = y0; y <= y1; ++y)
+                for (int x = x0; x <= x1; ++x) {
+                    uint16_t& m = masks[size_t(y) * size_t(atlas.width) + size_t(x)];
+                    for (int j = 0; j < n; ++j)
+                        for (int i = 0; i < n; ++i) {
+                            const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
+                            const double u = cross2(q - a, c - a) / det,
+                                         v = cross2(b - a, q - a) / det;
+                            if (u >= 0.0 && v >= 0.0 && u + v <= 1.0)
+                                m = uint16_t(m | (1u << (n * j + i)));
+                        }
+                }
+        }
+    }
+    return masks;
+}
+
+bool on_chart(const LightmapAtlas& atlas, const std::vector<uint16_t>& masks, int chart,
+              glm::vec2 p) {
+    const glm::vec2 f = glm::floor(p);
+    const int x = int(f.x), y = int(f.y);
+    if (x < 0 || y < 0 || x >= atlas.width || y >= atlas.height) return false;
+    const int record = atlas.texel_at(x, y);
+    if (record < 0 || atlas.texels[size_t(record)].chart != chart) return false;
+    constexpr int n = kCoverageSubdivision;
+    const int i = std::min(n - 1, int((p.x - f.x) * float(n))),
+              j = std::min(n - 1, int((p.y - f.y) * float(n)));
+    return (masks[size_t(y) * size_t(atlas.width) + size_t(x)] >> (n * j + i)) & 1u;
+}
+
+glm::vec2 chart_atlas_position(const Chart& chart, const glm::vec3& p) {
+    return {float(chart.x) + (glm::dot(p, chart.u_axis) - chart.origin.x) / chart.texel_size,
+            float(chart.y) + (glm::dot(p, chart.v_axis) - chart.origin.y) / chart.texel_size};
+}
+
 }  // namespace ag

@@ -35,6 +35,18 @@ std::vector<FootprintPoint> texel_footprint_points(const Scene& scene, int recor
 // The point of record `record`'s chart at atlas position (x + ½, y + ½) + offset, if it lies on
 // one of the chart's triangles (offsets in [−½, ½]² cover the texel's footprint).
 std::optional<FootprintPoint> texel_point_at(const Scene& scene, int record, glm::vec2 offset);
+// Which parts of every atlas texel lie on its chart: per atlas texel (width × height, row-major),
+// bit 4·j + i is set when the sub-texel point (x + (i + ½)/4, y + (j + ½)/4) lies on one of the
+// chart's triangles (0 for gutters and unused texels). Chart edges at a quarter texel, for the
+// AIM's boundary-corrected density estimate (cpu/aim.h).
+inline constexpr int kCoverageSubdivision = 4;
+std::vector<uint16_t> texel_coverage_masks(const Scene& scene);
+// Whether atlas position `p` (texel units) lies on chart `chart`, by texel_coverage_masks.
+bool on_chart(const LightmapAtlas& atlas, const std::vector<uint16_t>& masks, int chart,
+              glm::vec2 p);
+// The atlas position (texel units) of object-space point `p` projected onto chart `chart`.
+glm::vec2 chart_atlas_position(const Chart& chart, const glm::vec3& p);
+
 // Atlas bounds. Texels (gutters included): each one costs a texel record, AIM and IIM values and
 // GL texels, about 100 bytes in all, so 2^24 is some 1.6 GiB. Side: the GL_MAX_TEXTURE_SIZE every
 // OpenGL 4.5 implementation must reach, for the AIM and IIM textures.

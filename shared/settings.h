@@ -94,6 +94,9 @@ struct AimSettings {
     int knn = 50;                   // N nearest photon hits per texel (thesis: 50–500)
     int surfaces_per_frame = 4;     // AIM rebuilds per frame, by Δf / area
     float delta_threshold = 1e-3f;  // rebuild when Δf / surface flux exceeds this
+    // Divide each texel's kNN flux by the part of its disc that lies on its chart (the room's
+    // creases and corners), not by the whole π r² (aim.h, docs/fidelity.md).
+    bool boundary_correction = true;
 };
 
 struct GatherSettings {
@@ -296,6 +299,8 @@ void visit_settings(Settings& s, Visitor& v) {
                        "AIM rebuilds per frame"});
     v.field(Field<float>{"delta_threshold", s.aim.delta_threshold, 0, 1e30,
                          "rebuild when delta_f / surface flux exceeds this"});
+    v.field(Field<bool>{"boundary_correction", s.aim.boundary_correction, 0, 1,
+                        "density over the part of the kNN disc on the texel's chart"});
     v.end_section();
     v.section("gather", "hemi-plane final gathering into IIMs, Larsen ch. 11");
     v.field(EnumField<GatherBackend, 3>{"backend", s.gather.backend, kGatherBackendNames,

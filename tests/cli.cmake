@@ -57,6 +57,10 @@ set_tests_properties(cli.fidelity_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 
 add_test(NAME cli.fidelity_density COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_density_test.sh
          ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.fidelity_density PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+# The AIM's kNN density at chart edges: stage (a) on the rim of the room at 48² (issue #12).
+add_test(NAME cli.fidelity_edges COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_edges_test.sh
+         ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.fidelity_edges PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 ag_cli_test(fidelity_bad_reference 1 "no_such.indirect.exr" fidelity scenes/cornell.json
             --reference no_such.exr)
 # Values above half float's 65504 survive in the EXR; compare refuses NaN/Inf images (exit 1).

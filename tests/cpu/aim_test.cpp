@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "cpu/photon_simulation.h"
@@ -125,6 +127,91 @@ TEST(Aim, IndirectEstimatePerTexel) {
         changed += relative > 0.1f ? 1 : 0;
     }
     EXPECT_GT(changed, texels / 2);
+}
+
+}  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// The kNN estimate's boundary bias (cpu/aim.h): under a sun shining straight down, a plane's
+// irradiance is the sun's everywhere, so every texel should read E_sun, on the plane's edges and
+// in its corners too. Without the boundary correction the discs of those texels reach past the
+// edge, where there are no photons: measured 0.53 on the edges (texel centres snapped onto the
+// edge: half discs) and 0.27 in the corners, and 1.05 in the middle (the per-surface flux scale
+// lifts everything to make up for the dark rim), which fails this. Thread count does not matter.
+TEST(Aim, TexelsOnAPlanesEdgesAndCornersReadTheSunsIrradiance) {
+    constexpr float kHalf = 1000.0f, kTexel = 100.0f, kSun = 2.0f;
+    auto make = [&](bool correct) {
+        Scene s;
+        s.path = "plane_under_sun";
+        Object plane;
+        plane.name = "plane";
+        plane.mesh = make_quad(2.0f * kHalf, 2.0f * kHalf);
+        plane.material.albedo = glm::vec3(0.0f);  // no bounces: the irradiance is the sun's
+        s.objects.push_back(plane);
+        Light sun;
+        sun.name = "sun";
+        sun.type = LightType::sun;
+        sun.direction = glm::vec3(0.0f, -1.0f, 0.0f);
+        sun.irradiance = glm::vec3(kSun);
+        s.lights.push_back(sun);
+        s.settings.photons.groups = 64;
+        s.settings.photons.photons_per_group = 1000;
+        s.settings.aim.knn = 200;
+        s.settings.aim.boundary_correction = correct;
+        s.settings.lightmap.texel_size = kTexel;
+        init_versions(s);
+        update_sun_discs(s);
+        make_surfaces_and_atlas(s);
+        return s;
+    };
+    struct Means {
+        double edge = 0.0, corner = 0.0, middle = 0.0;
+        std::vector<glm::vec3> irradiance;
+    };
+    auto measure = [&](const Scene& scene, int threads) {
+        ThreadPool pool(threads);
+        PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        Aim aim(scene, pool);
+        aim.rebuild_all(sim.maps());
+        Means m;
+        m.irradiance = aim.irradiance();
+        int edge = 0, corner = 0, middle = 0;
+        for (const TexelRecord& t : scene.atlas.texels) {
+            // Distances of the centre from the nearer edges, in texels.
+            const float dx = (kHalf - std::abs(t.position.x)) / kTexel,
+                        dz = (kHalf - std::abs(t.position.z)) / kTexel;
+            const double e =
+                aim.irradiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)].x / kSun;
+            if (dx < 1.0f && dz < 1.0f)
+                m.corner += e, ++corner;
+            else if (dx < 1.0f || dz < 1.0f)
+                m.edge += e, ++edge;
+            else if (dx > 3.0f && dz > 3.0f)
+                m.middle += e, ++middle;
+        }
+        EXPECT_GE(corner, 4);
+        EXPECT_GT(edge, 40);
+        EXPECT_GT(middle, 100);
+        m.edge /= edge, m.corner /= corner, m.middle /= middle;
+        return m;
+    };
+    const Scene corrected = make(true), plain = make(false);
+    const Means with = measure(corrected, 2), without = measure(plain, 2);
+    std::printf(
+        "E / E_sun: edges %.3f (uncorrected %.3f), corners %.3f (%.3f), middle %.3f "
+        "(%.3f)\n",
+        with.edge, without.edge, with.corner, without.corner, with.middle, without.middle);
+    EXPECT_NEAR(with.edge, 1.0, 0.05);
+    EXPECT_NEAR(with.corner, 1.0, 0.1);  // 4 texels: noisier
+    EXPECT_NEAR(with.middle, 1.0, 0.03);
+    // The correction is what makes the difference: the same photons read low without it.
+    EXPECT_LT(without.edge, 0.8);
+    EXPECT_LT(without.corner, 0.6);
+    // Deterministic for any thread count.
+    EXPECT_EQ(measure(corrected, 1).irradiance, with.irradiance);
+    EXPECT_EQ(measure(corrected, 3).irradiance, with.irradiance);
 }
 
 }  // namespace ag::cpu
