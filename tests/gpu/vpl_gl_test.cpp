@@ -250,5 +250,99 @@ TEST_F(VplGlTest, TileListsLabelsAndInterleavingAgainstTheFullSum) {
     EXPECT_LE(err[1], 0.08);  // measured 0.052
 }
 
+// More maps than the GL's array layers (GL_MAX_ARRAY_TEXTURE_LAYERS, 2048 on llvmpipe: the
+// conference room's 4 lights × 128 groups × 4 photon VPLs with the method's room of half as many
+// again need 3072) share layers as an atlas. The cornell photon VPLs, each copied c times at
+// 1/c of its power so that the copies outnumber the layers, must give the same sum as the
+// originals at one map a layer, and each copy's map the original's. Fails if a lookup reads the
+// wrong tile or layer, a tile's clear or draw spills into its neighbours, or (as before the
+// atlas) the array cannot be made ("framebuffer incomplete").
+TEST_F(VplGlTest, MoreMapsThanArrayLayersShareLayersAsAnAtlas) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    for (Object& o : scene.objects) o.material.type = MaterialType::diffuse;
+    ThreadPool pool(2);
+    cpu::PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    std::vector<Vpl> vpls;
+    for (int g = 0; g < scene.settings.photons.groups; g += 2)
+        cpu::group_vpls(scene, sim.maps(), 0, g, 2, vpls);
+    ASSERT_GT(vpls.size(), 100u);
+    const int w = 32, h = 32, size = 64;
+    const Points points = camera_points(scene, sim.rays(), w, h);
+    gpu::SceneMeshes meshes(scene);
+    const float scale = std::numbers::inv_pi_v<float>;
+    gpu::VplGather gather(w, h);
+    gather.set_points(points.positions, points.normals);
+
+    gpu::VplShadowMaps single(scene, meshes, size, gpu::VplMapKind::octahedral, 0.5f);
+    single.set_vpls(vpls);
+    single.render_all();
+    ASSERT_EQ(single.layout().tiles, 1);
+    gather.shade(single, 0.0f, scale);
+    const std::vector<glm::vec3> reference = gather.read_back();
+    const double exact = rel_mse(reference, cpu_sum(sim.rays(), points, vpls));
+    EXPECT_LE(exact, 0.005) << "64² maps against Embree rays";
+
+    const gpu::VplMapLimits gl = gpu::VplMapLimits::gl_limits();
+    // The GL's own limits (copies past its layer count), then a tiny one (3 × 3 tiles a layer).
+    for (const gpu::VplMapLimits& limits : {gl, gpu::VplMapLimits{20, gl.max_texture_size}}) {
+        const int copies = std::max(1, limits.max_layers / int(vpls.size()) + 1);
+        std::vector<Vpl> many;
+        for (int c = 0; c < copies; ++c)
+            for (const Vpl& v : vpls)
+                many.push_back({v.position, v.normal, v.power / float(copies)});
+        ASSERT_GT(int(many.size()), limits.max_layers);
+        gpu::VplShadowMaps atlas(scene, meshes, size, gpu::VplMapKind::octahedral, 0.5f, limits);
+        atlas.set_vpls(many);
+        // Drawn in two halves, so that the second half's clears must keep the first's maps.
+        atlas.render(0, int(many.size()) / 2);
+        atlas.render(int(many.size()) / 2, int(many.size()));
+        const gpu::VplMapLayout& layout = atlas.layout();
+        EXPECT_GT(layout.tiles, 1);
+        EXPECT_LE(layout.layers, limits.max_layers);
+        gather.shade(atlas, 0.0f, scale);
+        const double err = rel_mse(gather.read_back(), reference);
+        std::printf(
+            "%zu maps (limit %d layers): %d × %d tiles a layer, %d layers; relMSE against one "
+            "map a layer %.2e (that against Embree %.5f)\n",
+            many.size(), limits.max_layers, layout.tiles, layout.tiles, layout.layers, err, exact);
+        EXPECT_LE(err, 1e-6);
+        // Copies in other tiles and layers hold the original's map.
+        for (size_t i : {size_t(0), vpls.size() - 1, many.size() - 1, many.size() / 2 + 1}) {
+            const std::vector<float> map = atlas.read_layer(int(i));
+            // The same texels up to interpolation rounding at another place in the viewport.
+            const std::vector<float> original = single.read_layer(int(i % vpls.size()));
+            double worst = 0.0;
+            for (size_t t = 0; t < map.size(); ++t)
+                worst = std::max(worst, std::abs(double(map[t]) - double(original[t])) /
+                                            std::max(1e-6, double(original[t])));
+            EXPECT_LE(worst, 1e-4) << "map " << i;  // the readers' depth bias is 1e-2
+        }
+    }
+}
+
+TEST(VplMapLayout, OneMapALayerWhileTheyFitThenTheFewestTilesThatDo) {
+    const gpu::VplMapLimits llvmpipe{2048, 16384};
+    EXPECT_EQ(gpu::vpl_map_layout(2048, 128, llvmpipe).tiles, 1);
+    EXPECT_EQ(gpu::vpl_map_layout(2048, 128, llvmpipe).layers, 2048);
+    // The conference room: 4 lights × 128 groups, room for 6 maps each (4 VPLs and half again).
+    const gpu::VplMapLayout conference = gpu::vpl_map_layout(4 * 128 * 6, 128, llvmpipe);
+    EXPECT_EQ(conference.tiles, 2);
+    EXPECT_EQ(conference.layers, 768);
+    EXPECT_EQ(conference.side(128), 256);
+    EXPECT_EQ(gpu::vpl_map_layout(2048 * 9 + 1, 128, llvmpipe).tiles, 4);
+    EXPECT_EQ(gpu::vpl_map_layout(0, 128, llvmpipe).layers, 1);
+    // A map larger than a texture, or more maps than the largest atlas holds: a clear error.
+    EXPECT_THROW(gpu::vpl_map_layout(1, 32768, llvmpipe), std::runtime_error);
+    const gpu::VplMapLimits small{4, 256};
+    EXPECT_EQ(gpu::vpl_map_layout(16, 128, small).tiles, 2);
+    try {
+        gpu::vpl_map_layout(17, 128, small);
+        ADD_FAILURE() << "17 maps of 128² in 4 layers of 256²";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("vpl.map_size 128"), std::string::npos) << e.what();
+    }
+}
+
 }  // namespace
 }  // namespace ag
