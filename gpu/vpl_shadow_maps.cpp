@@ -66,16 +66,19 @@ namespace {
 const char* const kMapVertex = R"(
 layout(location = 0) in vec3 position;
 uniform mat4 model;
-uniform int first, kind;
+uniform int first, kind, listed, list_offset;
 uniform float near_distance, far_distance;
+// Culled passes: instance k of a draw is (VPL, face) instances[list_offset + k] (VplShadowMaps).
+layout(std430, binding = 4) readonly buffer Instances { uint instances[]; };
 out vec3 v_local;
 out vec3 v_clip;
 out vec4 v_tile_clip;
 flat out int v_layer;
 void main() {
     int faces = kind == 0 ? 4 : 1;
-    int vi = first + gl_InstanceID / faces;
-    int face = gl_InstanceID % faces;
+    int instance = listed != 0 ? int(instances[list_offset + gl_InstanceID]) : gl_InstanceID;
+    int vi = first + instance / faces;
+    int face = instance % faces;
     vec3 p = vpl_local(vi, (model * vec4(position, 1.0)).xyz - vpl_position(vi));
     int tiles = int(vpl_data[3 * vi].w);
     v_local = p;
@@ -182,11 +185,33 @@ VplShadowMaps::VplShadowMaps(const Scene& scene, const SceneMeshes& meshes, int 
       program_("vpl shadow map", std::string(kVplMapGlsl) + kMapVertex, kMapGeometry, kMapFragment),
       vpl_buffer_(make_buffer()),
       layered_(make_framebuffer()),
-      single_(make_framebuffer()) {
+      single_(make_framebuffer()),
+      instances_(make_buffer()) {
     (void)vpl_map_layout(1, size_, limits_);  // the size alone must fit
     Bounds b;
     for (const Object& o : scene.objects)
         for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    for (size_t i = 0; i < scene.objects.size(); ++i) {
+        const Mesh& mesh = scene.objects[i].mesh;
+        const int triangles = int(mesh.triangles.size());
+        uint64_t counted = 0;
+        for (int first = 0; first < triangles; first += kChunkTriangles) {
+            Chunk c;
+            c.object = i, c.first = first;
+            c.count = std::min(kChunkTriangles, triangles - first);
+            Bounds cb;
+            for (int t = first; t < first + c.count; ++t)
+                for (int k = 0; k < 3; ++k)
+                    cb.add(mesh.positions[size_t(mesh.triangles[size_t(t)][k])]);
+            c.min = cb.min, c.max = cb.max;
+            // The run's share of the object's vertices (the shares sum to them exactly).
+            const uint64_t upto =
+                uint64_t(mesh.positions.size()) * uint64_t(first + c.count) / uint64_t(triangles);
+            c.vertices = upto - counted;
+            counted = upto;
+            chunks_.push_back(c);
+        }
+    }
     // Moved objects stay within a few scene diagonals; the far plane only bounds the depth range.
     far_ = 4.0f * std::max(1e-3f, glm::length(b.extent()));
 }
@@ -248,7 +273,89 @@ void VplShadowMaps::set_vpls(const std::vector<Vpl>& vpls) {
     gl::BufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(data.size() * sizeof(glm::vec4)),
                    data.data(), GL_DYNAMIC_DRAW);
     count_ = count;
+    vpls_ = vpls;
     check_gl("VplShadowMaps::set_vpls");
+}
+
+namespace {
+
+// The tangent frame of kVplMapGlsl's vpl_basis (the same sign rule), for the culling tests.
+void vpl_basis(const glm::vec3& n, glm::vec3& t, glm::vec3& b) {
+    const float s = n.z >= 0.0f ? 1.0f : -1.0f;
+    const float a = -1.0f / (s + n.z);
+    const float c = n.x * n.y * a;
+    t = glm::vec3(1.0f + s * n.x * n.x * a, s * c, -s * n.x);
+    b = glm::vec3(c, s + n.y * n.y * a, -n.y);
+}
+
+}  // namespace
+
+void VplShadowMaps::draw_culled(int first, int count, int faces) {
+    // A run's box lies wholly outside face (sx, sy)'s octant when all eight corners are on the
+    // negative side of one of its planes sx·x = 0, sy·y = 0, z = 0 (VPL frame): then so is every
+    // vertex of every triangle in it, and the geometry shader would drop them all. The margin
+    // keeps the CPU's rounding on the GPU's side of that test.
+    const float margin = 1e-6f * far_;
+    const size_t vpls = static_cast<size_t>(count);
+    std::vector<glm::vec3> position(vpls), t(vpls), b(vpls), n(vpls);
+    for (int v = 0; v < count; ++v) {
+        position[size_t(v)] = vpls_[size_t(first + v)].position;
+        n[size_t(v)] = vpls_[size_t(first + v)].normal;
+        vpl_basis(n[size_t(v)], t[size_t(v)], b[size_t(v)]);
+    }
+    std::vector<uint32_t> list;
+    struct Draw {
+        size_t chunk;
+        int offset, instances;
+    };
+    std::vector<Draw> draws;
+    for (size_t ci = 0; ci < chunks_.size(); ++ci) {
+        const Chunk& c = chunks_[ci];
+        const glm::mat4 model = model_matrix(scene_.objects[c.object]);
+        glm::vec3 corner[8];
+        for (int k = 0; k < 8; ++k)
+            corner[k] = glm::vec3(model * glm::vec4((k & 1) ? c.max.x : c.min.x,
+                                                    (k & 2) ? c.max.y : c.min.y,
+                                                    (k & 4) ? c.max.z : c.min.z, 1.0f));
+        const int offset = int(list.size());
+        for (int v = 0; v < count; ++v) {
+            // Largest of x, −x, y, −y, z over the corners, in the VPL's frame.
+            float hi[5] = {-1e30f, -1e30f, -1e30f, -1e30f, -1e30f};
+            for (const glm::vec3& p : corner) {
+                const glm::vec3 d = p - position[size_t(v)];
+                const float x = glm::dot(d, t[size_t(v)]), y = glm::dot(d, b[size_t(v)]);
+                hi[0] = std::max(hi[0], x), hi[1] = std::max(hi[1], -x);
+                hi[2] = std::max(hi[2], y), hi[3] = std::max(hi[3], -y);
+                hi[4] = std::max(hi[4], glm::dot(d, n[size_t(v)]));
+            }
+            if (hi[4] < -margin) continue;  // below the horizon: no face
+            for (int f = 0; f < faces; ++f) {
+                // Face bits as in kMapVertex: bit 0 flips x, bit 1 flips y.
+                if (faces == 4 && (hi[(f & 1) ? 1 : 0] < -margin || hi[(f & 2) ? 3 : 2] < -margin))
+                    continue;
+                list.push_back(uint32_t(v * faces + f));
+            }
+        }
+        const int instances = int(list.size()) - offset;
+        if (instances > 0) draws.push_back({ci, offset, instances});
+    }
+    if (list.empty()) return;
+    gl::BindBuffer(GL_SHADER_STORAGE_BUFFER, instances_.get());
+    gl::BufferData(GL_SHADER_STORAGE_BUFFER, GLsizeiptr(list.size() * sizeof(uint32_t)),
+                   list.data(), GL_STREAM_DRAW);
+    gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, 4, instances_.get());
+    program_.set("listed", 1);
+    size_t object = size_t(-1);
+    for (const Draw& d : draws) {
+        const Chunk& c = chunks_[d.chunk];
+        if (c.object != object) {
+            object = c.object;
+            program_.set("model", model_matrix(scene_.objects[object]));
+        }
+        program_.set("list_offset", d.offset);
+        meshes_.draw_instanced(c.object, c.first, c.count, d.instances);
+        vertices_ += c.vertices * uint64_t(d.instances);
+    }
 }
 
 void VplShadowMaps::render(int first, int count) {
@@ -297,10 +404,16 @@ void VplShadowMaps::render(int first, int count) {
     program_.set("near_distance", near_);
     program_.set("far_distance", far_);
     const int faces = kind_ == VplMapKind::octahedral ? 4 : 1;
-    for (size_t i = 0; i < scene_.objects.size(); ++i) {
-        program_.set("model", model_matrix(scene_.objects[i]));
-        meshes_.draw_instanced(i, count * faces);
-        vertices_ += uint64_t(scene_.objects[i].mesh.positions.size()) * uint64_t(count * faces);
+    if (!culling_) {
+        program_.set("listed", 0);
+        for (size_t i = 0; i < scene_.objects.size(); ++i) {
+            program_.set("model", model_matrix(scene_.objects[i]));
+            meshes_.draw_instanced(i, count * faces);
+            vertices_ +=
+                uint64_t(scene_.objects[i].mesh.positions.size()) * uint64_t(count * faces);
+        }
+    } else {
+        draw_culled(first, count, faces);
     }
     for (int c = 0; c < planes; ++c) gl::Disable(GL_CLIP_DISTANCE0 + GLenum(c));
     check_gl("VplShadowMaps::render");

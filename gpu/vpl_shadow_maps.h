@@ -78,8 +78,17 @@ public:
     // about π over `size` texels) at unit distance, and the relative depth bias.
     float offset_scale() const { return 2.0f / float(size_); }
     static constexpr float kRelativeBias = 0.01f;
+    // Culling before the vertex stage (default on): each object is cut into runs of
+    // kChunkTriangles triangles in mesh order, and a run is drawn only for the (VPL, face)
+    // pairs whose octant (the hemisphere for paraboloid maps) its bounding box reaches. The
+    // geometry shader would drop the same triangles after transforming them, so the maps are
+    // identical; off: every object for every VPL and face (the naive pass).
+    void set_culling(bool on) { culling_ = on; }
+    bool culling() const { return culling_; }
+    static constexpr int kChunkTriangles = 512;
     // Object vertices transformed by map passes since construction (the thesis's cost measure:
-    // each vertex once per face and VPL).
+    // each vertex once per face and VPL; with culling, each run's share of its object's
+    // vertices, by triangles, once per (VPL, face) it is drawn for).
     uint64_t vertices_transformed() const { return vertices_; }
     // Reads VPL i's map back (size² distances, rows bottom-first) for tests and views.
     std::vector<float> read_layer(int i) const;
@@ -97,6 +106,17 @@ private:
     Buffer vpl_buffer_;
     Texture distance_, depth_;
     Framebuffer layered_, single_;
+    struct Chunk {
+        size_t object = 0;
+        int first = 0, count = 0;        // triangles
+        glm::vec3 min{0.0f}, max{0.0f};  // object-space bounds
+        uint64_t vertices = 0;           // its share of the object's vertices
+    };
+    std::vector<Chunk> chunks_;
+    std::vector<Vpl> vpls_;  // as uploaded
+    void draw_culled(int first, int count, int faces);
+    bool culling_ = true;
+    Buffer instances_;  // culled: the (VPL, face) instances each run is drawn for (binding 4)
     uint64_t vertices_ = 0;
 };
 

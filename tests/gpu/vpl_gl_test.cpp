@@ -99,11 +99,71 @@ TEST_F(VplGlTest, OctahedralMapVisibilityMatchesEmbreeRaysOnCornell) {
                 vpls.size(), err, shadow_effect);
     EXPECT_LE(err, 0.005);
     EXPECT_GT(shadow_effect, 10.0 * err) << "the visibility must matter in this test";
-    EXPECT_EQ(maps.vertices_transformed(), [&] {
+    // Culling before the vertex stage transforms fewer vertices than every object for every
+    // VPL and face (the naive pass, counted exactly).
+    const uint64_t culled = maps.vertices_transformed();
+    maps.set_culling(false);
+    maps.render_all();
+    const uint64_t naive = maps.vertices_transformed() - culled;
+    EXPECT_EQ(naive, [&] {
         uint64_t v = 0;
         for (const Object& o : scene.objects) v += o.mesh.positions.size();
         return v * 4 * vpls.size();
     }());
+    EXPECT_LT(culled, naive);
+}
+
+// Culling runs of triangles outside a face's octant before the vertex stage leaves every map
+// as the naive pass draws it (the geometry shader would have dropped the same triangles), on
+// cornell's photon VPLs and in the thesis's table room with the torus (a 0.8 m × 0.8 m quad
+// light's photon VPLs), octahedral and paraboloid, and after the torus moves. Fails if a run
+// is culled for a face that it reaches (a map then misses an occluder) or the instance list
+// maps a draw to the wrong VPL or face.
+TEST_F(VplGlTest, CullingBeforeTheVertexStageLeavesEveryMapAsTheNaivePassDrawsIt) {
+    for (const char* name : {"cornell.json", "vpl_table_torus.json"}) {
+        Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/" + name);
+        for (Object& o : scene.objects) o.material.type = MaterialType::diffuse;
+        ThreadPool pool(2);
+        cpu::PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        std::vector<Vpl> vpls;
+        for (int g = 0; g < scene.settings.photons.groups; g += 4)
+            cpu::group_vpls(scene, sim.maps(), 0, g, 2, vpls);
+        ASSERT_GT(vpls.size(), 40u) << name;
+        gpu::SceneMeshes meshes(scene);
+        for (gpu::VplMapKind kind : {gpu::VplMapKind::octahedral, gpu::VplMapKind::paraboloid}) {
+            gpu::VplShadowMaps culled(scene, meshes, 64, kind, 1e-3f),
+                naive(scene, meshes, 64, kind, 1e-3f);
+            naive.set_culling(false);
+            for (int move = 0; move < 2; ++move) {
+                if (move) {
+                    for (Object& o : scene.objects)
+                        if (o.dynamic) o.transform.translation += glm::vec3(0.21f, 0.0f, 0.13f);
+                }
+                const uint64_t c0 = culled.vertices_transformed(),
+                               n0 = naive.vertices_transformed();
+                for (gpu::VplShadowMaps* m : {&culled, &naive}) {
+                    m->set_vpls(vpls);
+                    m->render_all();
+                }
+                size_t differ = 0;
+                for (size_t i = 0; i < vpls.size(); ++i)
+                    differ += culled.read_layer(int(i)) == naive.read_layer(int(i)) ? 0 : 1;
+                const double share = double(culled.vertices_transformed() - c0) /
+                                     double(naive.vertices_transformed() - n0);
+                std::printf("%s, %s maps%s: %zu VPLs, vertices transformed %.3f of naive\n", name,
+                            kind == gpu::VplMapKind::octahedral ? "octahedral" : "paraboloid",
+                            move ? " (mover moved)" : "", vpls.size(), share);
+                EXPECT_EQ(differ, 0u) << name;
+                // The hemisphere alone culls little in a closed room; the octants do.
+                if (kind == gpu::VplMapKind::octahedral) {
+                    EXPECT_LT(share, 0.7) << name;
+                } else {
+                    EXPECT_LE(share, 1.0) << name;
+                }
+            }
+        }
+    }
 }
 
 // A VPL just above the floor facing up, a wall of 25×25 vertices standing 0.2 in front of it
