@@ -94,6 +94,9 @@ public:
     std::vector<float> read_layer(int i) const;
 
 private:
+    // Draws the runs for maps [first, first + count) over their (VPL, face) lists.
+    void draw_culled(int first, int count, int faces);
+
     const Scene& scene_;
     const SceneMeshes& meshes_;
     int size_;
@@ -114,7 +117,6 @@ private:
     };
     std::vector<Chunk> chunks_;
     std::vector<Vpl> vpls_;  // as uploaded
-    void draw_culled(int first, int count, int faces);
     bool culling_ = true;
     Buffer instances_;  // culled: the (VPL, face) instances each run is drawn for (binding 4)
     uint64_t vertices_ = 0;
