@@ -98,4 +98,9 @@ void SceneMeshes::draw_instanced(size_t i, int instances) const {
     gl::DrawArraysInstanced(GL_TRIANGLES, 0, objects_[i].triangles * 3, instances);
 }
 
+void SceneMeshes::draw_instanced(size_t i, int first, int count, int instances) const {
+    gl::BindVertexArray(objects_[i].vao.get());
+    gl::DrawArraysInstanced(GL_TRIANGLES, first * 3, count * 3, instances);
+}
+
 }  // namespace ag::gpu

@@ -24,6 +24,8 @@ public:
     void draw(size_t i) const;
     // The same, `instances` times (gl_InstanceID picks what each copy is for).
     void draw_instanced(size_t i, int instances) const;
+    // Triangles [first, first + count) of object `i` (in its mesh's order), `instances` times.
+    void draw_instanced(size_t i, int first, int count, int instances) const;
     int triangle_count(size_t i) const { return objects_[i].triangles; }
     // Binds object `i`'s albedo texture (if any) to texture unit `unit` and sets the program's
     // `albedo_map` and `has_albedo_map` uniforms (kAlbedoGlsl).

@@ -57,6 +57,19 @@ VplMethod::VplMethod(const Scene& scene, const gpu::SceneMeshes& meshes, int wid
         for (Slot& s : slots_)
             if (s.has_next) mark(s, 0);
     }
+    if (maps_) {
+        // Before any frame: the most maps layout() can ask for (each slot's room, half as many
+        // again as its VPLs: a photon group yields at most photons_per_group) must fit the GL's
+        // array layers as an atlas, or the scene fails here, naming the setting to lower.
+        size_t most = 0;
+        for (const Slot& s : slots_) {
+            const size_t k =
+                vs.source == VplSource::photons ? size_t(vs.photons_per_group) : s.next.size();
+            most += (k * 3 + 1) / 2;
+        }
+        (void)gpu::vpl_map_layout(int(std::min<size_t>(most, size_t(1) << 30)), vs.map_size,
+                                  maps_->limits());
+    }
 }
 
 std::vector<size_t> VplMethod::make_points() {

@@ -99,11 +99,71 @@ TEST_F(VplGlTest, OctahedralMapVisibilityMatchesEmbreeRaysOnCornell) {
                 vpls.size(), err, shadow_effect);
     EXPECT_LE(err, 0.005);
     EXPECT_GT(shadow_effect, 10.0 * err) << "the visibility must matter in this test";
-    EXPECT_EQ(maps.vertices_transformed(), [&] {
+    // Culling before the vertex stage transforms fewer vertices than every object for every
+    // VPL and face (the naive pass, counted exactly).
+    const uint64_t culled = maps.vertices_transformed();
+    maps.set_culling(false);
+    maps.render_all();
+    const uint64_t naive = maps.vertices_transformed() - culled;
+    EXPECT_EQ(naive, [&] {
         uint64_t v = 0;
         for (const Object& o : scene.objects) v += o.mesh.positions.size();
         return v * 4 * vpls.size();
     }());
+    EXPECT_LT(culled, naive);
+}
+
+// Culling runs of triangles outside a face's octant before the vertex stage leaves every map
+// as the naive pass draws it (the geometry shader would have dropped the same triangles), on
+// cornell's photon VPLs and in the thesis's table room with the torus (a 0.8 m × 0.8 m quad
+// light's photon VPLs), octahedral and paraboloid, and after the torus moves. Fails if a run
+// is culled for a face that it reaches (a map then misses an occluder) or the instance list
+// maps a draw to the wrong VPL or face.
+TEST_F(VplGlTest, CullingBeforeTheVertexStageLeavesEveryMapAsTheNaivePassDrawsIt) {
+    for (const char* name : {"cornell.json", "vpl_table_torus.json"}) {
+        Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/" + name);
+        for (Object& o : scene.objects) o.material.type = MaterialType::diffuse;
+        ThreadPool pool(2);
+        cpu::PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        std::vector<Vpl> vpls;
+        for (int g = 0; g < scene.settings.photons.groups; g += 4)
+            cpu::group_vpls(scene, sim.maps(), 0, g, 2, vpls);
+        ASSERT_GT(vpls.size(), 40u) << name;
+        gpu::SceneMeshes meshes(scene);
+        for (gpu::VplMapKind kind : {gpu::VplMapKind::octahedral, gpu::VplMapKind::paraboloid}) {
+            gpu::VplShadowMaps culled(scene, meshes, 64, kind, 1e-3f),
+                naive(scene, meshes, 64, kind, 1e-3f);
+            naive.set_culling(false);
+            for (int move = 0; move < 2; ++move) {
+                if (move) {
+                    for (Object& o : scene.objects)
+                        if (o.dynamic) o.transform.translation += glm::vec3(0.21f, 0.0f, 0.13f);
+                }
+                const uint64_t c0 = culled.vertices_transformed(),
+                               n0 = naive.vertices_transformed();
+                for (gpu::VplShadowMaps* m : {&culled, &naive}) {
+                    m->set_vpls(vpls);
+                    m->render_all();
+                }
+                size_t differ = 0;
+                for (size_t i = 0; i < vpls.size(); ++i)
+                    differ += culled.read_layer(int(i)) == naive.read_layer(int(i)) ? 0 : 1;
+                const double share = double(culled.vertices_transformed() - c0) /
+                                     double(naive.vertices_transformed() - n0);
+                std::printf("%s, %s maps%s: %zu VPLs, vertices transformed %.3f of naive\n", name,
+                            kind == gpu::VplMapKind::octahedral ? "octahedral" : "paraboloid",
+                            move ? " (mover moved)" : "", vpls.size(), share);
+                EXPECT_EQ(differ, 0u) << name;
+                // The hemisphere alone culls little in a closed room; the octants do.
+                if (kind == gpu::VplMapKind::octahedral) {
+                    EXPECT_LT(share, 0.7) << name;
+                } else {
+                    EXPECT_LE(share, 1.0) << name;
+                }
+            }
+        }
+    }
 }
 
 // A VPL just above the floor facing up, a wall of 25×25 vertices standing 0.2 in front of it
@@ -248,6 +308,100 @@ TEST_F(VplGlTest, TileListsLabelsAndInterleavingAgainstTheFullSum) {
                 (unsigned long long)fpn.lookups, (unsigned long long)plain.lookups);
     EXPECT_LE(err[0], 0.03);  // measured 0.0175 (48², ~150 VPLs)
     EXPECT_LE(err[1], 0.08);  // measured 0.052
+}
+
+// More maps than the GL's array layers (GL_MAX_ARRAY_TEXTURE_LAYERS, 2048 on llvmpipe: the
+// conference room's 4 lights × 128 groups × 4 photon VPLs with the method's room of half as many
+// again need 3072) share layers as an atlas. The cornell photon VPLs, each copied c times at
+// 1/c of its power so that the copies outnumber the layers, must give the same sum as the
+// originals at one map a layer, and each copy's map the original's. Fails if a lookup reads the
+// wrong tile or layer, a tile's clear or draw spills into its neighbours, or (as before the
+// atlas) the array cannot be made ("framebuffer incomplete").
+TEST_F(VplGlTest, MoreMapsThanArrayLayersShareLayersAsAnAtlas) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+    for (Object& o : scene.objects) o.material.type = MaterialType::diffuse;
+    ThreadPool pool(2);
+    cpu::PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    std::vector<Vpl> vpls;
+    for (int g = 0; g < scene.settings.photons.groups; g += 2)
+        cpu::group_vpls(scene, sim.maps(), 0, g, 2, vpls);
+    ASSERT_GT(vpls.size(), 100u);
+    const int w = 32, h = 32, size = 64;
+    const Points points = camera_points(scene, sim.rays(), w, h);
+    gpu::SceneMeshes meshes(scene);
+    const float scale = std::numbers::inv_pi_v<float>;
+    gpu::VplGather gather(w, h);
+    gather.set_points(points.positions, points.normals);
+
+    gpu::VplShadowMaps single(scene, meshes, size, gpu::VplMapKind::octahedral, 0.5f);
+    single.set_vpls(vpls);
+    single.render_all();
+    ASSERT_EQ(single.layout().tiles, 1);
+    gather.shade(single, 0.0f, scale);
+    const std::vector<glm::vec3> reference = gather.read_back();
+    const double exact = rel_mse(reference, cpu_sum(sim.rays(), points, vpls));
+    EXPECT_LE(exact, 0.005) << "64² maps against Embree rays";
+
+    const gpu::VplMapLimits gl = gpu::VplMapLimits::gl_limits();
+    // The GL's own limits (copies past its layer count), then a tiny one (3 × 3 tiles a layer).
+    for (const gpu::VplMapLimits& limits : {gl, gpu::VplMapLimits{20, gl.max_texture_size}}) {
+        const int copies = std::max(1, limits.max_layers / int(vpls.size()) + 1);
+        std::vector<Vpl> many;
+        for (int c = 0; c < copies; ++c)
+            for (const Vpl& v : vpls)
+                many.push_back({v.position, v.normal, v.power / float(copies)});
+        ASSERT_GT(int(many.size()), limits.max_layers);
+        gpu::VplShadowMaps atlas(scene, meshes, size, gpu::VplMapKind::octahedral, 0.5f, limits);
+        atlas.set_vpls(many);
+        // Drawn in two halves, so that the second half's clears must keep the first's maps.
+        atlas.render(0, int(many.size()) / 2);
+        atlas.render(int(many.size()) / 2, int(many.size()));
+        const gpu::VplMapLayout& layout = atlas.layout();
+        EXPECT_GT(layout.tiles, 1);
+        EXPECT_LE(layout.layers, limits.max_layers);
+        gather.shade(atlas, 0.0f, scale);
+        const double err = rel_mse(gather.read_back(), reference);
+        std::printf(
+            "%zu maps (limit %d layers): %d × %d tiles a layer, %d layers; relMSE against one "
+            "map a layer %.2e (that against Embree %.5f)\n",
+            many.size(), limits.max_layers, layout.tiles, layout.tiles, layout.layers, err, exact);
+        EXPECT_LE(err, 1e-6);
+        // Copies in other tiles and layers hold the original's map.
+        for (size_t i : {size_t(0), vpls.size() - 1, many.size() - 1, many.size() / 2 + 1}) {
+            const std::vector<float> map = atlas.read_layer(int(i));
+            // The same texels up to interpolation rounding at another place in the viewport.
+            const std::vector<float> original = single.read_layer(int(i % vpls.size()));
+            double worst = 0.0;
+            for (size_t t = 0; t < map.size(); ++t)
+                worst = std::max(worst, std::abs(double(map[t]) - double(original[t])) /
+                                            std::max(1e-6, double(original[t])));
+            EXPECT_LE(worst, 1e-4) << "map " << i;  // the readers' depth bias is 1e-2
+        }
+    }
+}
+
+TEST(VplMapLayout, OneMapALayerWhileTheyFitThenTheFewestTilesThatDo) {
+    const gpu::VplMapLimits llvmpipe{2048, 16384};
+    EXPECT_EQ(gpu::vpl_map_layout(2048, 128, llvmpipe).tiles, 1);
+    EXPECT_EQ(gpu::vpl_map_layout(2048, 128, llvmpipe).layers, 2048);
+    // The conference room: 4 lights × 128 groups, room for 6 maps each (4 VPLs and half again).
+    const gpu::VplMapLayout conference = gpu::vpl_map_layout(4 * 128 * 6, 128, llvmpipe);
+    EXPECT_EQ(conference.tiles, 2);
+    EXPECT_EQ(conference.layers, 768);
+    EXPECT_EQ(conference.side(128), 256);
+    EXPECT_EQ(gpu::vpl_map_layout(2048 * 9 + 1, 128, llvmpipe).tiles, 4);
+    EXPECT_EQ(gpu::vpl_map_layout(0, 128, llvmpipe).layers, 1);
+    // A map larger than a texture, or more maps than the largest atlas holds: a clear error.
+    EXPECT_THROW(gpu::vpl_map_layout(1, 32768, llvmpipe), std::runtime_error);
+    const gpu::VplMapLimits small{4, 256};
+    EXPECT_EQ(gpu::vpl_map_layout(16, 128, small).tiles, 2);
+    try {
+        gpu::vpl_map_layout(17, 128, small);
+        ADD_FAILURE() << "17 maps of 128² in 4 layers of 256²";
+    } catch (const std::runtime_error& e) {
+        EXPECT_NE(std::string(e.what()).find("vpl.map_size 128"), std::string::npos) << e.what();
+    }
 }
 
 }  // namespace

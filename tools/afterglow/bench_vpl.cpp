@@ -120,11 +120,14 @@ void table_rooms(const Args& args, const std::string& scene_path, int width, int
             t_maps.set_vpls(v);
             t_maps.render_all();
             const int c = int(v.size());
-            std::vector<int> updates{c};  // all of them: the naive row
+            // All of them without culling: the naive row; then all and K a frame culled.
+            std::vector<int> updates{-c, c};
             for (int k : {150, 100, 50})
                 if (k < c) updates.push_back(k);
             updates.push_back(0);  // static maps
-            for (int k : updates) {
+            for (int signed_k : updates) {
+                const int k = std::abs(signed_k);
+                t_maps.set_culling(signed_k >= 0);
                 int next = 0;
                 const uint64_t before = t_maps.vertices_transformed();
                 const double ms = best_ms(repeat, [&] {
@@ -138,8 +141,10 @@ void table_rooms(const Args& args, const std::string& scene_path, int width, int
                 const double mverts =
                     double(t_maps.vertices_transformed() - before) / double(repeat + 1) / 1e6;
                 char label[48];
-                if (k == c)
+                if (signed_k == -c)
                     std::snprintf(label, sizeof label, "all %d (naive)", c);
+                else if (k == c)
+                    std::snprintf(label, sizeof label, "all %d, culled", c);
                 else if (k == 0)
                     std::snprintf(label, sizeof label, "none (static maps)");
                 else
@@ -207,11 +212,19 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
                 labels[node * v300.size() + size_t(l)] = uint32_t(db.state(int(node), l));
         return std::pair{patch, labels};
     };
+    // Naive: every object drawn into every map (no culling before the vertex stage).
+    maps.set_culling(false);
     const double naive = best_ms(repeat, [&] {
         maps.render_all();
         gather.shade(maps, vs.clamp, scale);
     });
+    uint64_t before = maps.vertices_transformed();
     const double maps_only = best_ms(repeat, [&] { maps.render_all(); });
+    const double naive_vertices = double(maps.vertices_transformed() - before);
+    maps.set_culling(true);
+    before = maps.vertices_transformed();
+    const double culled_maps = best_ms(repeat, [&] { maps.render_all(); });
+    const double culled_vertices = double(maps.vertices_transformed() - before);
     const double sum_only = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale); });
     const double unshadowed = best_ms(repeat, [&] { gather.shade(maps, vs.clamp, scale, false); });
     std::printf("\n%d VPLs               %10s %8s %9s\n", n, "ms/frame", "fps", "speed-up");
@@ -219,17 +232,25 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         std::printf("%-24s %10.2f %8.2f %8.2fx\n", what, ms, 1000.0 / ms, naive / ms);
     };
     row("naive (all maps + sum)", naive);
-    for (int k : {150, 100, 50}) {
-        int next = 0;
-        const double ms = best_ms(repeat, [&] {
-            maps.render(next, k);
-            next = (next + k) % n;
+    row("culled maps (all + sum)", best_ms(repeat, [&] {
+            maps.render_all();
             gather.shade(maps, vs.clamp, scale);
-        });
-        char label[64];
-        std::snprintf(label, sizeof label, "K=%d map updates/frame", k);
-        row(label, ms);
-    }
+        }));
+    for (bool culling : {false, true})
+        for (int k : {150, 100, 50}) {
+            if (!culling && k != 100) continue;
+            maps.set_culling(culling);
+            int next = 0;
+            const double ms = best_ms(repeat, [&] {
+                maps.render(next, k);
+                next = (next + k) % n;
+                gather.shade(maps, vs.clamp, scale);
+            });
+            char label[64];
+            std::snprintf(label, sizeof label, "K=%d%s", k, culling ? ", culled" : ", no culling");
+            row(label, ms);
+        }
+    maps.set_culling(true);
     row("static maps (sum only)", sum_only);
     {
         // Barczak's visibility determination (VD): F/P/N labels per (patch, VPL); only P pairs
@@ -257,6 +278,10 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
     }
     row("no visibility (floor)", unshadowed);
     std::printf("(of the naive frame: maps %.2f ms, per-pixel sum %.2f ms)\n", maps_only, sum_only);
+    std::printf(
+        "(all %d maps: naive %.2f ms, culled before the vertex stage %.2f ms (%.2fx); vertices "
+        "transformed %.3f of naive)\n",
+        n, maps_only, culled_maps, maps_only / culled_maps, culled_vertices / naive_vertices);
     {
         std::vector<glm::vec3> e(points.size(), glm::vec3(0.0f));
         const Clock::time_point t = Clock::now();
@@ -324,7 +349,10 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         std::printf("%-34s %9.2f %7.2f %8.2fx %9.2f %8.2fx %9.2e %10.4f %10s %9.4f %9.4f\n",
                     "naive (all maps + sum)", naive, 1000.0 / naive, 1.0, sum_only,
                     naive / sum_only, 0.0, 0.0, "-", 1.0, 1.0);
+        maps.set_culling(false);
         step("+ K=100 map updates a frame", 0.0);
+        maps.set_culling(true);
+        step("+ culling before the vertex stage", 0.0);
         double ms = timed([&] { gather.set_tiles(v300, 1); });
         const gpu::VplGather::TileCounts plain = gather.tile_counts();
         step("+ tile lists (both cosines > 0)", ms);
@@ -362,16 +390,19 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
     }
 
     // 2. Frame rate against the number of VPLs.
-    std::printf("\n%8s %14s %14s %14s\n", "VPLs", "naive fps", "K=100 fps", "static fps");
+    std::printf("\n%8s %14s %14s %14s  (K=100: culled map passes)\n", "VPLs", "naive fps",
+                "K=100 fps", "static fps");
     for (size_t count : {25, 50, 100, 200, 300, 600, 1000}) {
         if (count > all.size()) break;
         maps.set_vpls(take(count));
         maps.render_all();
         const int c = int(count);
+        maps.set_culling(false);  // naive
         const double nv = best_ms(repeat, [&] {
             maps.render_all();
             gather.shade(maps, vs.clamp, scale);
         });
+        maps.set_culling(true);
         int next = 0;
         const double k100 = best_ms(repeat, [&] {
             maps.render(next, std::min(100, c));
@@ -415,6 +446,7 @@ int bench_vpl(const Args& args, const std::string& scene_path, int width, int he
         make_surfaces_and_atlas(m);
         gpu::SceneMeshes mm(m);
         gpu::VplShadowMaps mover_maps(m, mm, vs.map_size, vs.map, 1e-3f);
+        mover_maps.set_culling(false);  // the thesis's measure: every vertex for every map
         std::vector<Vpl> ring;
         for (int i = 0; i < 300; ++i) {
             const float a = 6.2831853f * float(i) / 300.0f;
