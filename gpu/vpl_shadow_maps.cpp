@@ -416,6 +416,11 @@ void VplShadowMaps::render(int first, int count) {
         draw_culled(first, count, faces);
     }
     for (int c = 0; c < planes; ++c) gl::Disable(GL_CLIP_DISTANCE0 + GLenum(c));
+    // Let llvmpipe drain the map passes here: queuing two full passes of hundreds of layered,
+    // instanced map draws without a finish corrupted its memory (a crash when the context was
+    // destroyed at exit; VplGlTest.OctahedralMapVisibilityMatchesEmbreeRaysOnCornell renders all
+    // 311 maps at 256² twice). The gather reads the maps next anyway.
+    gl::Finish();
     check_gl("VplShadowMaps::render");
 }
 
