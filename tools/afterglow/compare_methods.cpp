@@ -454,7 +454,8 @@ int run_compare_methods(const Args& args) {
         notes << (s ? ", " : "") << segments[s].begin << "–" << segments[s].end - 1
               << " → state at " << segments[s].end;
     notes << "). Settled: mean of the last tenth (≥ 3) of the final segment's frames; settle s: "
-             "wall time from an edit's last frame until the error stays within 10% of that "
+             "wall time from the start of an edit's last frame (that frame included) until the "
+             "error stays within 10% of that "
              "segment's own settled value; flicker: mean |frame-to-frame change| over the mean "
              "value, over the last tenth of the final (still) segment, all pixels static; RSS "
              "growth: peak resident set during the run above the resident set before the "
