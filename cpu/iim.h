@@ -73,6 +73,11 @@ public:
     // record, the scene and the AIMs, never on the order passes ran in.
     IimFrameStats refine_records(Gatherer& gatherer, const std::vector<int>& records,
                                  uint64_t frame);
+    // Gathers in several batches within one frame: the repair of invalid texels from their
+    // neighbours (and the blends it starts) waits for repair_deferred(), once, instead of running
+    // after every batch; the result is the same as one batch of all of them.
+    void defer_repairs();
+    void repair_deferred(uint64_t frame);
     // Advances every blend to `frame` over `blend_frames` frames; returns the atlas texels whose
     // shown value changed (to upload).
     const std::vector<int>& blend(uint64_t frame, int blend_frames);
@@ -110,12 +115,16 @@ private:
     bool refinable(size_t record) const;
 
     bool seen(int t) const { return coverage_.empty() || coverage_[size_t(t)] > 0.0f; }
-    // Order within the changed texels: staleness² × pixels covered where the camera sees the
-    // texel; the staleness alone where coverage is not known or the texel is not seen.
+    // Order within the changed texels: (|E_now − E_gathered| / (E_now + floor))² × pixels
+    // covered where the camera sees the texel (its share of the image's relative squared error);
+    // the staleness alone where coverage is not known or the texel is not seen.
     float priority(int record) const;
 
     const Scene& scene_;
-    std::vector<float> coverage_;  // per record; empty = not known
+    std::vector<float> coverage_;    // per record; empty = not known
+    std::vector<int> seen_records_;  // records with coverage
+    bool deferring_ = false;         // defer_repairs() until repair_deferred()
+    std::vector<int> deferred_;      // records gathered meanwhile
     // Per record: the photons' indirect estimate now and when last gathered (−1 = not known),
     // and the floor of a relative change; empty = never noted.
     std::vector<float> estimate_, estimate_gathered_, estimate_floor_;
@@ -132,7 +141,6 @@ private:
     std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
     std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;
-    size_t sweep_seen_ = 0;  // the sweep over texels the camera sees
     // Per record, the running mean of its gathers with the current inputs (refinement).
     std::vector<int> passes_;         // gathers run: the first, then refinement passes
     std::vector<glm::dvec3> sum_;     // of the valid ones

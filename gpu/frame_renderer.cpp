@@ -779,7 +779,8 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     mean_complete_ = (!accumulating || !fresh || mean_frames_ + 1 >= limit) &&
                      (all_terms || !frame_accumulation);
     // Every term is kept as it is: the term attachments and the frame already hold the mean.
-    if (all_terms && !fresh) return;
+    drew_ = !(all_terms && !fresh);
+    if (!drew_) return;
 
     // Frame k of the mean: the light samples at jitter k (frame 0 at their centres) and, with all
     // terms accumulated, the pixels sampled at offset k (frame 0 at their centres). The offset

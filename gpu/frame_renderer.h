@@ -99,6 +99,9 @@ public:
     // mean is complete (as many frames as the settings ask; later renders keep it as it is).
     int accumulated_frames() const { return mean_frames_; }
     bool accumulation_complete() const { return mean_complete_; }
+    // Whether the last render() drew the frame's passes; false when the accumulated mean was
+    // complete and kept as it was (a frame that costs next to nothing to draw).
+    bool drew() const { return drew_; }
 
 private:
     // Renders the listed faces (object × 6 + face, GL face order).
@@ -195,6 +198,7 @@ private:
     } mean_key_, shown_key_;
     int mean_frames_ = 0;  // frames in the mean
     bool mean_complete_ = false;
+    bool drew_ = false;
 };
 
 }  // namespace ag::gpu

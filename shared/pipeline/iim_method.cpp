@@ -115,7 +115,7 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());
     // Round robin through every texel, a new cycle when one ends.
     if (in.mode == PipelineMode::full_budget && iim_.pending() == 0) iim_.invalidate_all();
-    const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
+    const cpu::IimFrameStats s = gather(in, budget);
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
     // New values fade in over blend_frames so the thesis's trickle of ≤ 20 texels a frame never
@@ -126,6 +126,48 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     const std::vector<int>& changed = iim_.blend(in.frame, blend_frames);
     if (!changed.empty()) ++revision_;
     texture_.update(iim_.shown(), changed);
+}
+
+cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget) {
+    if (in.work_ms <= 0.0 || in.mode == PipelineMode::full) {
+        const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
+        gathered_ = iim_.last_gathered();
+        return s;
+    }
+    // By time: chunks of at most one GL pass, until the budget is spent or the share has run
+    // out. A texel's cost varies with what its hemi-plane sees (on the conference room the
+    // texels the camera sees cost about 3× the mean) and with what else runs on the cores, so
+    // an estimate from other frames can be far off: after the first chunk (a third of the
+    // plan), each is sized by what this frame's chunks cost, and the frame holds its target
+    // anyway. Only running out of time stops the loop early, never a prediction: small
+    // batches gather less efficiently, and stopping on predictions made from them shrank the
+    // measured budget frame after frame. Between chunks the photon work is taken over as soon
+    // as it is done, so the rest of the frame gathers with the new AIMs, a frame earlier.
+    using Clock = std::chrono::steady_clock;
+    const Clock::time_point start = Clock::now();
+    cpu::IimFrameStats total;
+    gathered_.clear();
+    int chunk = std::min(budget, std::clamp(budget / 3, kFirstChunkTexels, kChunkTexels));
+    iim_.defer_repairs();  // once for the frame, not per chunk (it scans every invalid texel)
+    while (chunk > 0) {
+        const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), chunk, in.frame);
+        total.gathered += s.gathered;
+        total.invalid += s.invalid;
+        total.relocated += s.relocated;
+        total.refined += s.refined;
+        total.pending = s.pending;
+        gathered_.insert(gathered_.end(), iim_.last_gathered().begin(), iim_.last_gathered().end());
+        if (s.gathered < chunk) break;  // nothing left to gather, refresh or refine
+        if (in.poll_hand_over && in.poll_hand_over()) iim_.aim_changed();
+        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        const int left = budget - total.gathered;
+        if (ms >= in.work_ms || left <= 0) break;
+        const double fits = std::floor((in.work_ms - ms) / (ms / double(total.gathered)));
+        chunk = int(std::clamp<double>(fits, double(std::min(left, kFirstChunkTexels)),
+                                       double(std::min(left, kChunkTexels))));
+    }
+    iim_.repair_deferred(in.frame);
+    return total;
 }
 
 void IimMethod::hand_over(cpu::PhotonSimulation& photons, PipelineStats& stats) {
@@ -140,6 +182,7 @@ void IimMethod::prime(cpu::PhotonSimulation& photons, uint64_t frame) {
     iim_.invalidate_all();
     moved_regions();  // consumes the scene changes
     iim_.gather(gatherer(backend_), int(scene_.atlas.texels.size()), frame);
+    gathered_ = iim_.last_gathered();
     texture_.update(iim_.shown(), iim_.blend(frame, 1));
     ++revision_;
 }

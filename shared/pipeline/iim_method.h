@@ -38,6 +38,8 @@ public:
     uint64_t changes_seen() const override { return seen_sequence_; }
 
     const cpu::Iim& iim() const { return iim_; }
+    // The texel records the last update() gathered (all its chunks).
+    const std::vector<int>& last_gathered() const { return gathered_; }
     // Per texel record, the photons' indirect estimate as the AIMs now hold it (see
     // cpu::Iim::note_indirect_estimates); the selective schedule gathers the most stale first.
     void note_indirect_estimates(const std::vector<float>& estimates,
@@ -62,6 +64,11 @@ private:
     // and the last measurement is `kCoverageFrames` frames old; hands it to the IIM.
     void update_coverage(bool objects_moved, uint64_t frame);
     static constexpr uint64_t kCoverageFrames = 8;
+    // Gathers this frame's texels: `budget` at once, or with a time share in chunks (below).
+    cpu::IimFrameStats gather(const IndirectInputs& in, int budget);
+    // A chunk is at most one pass of the GL gather (its 256 layers).
+    static constexpr int kChunkTexels = 256, kFirstChunkTexels = 8;
+    std::vector<int> gathered_;  // texel records gathered in the last update()
 
     const Scene& scene_;
     cpu::Iim iim_;

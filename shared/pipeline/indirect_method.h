@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <limits>
 #include <memory>
 
@@ -30,6 +31,13 @@ struct IndirectInputs {
     bool aim_changed = false;  // the AIM texture (and the staged AIM values) changed this frame
     PipelineMode mode = PipelineMode::selective;
     int budget = 0;  // units of work (IIM texels) this frame, from the scheduler
+    // With a frame-time target: the GL thread's share of it for this work, in ms (0: none, do
+    // `budget` units). The work then goes in chunks, sized by what this frame's chunks cost,
+    // until the share is spent: `budget` is the scheduler's plan, the share the limit.
+    double work_ms = 0.0;
+    // Between chunks: hands this frame's photon work over if the workers have finished it (never
+    // waits) and says whether new AIMs arrived, so the rest of the frame reads them.
+    std::function<bool()> poll_hand_over;
 };
 
 class IndirectMethod {

@@ -176,7 +176,13 @@ PipelineStats Pipeline::frame() {
     const bool aim_changed = !aim_dirty_.empty();
     aim_texture_.update(staged_aim_, aim_dirty_);
     aim_dirty_.clear();
-    indirect_->update(IndirectInputs{frame_, aim_changed, mode_, budgets.iim_texels}, stats);
+    IndirectInputs in{frame_, aim_changed, mode_, budgets.iim_texels};
+    in.work_ms = budgets.gather_ms;
+    // Selective takes the photon work over the moment it is done; the baselines at the end of
+    // the frame, as brute force does.
+    if (mode_ == PipelineMode::selective && budgets.gather_ms > 0.0)
+        in.poll_hand_over = [this, &stats] { return hand_over_if_done(stats); };
+    indirect_->update(in, stats);
     stats.gather_ms = ms_since(t);
     t = Clock::now();
     caustics_->render(caustic_positions_, caustic_powers_);
@@ -185,10 +191,11 @@ PipelineStats Pipeline::frame() {
     renderer_->render(indirect_->term(), caustics_->texture(), caustics_->revision());
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
+    stats.drawn = renderer_->drew();
     if (on_gl_drawn_) on_gl_drawn_();
 
     t = Clock::now();
-    hand_over(stats);
+    if (cpu_work_.valid()) hand_over(stats);
     stats.photons.groups_invalidated += invalidated;
     stats.wait_ms = ms_since(t);
     stats.frame_ms = ms_since(start);
@@ -221,6 +228,19 @@ void Pipeline::hand_over(PipelineStats& stats) {
     // Both readers of the change log have seen this frame's edits: without trimming, the log
     // grows by every edit for as long as the program runs.
     trim_changes(scene_, std::min(photons_->changes_seen(), indirect_->changes_seen()));
+}
+
+bool Pipeline::hand_over_if_done(PipelineStats& stats) {
+    if (!cpu_work_.valid() ||
+        cpu_work_.wait_for(std::chrono::seconds(0)) != std::future_status::ready)
+        return false;
+    hand_over(stats);
+    stats.early_hand_over = true;
+    if (aim_dirty_.empty()) return false;
+    // The AIM texels reach the gatherers now, not at the start of the next frame.
+    aim_texture_.update(staged_aim_, aim_dirty_);
+    aim_dirty_.clear();
+    return true;
 }
 
 int Pipeline::prime(int max_frames) {
@@ -298,7 +318,7 @@ const std::vector<char>& Pipeline::texel_pending() const {
 
 const std::vector<int>& Pipeline::last_gathered() const {
     const IimMethod* m = iim_method();
-    return m ? m->iim().last_gathered() : kNoneGathered;
+    return m ? m->last_gathered() : kNoneGathered;
 }
 
 }  // namespace ag

@@ -107,6 +107,9 @@ public:
 private:
     void start_cpu_work(const FrameBudgets& budgets);
     void hand_over(PipelineStats& stats);
+    // Between gather chunks: hand_over() if the workers have finished (never waits) and upload
+    // the new AIM texels at once; true when AIMs changed.
+    bool hand_over_if_done(PipelineStats& stats);
     // The volume term: the media method again when the scene changed, the view march alone when
     // only the camera moved (docs/media.md).
     void update_media();

@@ -23,6 +23,11 @@ struct PipelineStats {
     // thread; wait_ms is what the GL thread then waited for them.
     // The scheduler's budgets for this frame (fixed counts without a frame-time target).
     int budget_iim_texels = 0, budget_photons = 0;
+    // The photon work was handed over between gather chunks, not at the end of the frame: the
+    // rest of this frame's gathers read its AIMs.
+    bool early_hand_over = false;
+    // The frame's passes were drawn (false: the accumulated mean was complete and kept).
+    bool drawn = true;
     double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0,
            frame_ms = 0;
 };

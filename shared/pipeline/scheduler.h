@@ -33,6 +33,7 @@ struct FrameBudgets {
     int retrace_photons = kUnlimited;  // photons re-traced for invalid groups (workers)
     int aim_surfaces = kUnlimited;     // AIM surfaces rebuilt (workers)
     int iim_texels = kUnlimited;       // IIM texels gathered (GL thread)
+    double gather_ms = 0.0;            // the GL thread's time share for gathering; 0: none
     double worker_ms = 0.0;            // time target for the workers' photon + AIM work; 0: none
 };
 
@@ -40,12 +41,15 @@ class FrameScheduler {
 public:
     // Budgets for the next frame: the fixed counts of the settings without a target; with one,
     // what the measured costs say fits (the counts then cap them only with counts_cap). In the
-    // frame of an edit after frames without one (`edited`) the GL thread gathers kEditGatherShare
-    // of that: its one-time costs (moved geometry, shadow volumes, the first gathers that see the
-    // change) are not known in advance, and what it gathers is stale again when the edit's AIMs
-    // arrive a frame later.
+    // frame of an edit after frames without one (`edited`) drawing costs more than the running
+    // estimate says (moved geometry, shadow volumes, cube-map faces; not known in advance): the
+    // GL thread then leaves kEditDrawFactor times the estimate for drawing, and gathers at least
+    // kEditGatherShare of the usual share. Where drawing is a small part of the target, that
+    // leaves most of the frame to gathering, which reads the edit's AIMs as soon as the workers
+    // hand them over (between gather chunks).
     FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false) const;
     static constexpr double kEditGatherShare = 0.5;
+    static constexpr double kEditDrawFactor = 2.0;
     // AIM texels the workers may still rebuild, `elapsed_ms` into their frame.
     int aim_texels_left(const Settings& settings, double elapsed_ms) const;
     // Learns from a finished frame.

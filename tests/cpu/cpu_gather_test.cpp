@@ -735,4 +735,39 @@ TEST(IimSchedule, ChangedTexelsByStalenessSquaredTimesPixels) {
     for (auto it = at7 + 1; it != rest.end(); ++it) EXPECT_EQ(coverage[size_t(*it)], 0.0f);
 }
 
+// The error a stale texel shows is relative to the value it will have: a texel whose light falls
+// to a third (a lamp switched off) shows 200% too bright until it is gathered, one whose light
+// rises by half 33% too dark. The falling one goes first though it covers a tenth of the pixels:
+// by the symmetric staleness (0.5² × 0.2 = 0.05 against 0.2² × 2 = 0.08) it would go second, and
+// the conference room's chairs beside the lamp stayed 3× too bright for four frames.
+TEST(IimSchedule, ChangedTexelsByTheirErrorRelativeToTheNewValue) {
+    ScheduleCase c;
+    Simulated& s = c.s;
+    Iim& map = c.map;
+    const int texels = int(s.scene.atlas.texels.size());
+    ASSERT_GT(texels, 10);
+    std::vector<float> coverage(size_t(texels), 0.0f);
+    coverage[3] = 2.0f;  // on a wall, its light up by half
+    coverage[8] = 0.2f;  // on a chair, its light down to a third
+    map.set_coverage(coverage);
+    const std::vector<float> floors(size_t(texels), 0.0f);
+    std::vector<float> estimate(size_t(texels), 1.0f);
+    estimate[8] = 3.0f;
+    map.note_indirect_estimates(estimate, floors);
+    map.gather(c.gather, texels, 0);
+    ASSERT_TRUE(map.complete());
+    estimate[3] = 1.5f;
+    estimate[8] = 1.0f;
+    map.note_indirect_estimates(estimate, floors);
+    PhotonMaps& maps = s.sim->maps();
+    for (int surface = 0; surface < int(maps.surface_count()); ++surface)
+        maps.surface(surface).delta_i = 1e9;
+    map.schedule(maps);
+    map.gather(c.gather, 2, 1);
+    const std::vector<int> got = map.last_gathered();
+    ASSERT_EQ(got.size(), 2u);
+    EXPECT_EQ(got[0], 8);
+    EXPECT_EQ(got[1], 3);
+}
+
 }  // namespace ag::cpu

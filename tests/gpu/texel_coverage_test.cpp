@@ -52,6 +52,26 @@ TEST_F(TexelCoverageTest, AgreesWithTheGBuffer) {
     EXPECT_LT(seen, int(c.size()));  // the cube's bottom and back faces are hidden
 }
 
+// The frame reads the lightmap bilinearly, so a pixel depends on up to four texels: each is
+// credited by its weight. Counted at 12 × 10, the walls are minified (several texels a pixel):
+// more texels are seen than pixels show them, and the coverage still adds up to those pixels.
+// Crediting only the texel under each lookup sees at most one texel a pixel.
+TEST_F(TexelCoverageTest, CreditsTheFourTexelsABilinearLookupReads) {
+    const Scene scene = load_scene(AG_SOURCE_DIR "/scenes/cornell.json");
+    SceneMeshes meshes(scene);
+    TexelCoverage coverage(scene, meshes, 12, 10);
+    const std::vector<float>& c = coverage.update();
+    GBuffer g(scene, meshes, 12, 10);
+    g.render();
+    int lightmapped = 0;
+    for (const glm::vec4& id : g.read(GBufferTarget::ids))
+        if (id.w > 0.0f && int(id.b + 0.5f) == int(MaterialType::diffuse)) ++lightmapped;
+    int seen = 0;
+    for (float v : c) seen += v > 0.0f ? 1 : 0;
+    EXPECT_GT(seen, 2 * lightmapped);
+    EXPECT_NEAR(std::accumulate(c.begin(), c.end(), 0.0f), float(lightmapped) / 120.0f, 1e-4f);
+}
+
 TEST_F(TexelCoverageTest, FollowsTheCamera) {
     Scene scene = load_scene(AG_SOURCE_DIR "/scenes/cornell.json");
     SceneMeshes meshes(scene);

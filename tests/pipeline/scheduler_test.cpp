@@ -64,8 +64,15 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
     EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
-    // The frame of an edit gathers half as much (its one-time costs are not known).
-    EXPECT_EQ(scheduler.budgets(settings, 100000, true).iim_texels, 115);
+    // The frame of an edit leaves twice the usual drawing time (its one-time costs are not
+    // known): (33 − 20) / 0.1.
+    EXPECT_EQ(scheduler.budgets(settings, 100000, true).iim_texels, 130);
+    EXPECT_NEAR(scheduler.budgets(settings, 100000, true).gather_ms, 13.0, 1e-9);
+    // Where drawing is most of the frame, it still gathers half the usual share: drawing 14 ms,
+    // (33 − 14) / 2 / 0.1 texels, not (33 − 28) / 0.1.
+    FrameScheduler busy;
+    busy.measure(measured(14.0, 20, 2.0, 1000, 5.0, 100, 1.0));
+    EXPECT_EQ(busy.budgets(settings, 100000, true).iim_texels, 95);
     // Never more texels than there are, never none.
     EXPECT_EQ(scheduler.budgets(settings, 50).iim_texels, 50);
     // Drawing alone overruns the target: gathering keeps a quarter of it.

@@ -150,6 +150,8 @@ py::dict stats_dict(const PipelineStats& s) {
     d["gather_ms"] = s.gather_ms;
     d["draw_ms"] = s.draw_ms;
     d["wait_ms"] = s.wait_ms;
+    d["early_hand_over"] = s.early_hand_over;
+    d["drawn"] = s.drawn;
     d["photons_verified"] = s.photons.photons_verified;
     d["groups_invalidated"] = s.photons.groups_invalidated;
     d["groups_invalidated_by_query"] = s.photons.groups_invalidated_by_query;
