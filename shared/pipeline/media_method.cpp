@@ -7,7 +7,10 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "cpu/media_tracking.h"
 #include "cpu/media_voxelizer.h"
+#include "cpu/reference/reference.h"
+#include "cpu/sampling.h"
 #include "gpu/media_view.h"
 #include "shared/media_grid.h"
 #include "shared/qmc.h"
@@ -478,6 +481,8 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     }
     start = Clock::now();
     result.volume = view_media(scene, result, camera, settings);
+    if (settings.through_glass)
+        result.specular = view_through_glass(scene, result, camera, settings);
     result.timing.viewing = since(start);
     return result;
 }
@@ -503,6 +508,115 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
     for (int y = 0; y < volume.height; ++y)
         for (int x = 0; x < volume.width; ++x) volume.set_rgb(x, y, volume.rgb(x, y) * media.tint);
     return volume;
+}
+
+namespace {
+
+// The light a diffuse surface sends back along `ray` to where the ray started: its emission and
+// its albedo/π × the direct irradiance from the scene's lights (shadowed, attenuated by the
+// media), times the media's transmittance on the way. Black where the ray meets nothing, a back
+// face, or another mirror or glass (not followed).
+glm::vec3 surface_radiance(const Scene& scene, const cpu::RayTracer& rays,
+                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key) {
+    const cpu::RayHit hit = rays.intersect(ray);
+    if (!hit.hit) return glm::vec3(0.0f);
+    const Object& object = scene.objects[size_t(hit.object)];
+    if (object.material.type != MaterialType::diffuse) return glm::vec3(0.0f);
+    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
+    cpu::HashedStream more(key);
+    glm::vec3 radiance = object.material.emission;
+    const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
+    if (glm::any(glm::greaterThan(albedo, glm::vec3(0.0f))))
+        radiance += albedo / std::numbers::pi_v<float> *
+                    cpu::direct_irradiance(scene, rays, hit.position, hit.normal, 16, 0.5f, 0.5f,
+                                           &tracker, &more);
+    return radiance * tracker.transmittance(ray, hit.t, -1, more);
+}
+
+}  // namespace
+
+Image view_through_glass(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                         const MediaMethodSettings& settings) {
+    const cpu::RayTracer rays(scene);
+    const cpu::MediaTracker tracker(scene);
+    const float eps = rays.epsilon();
+    Image out(camera.width, camera.height);
+    // The pixels whose camera ray meets glass first: its Fresnel reflection there (followed to
+    // the surface it shows, his isosurface reflection), and the march on into it.
+    struct Pixel {
+        int x = 0, y = 0;
+        glm::vec3 reflected{0.0f};  // F × what the reflected ray shows × T to the glass
+        float transmitted = 0.0f;   // 1 − F at the entry
+        float ior = 1.5f;
+    };
+    std::vector<Pixel> pixels;
+    std::vector<gpu::MediaViewRay> entering;
+    for (int y = 0; y < camera.height; ++y)
+        for (int x = 0; x < camera.width; ++x) {
+            const glm::vec3 d = camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f);
+            const cpu::RayHit hit = rays.intersect({camera.eye, d});
+            if (!hit.hit) continue;
+            const Material& m = scene.objects[size_t(hit.object)].material;
+            if (m.type != MaterialType::glass) continue;
+            const uint64_t key = cpu::mix64(uint64_t(y) * uint64_t(camera.width) + uint64_t(x));
+            const cpu::SpecularSplit split = cpu::specular_split(m, hit, d, eps);
+            cpu::HashedStream more(key);
+            Pixel p{x, y, glm::vec3(0.0f), 1.0f - split.reflectance, m.ior};
+            p.reflected = split.reflectance *
+                          tracker.transmittance({camera.eye, d}, hit.t, -1, more) *
+                          surface_radiance(scene, rays, tracker, split.reflected, key ^ 1u);
+            pixels.push_back(p);
+            gpu::MediaViewRay r;
+            r.origin = camera.eye;
+            r.direction = d;
+            r.split = hit.t;  // the light scattered before the glass is the volume term's
+            // Once in the glass (its smoothed index begins), until back in air: a grazing ray
+            // may never reach the index deep inside.
+            r.n_leave = 1.0f + 0.01f * (m.ior - 1.0f);
+            entering.push_back(r);
+        }
+    gpu::MediaViewSettings view;
+    view.step = settings.view_step;
+    view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
+    const gpu::MediaView marcher;
+    const std::vector<gpu::MediaViewEnd> inside =
+        marcher.march(media.grids, media.fluence, media.flow, entering, view);
+    // Out of the glass bent: straight on through the fog to the surface behind (n = 1 there).
+    std::vector<gpu::MediaViewRay> behind(pixels.size());
+    std::vector<float> leaving(pixels.size(), 0.0f);  // 1 − F where the ray leaves the glass
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        if (!inside[i].ended) continue;  // out of steps: lost
+        const glm::vec3 o = inside[i].position, d = inside[i].direction;
+        behind[i].origin = o;
+        behind[i].direction = d;
+        const cpu::RayHit hit = rays.intersect({o, d});
+        behind[i].max_distance = hit.hit ? hit.t : 1e30f;
+        // The exit's Fresnel factor, from the glass surface the bent ray came out of (F is the
+        // same from either side).
+        const cpu::RayHit back = rays.intersect({o, -d});
+        if (back.hit && scene.objects[size_t(back.object)].material.type == MaterialType::glass) {
+            float cos_t = 0.0f;
+            leaving[i] = 1.0f - cpu::fresnel_dielectric(std::abs(glm::dot(d, back.normal)),
+                                                        1.0f / pixels[i].ior, cos_t);
+        } else {
+            leaving[i] = 1.0f;
+        }
+    }
+    const std::vector<gpu::MediaViewEnd> after =
+        marcher.march(media.grids, media.fluence, media.flow, behind, view);
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        const Pixel& p = pixels[i];
+        glm::vec3 seen = inside[i].radiance * media.tint;
+        if (inside[i].ended) {
+            const uint64_t key = cpu::mix64(uint64_t(p.y) * uint64_t(camera.width) + uint64_t(p.x));
+            const glm::vec3 surface = surface_radiance(
+                scene, rays, tracker, {behind[i].origin, behind[i].direction}, key ^ 2u);
+            seen += leaving[i] * inside[i].transmittance *
+                    (after[i].radiance * media.tint + after[i].transmittance * surface);
+        }
+        out.set_rgb(p.x, p.y, p.reflected + p.transmitted * seen);
+    }
+    return out;
 }
 
 Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,

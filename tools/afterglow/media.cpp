@@ -20,7 +20,9 @@ const Command kMediaCommand{
     "Render the volume term of the scene's participating media by Pfeuti's method: voxel grids "
     "of n, sigma_s and sigma_t through the ray tracer, n smoothed by a 9^3 Gaussian, photons of "
     "the first point light's photon plane marched along curved paths on the GPU, single "
-    "scattering by a view march. Writes OUT.exr and OUT.png and prints the time of each pass.",
+    "scattering by a view march. Writes OUT.exr and OUT.png, and OUT.specular.exr (what the camera "
+    "sees through the glass: the view march on through it, bent, then the surface behind), and "
+    "prints the time of each pass.",
     {
         text("output,o", "OUT.exr", "the volume term"),
         integer("grid", "N", "voxels along the grid's longest side", 4, 512,
@@ -106,6 +108,9 @@ int run_media(const Args& args) {
     write_image(result.volume, out);
     const std::string png = out.substr(0, out.size() - 4) + ".png";
     write_image(result.volume, png, float(args.get_double("exposure")));
+    // What the camera sees through the glass (the specular term at glass pixels), where any.
+    if (!result.specular.pixels.empty())
+        write_image(result.specular, out.substr(0, out.size() - 4) + ".specular.exr");
     if (args.has("slices")) {
         const int layer = result.grids.size.z / 2;
         const std::string stem = out.substr(0, out.size() - 4);
