@@ -241,6 +241,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     result.timing.pilot_generation = since(start);
     const gpu::MediaMarchResult piloted = marcher.march(grid, pilots, march, origins, 5);
     result.timing.pilot_marching = piloted.seconds;
+    result.timing.octree += piloted.octree_seconds;
 
     start = Clock::now();
     const PhotonDensity density(side, pilot_density(grid, piloted, source, a));
@@ -309,6 +310,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     result.timing.photon_generation = since(start);
     gpu::MediaMarchResult marched = marcher.march(grid, photons, march, inverse_density, 2);
     result.timing.photon_marching = marched.seconds;
+    result.timing.octree += marched.octree_seconds;
     const glm::vec3 voxel = grid.voxel_size();
     for (float f : marched.fluence)
         result.power_deposited += double(f) * voxel.x * voxel.y * voxel.z;
@@ -408,6 +410,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     gpu::MediaMarchSettings march;
     march.step = settings.march_step;
     march.deposit = settings.deposit;
+    march.octree = settings.octree;
     const gpu::MediaMarcher marcher;
     gpu::MediaMarchResult marched;
     if (!settings.adaptive.enabled) {
@@ -436,6 +439,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         result.timing.photon_generation = since(start);
         marched = marcher.march(grid, photons, march);
         result.timing.photon_marching = marched.seconds;
+        result.timing.octree += marched.octree_seconds;
         for (float f : marched.fluence)
             result.power_deposited += double(f) * double(voxel) * voxel * voxel;
         std::vector<MediaPhoton> left = std::move(marched.photons);
@@ -447,6 +451,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
             if (from_surfaces.empty()) break;
             gpu::MediaMarchResult again = marcher.march(grid, from_surfaces, march);
             result.timing.photon_marching += again.seconds;
+            result.timing.octree += again.octree_seconds;
             result.photons_bounced += from_surfaces.size();
             for (size_t i = 0; i < marched.fluence.size(); ++i) {
                 marched.fluence[i] += again.fluence[i];

@@ -31,6 +31,9 @@ const Command kMediaCommand{
                 MediaMethodSettings{}.photons),
         choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
         number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
+        flag("no-octree",
+             "march photons in fixed steps everywhere (default: his octree, whole runs of steps "
+             "at once through cubes of constant index and extinction; the same result)"),
         integer("surface-bounces", "N",
                 "photons leaving the grid go on from the opaque surface they meet (mirror: "
                 "reflected; else cosine, times the grey albedo) and are marched again, up to N "
@@ -89,6 +92,7 @@ int run_media(const Args& args) {
     settings.photons = args.get_int("photons");
     settings.march_step = float(args.get_double("step"));
     settings.surface_bounces = args.get_int("surface-bounces");
+    settings.octree = !args.has("no-octree");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
     settings.adaptive.enabled = args.has("adaptive");
@@ -128,12 +132,12 @@ int run_media(const Args& args) {
             1e3 * t.distribution, 1e3 * t.reconstruction);
     std::printf(
         "media: grid %dx%dx%d, %zu photons marched (+%zu from surfaces), %dx%d pixels on %s\n"
-        "  voxelisation %.1f ms, smoothing %.1f ms, photon generation %.1f ms, photon marching "
-        "%.1f ms, viewing %.1f ms, total %.1f ms\n",
+        "  voxelisation %.1f ms, smoothing %.1f ms, octree %.1f ms, photon generation %.1f ms, "
+        "photon marching %.1f ms, viewing %.1f ms, total %.1f ms\n",
         result.grid.x, result.grid.y, result.grid.z, result.photons_marched, result.photons_bounced,
         scene.camera.width, scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation,
-        1e3 * t.smoothing, 1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing,
-        1e3 * t.total());
+        1e3 * t.smoothing, 1e3 * t.octree, 1e3 * t.photon_generation, 1e3 * t.photon_marching,
+        1e3 * t.viewing, 1e3 * t.total());
     if (!result.levels.empty() && args.has("slices")) {
         std::vector<float> levels(result.levels.begin(), result.levels.end());
         write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),
