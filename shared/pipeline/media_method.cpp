@@ -546,16 +546,18 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
     const cpu::MediaTracker tracker(scene);
     const float eps = rays.epsilon();
     Image out(camera.width, camera.height);
-    // The pixels whose camera ray meets glass first: its Fresnel reflection there (followed to
-    // the surface it shows, his isosurface reflection), and the march on into it.
+    // The pixels whose camera ray meets glass first: its Fresnel reflection there (marched
+    // through the fog to the surface it shows: his isosurface reflection, with the fog), and the
+    // march on into it.
     struct Pixel {
         int x = 0, y = 0;
-        glm::vec3 reflected{0.0f};  // F × what the reflected ray shows × T to the glass
+        glm::vec3 reflected{0.0f};  // F × T to the glass × the surface the reflected ray shows
+        float reflectance = 0.0f;   // F × T to the glass
         float transmitted = 0.0f;   // 1 − F at the entry
         float ior = 1.5f;
     };
     std::vector<Pixel> pixels;
-    std::vector<gpu::MediaViewRay> entering;
+    std::vector<gpu::MediaViewRay> entering, reflecting;
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
             const glm::vec3 d = camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f);
@@ -566,11 +568,18 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
             const uint64_t key = cpu::mix64(uint64_t(y) * uint64_t(camera.width) + uint64_t(x));
             const cpu::SpecularSplit split = cpu::specular_split(m, hit, d, eps);
             cpu::HashedStream more(key);
-            Pixel p{x, y, glm::vec3(0.0f), 1.0f - split.reflectance, m.ior};
-            p.reflected = split.reflectance *
-                          tracker.transmittance({camera.eye, d}, hit.t, -1, more) *
-                          surface_radiance(scene, rays, tracker, split.reflected, key ^ 1u);
+            Pixel p{x, y, glm::vec3(0.0f), 0.0f, 1.0f - split.reflectance, m.ior};
+            p.reflectance =
+                split.reflectance * tracker.transmittance({camera.eye, d}, hit.t, -1, more);
+            p.reflected =
+                p.reflectance * surface_radiance(scene, rays, tracker, split.reflected, key ^ 1u);
             pixels.push_back(p);
+            gpu::MediaViewRay back;
+            back.origin = split.reflected.origin;
+            back.direction = glm::normalize(split.reflected.direction);
+            const cpu::RayHit seen = rays.intersect(split.reflected);
+            back.max_distance = seen.hit ? seen.t : 1e30f;
+            reflecting.push_back(back);
             gpu::MediaViewRay r;
             r.origin = camera.eye;
             r.direction = d;
@@ -609,6 +618,8 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
     }
     const std::vector<gpu::MediaViewEnd> after =
         marcher.march(media.grids, media.fluence, media.flow, behind, view);
+    const std::vector<gpu::MediaViewEnd> reflected =
+        marcher.march(media.grids, media.fluence, media.flow, reflecting, view);
     for (size_t i = 0; i < pixels.size(); ++i) {
         const Pixel& p = pixels[i];
         glm::vec3 seen = inside[i].radiance * media.tint;
@@ -619,7 +630,9 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
             seen += leaving[i] * inside[i].transmittance *
                     (after[i].radiance * media.tint + after[i].transmittance * surface);
         }
-        out.set_rgb(p.x, p.y, p.reflected + p.transmitted * seen);
+        out.set_rgb(p.x, p.y,
+                    p.reflected + p.reflectance * reflected[i].radiance * media.tint +
+                        p.transmitted * seen);
     }
     return out;
 }
