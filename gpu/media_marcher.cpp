@@ -31,6 +31,10 @@ layout(std430, binding = 3) buffer Fluence { uint fluence[]; };
 // or 1 per voxel credited (walk). Fixed point like the fluence, with their own scale.
 layout(std430, binding = 4) readonly buffer Attributes { vec4 attributes[]; };
 layout(std430, binding = 5) buffer Stats { uint stats[]; };
+// His octree (ch. 3.1.3) as an array: per voxel, the edge (in voxels) of the largest aligned cube
+// around it in which the march's reads of n and σ_t all see one value; 0: none.
+layout(std430, binding = 6) readonly buffer Octree { int cube_edge[]; };
+uniform int octree;  // 1: long steps through those cubes
 uniform int stat_count;
 uniform float stat_scale;
 vec4 photon_attribute = vec4(0.0);
@@ -110,7 +114,10 @@ void add(int cell, float v, vec3 dir) {
 // Track length: power × chord length of a→b (voxel coordinates) in every voxel it crosses,
 // by Amanatides–Woo, divided by the voxel volume: each voxel's mean fluence, whatever the
 // direction.
-void deposit_track(vec3 a, vec3 b, float power) {
+// The photon's power falls along the segment as exp(−optical t), t ∈ [0, 1] (Beer–Lambert with
+// σ_t constant over it): each chord gets ∫ of it exactly, so that one long step through a
+// constant medium deposits what many short ones do.
+void deposit_track(vec3 a, vec3 b, float power, float optical) {
     vec3 d = b - a;
     float t0 = 0.0, t1 = 1.0;
     for (int k = 0; k < 3; ++k) {
@@ -143,7 +150,11 @@ void deposit_track(vec3 a, vec3 b, float power) {
         float tn = min(min(tmax.x, tmax.y), tmax.z);
         float te = min(tn, t1);
         if (te > t) {
-            add(cell_index(cell), scale * (te - t), dir);
+            float dt = te - t;
+            float share = optical * dt > 1e-6
+                              ? exp(-optical * t) * (1.0 - exp(-optical * dt)) / optical
+                              : exp(-optical * t) * dt;
+            add(cell_index(cell), scale * share, dir);
             if (stat_count > 0) add_stats(cell_index(cell), (te - t) * length(d));
         }
         if (tn >= t1) break;
@@ -198,7 +209,26 @@ void main() {
     float inside = 1.0;
     for (int i = 0; i < max_steps; ++i) {
         vec3 x1 = x;
-        ray_step(x1, v, n, step);  // eqs. 2.10/2.11
+        float ds = step;
+        if (octree != 0) {
+            // Through a constant cube in one go (his octree step sizes), a whole number of
+            // steps so that the march goes on in step with the uniform one: straight (∇n = 0),
+            // and the deposits the same (deposit_track integrates each chord).
+            ivec3 c = clamp(ivec3(floor(g)), ivec3(0), size - 1);
+            int e = cube_edge[cell_index(c)];
+            if (e > 1) {
+                vec3 lo = vec3((c / e) * e), hi = min(lo + float(e), vec3(size));
+                vec3 dg = normalize(v) / voxel;
+                float t = 1e30;
+                for (int k = 0; k < 3; ++k) {
+                    if (dg[k] > 0.0) t = min(t, (hi[k] - g[k]) / dg[k]);
+                    else if (dg[k] < 0.0) t = min(t, (lo[k] - g[k]) / dg[k]);
+                }
+                float whole = floor(t / step);
+                if (whole > 1.0) ds = whole * step;
+            }
+        }
+        ray_step(x1, v, n, ds);  // eqs. 2.10/2.11
         vec3 g1 = (x1 - grid_min) / voxel;
         bool leaving = any(lessThan(g1, vec3(0.0))) || any(greaterThanEqual(g1, vec3(size)));
         if (leaving) {
@@ -218,7 +248,7 @@ void main() {
         // The segment's mean power under Beer–Lambert, σ_t taken constant over it.
         float optical = nearest_sigma_t(0.5 * (g + g1)) * length(x1 - x);
         float mean_power = optical > 1e-6 ? power * (1.0 - exp(-optical)) / optical : power;
-        if (walk != 0) deposit_walk(g, g1, mean_power); else deposit_track(g, g1, mean_power);
+        if (walk != 0) deposit_walk(g, g1, mean_power); else deposit_track(g, g1, power, optical);
         power *= exp(-optical);
         x = x1;
         g = g1;
@@ -234,6 +264,83 @@ void main() {
 )";
 
 }  // namespace
+
+std::vector<int32_t> media_octree(const MediaGrid& grid) {
+    const glm::ivec3 s = grid.size;
+    const size_t count = grid.voxel_count();
+    const auto at = [&](int x, int y, int z) {
+        return (size_t(z) * size_t(s.y) + size_t(y)) * size_t(s.x) + size_t(x);
+    };
+    // Voxels with a face neighbour of another n or σ_t, then grown by 2 voxels along each axis
+    // (a box of 5³): the march's trilinear reads, gradients and step ends reach 1.5 voxels from
+    // where a step lies, so a cube none of whose voxels is marked reads one value throughout.
+    std::vector<uint8_t> mark(count, 0);
+    for (int z = 0; z < s.z; ++z)
+        for (int y = 0; y < s.y; ++y)
+            for (int x = 0; x < s.x; ++x) {
+                const size_t i = at(x, y, z);
+                const glm::ivec3 p(x, y, z);
+                for (int k = 0; k < 3; ++k) {
+                    glm::ivec3 q = p;
+                    ++q[k];
+                    if (q[k] >= s[k]) continue;
+                    const size_t j = at(q.x, q.y, q.z);
+                    if (grid.n[i] != grid.n[j] || grid.sigma_t[i] != grid.sigma_t[j])
+                        mark[i] = mark[j] = 1;
+                }
+            }
+    for (int k = 0; k < 3; ++k) {
+        const std::vector<uint8_t> before = mark;
+        for (int z = 0; z < s.z; ++z)
+            for (int y = 0; y < s.y; ++y)
+                for (int x = 0; x < s.x; ++x) {
+                    const glm::ivec3 p(x, y, z);
+                    uint8_t m = 0;
+                    for (int o = -2; o <= 2 && !m; ++o) {
+                        glm::ivec3 q = p;
+                        q[k] += o;
+                        if (q[k] >= 0 && q[k] < s[k]) m = before[at(q.x, q.y, q.z)];
+                    }
+                    mark[at(x, y, z)] = m;
+                }
+    }
+    // The level pyramid (his Listing 3.1, bottom up): a cube of edge 2e is constant where its
+    // eight cubes of edge e are (those outside the grid count as constant).
+    std::vector<int32_t> edge(count, 0);
+    std::vector<uint8_t> level(count);
+    for (size_t i = 0; i < count; ++i) level[i] = mark[i] ? 0 : 1;
+    glm::ivec3 dims = s;
+    for (int e = 2; e <= std::max({s.x, s.y, s.z}); e *= 2) {
+        const glm::ivec3 up = (dims + 1) / 2;
+        std::vector<uint8_t> next(size_t(up.x) * size_t(up.y) * size_t(up.z), 1);
+        bool any = false;
+        for (int z = 0; z < up.z; ++z)
+            for (int y = 0; y < up.y; ++y)
+                for (int x = 0; x < up.x; ++x) {
+                    uint8_t ok = 1;
+                    for (int c = 0; c < 8 && ok; ++c) {
+                        const glm::ivec3 q(2 * x + (c & 1), 2 * y + ((c >> 1) & 1),
+                                           2 * z + ((c >> 2) & 1));
+                        if (q.x < dims.x && q.y < dims.y && q.z < dims.z)
+                            ok = level[(size_t(q.z) * size_t(dims.y) + size_t(q.y)) *
+                                           size_t(dims.x) +
+                                       size_t(q.x)];
+                    }
+                    next[(size_t(z) * size_t(up.y) + size_t(y)) * size_t(up.x) + size_t(x)] = ok;
+                    any = any || ok;
+                }
+        if (!any) break;
+        for (int z = 0; z < s.z; ++z)
+            for (int y = 0; y < s.y; ++y)
+                for (int x = 0; x < s.x; ++x)
+                    if (next[(size_t(z / e) * size_t(up.y) + size_t(y / e)) * size_t(up.x) +
+                             size_t(x / e)])
+                        edge[at(x, y, z)] = e;
+        level = std::move(next);
+        dims = up;
+    }
+    return edge;
+}
 
 MediaMarcher::MediaMarcher()
     : program_("media photon march", std::string(kMarchCompute) + kMediaRayStep + kMarchDeposits) {}
@@ -270,6 +377,12 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
         upload(attributes.data(), stat_count > 0 ? attributes.size() * sizeof(glm::vec4) : 0, 4);
     const std::vector<uint32_t> stat_zeros(2 * size_t(stat_count) * voxels, 0u);
     const Buffer stat_buffer = upload(stat_zeros.data(), stat_zeros.size() * sizeof(uint32_t), 5);
+    const bool octree = settings.octree && settings.deposit == MediaDeposit::track_length;
+    const auto octree_start = std::chrono::steady_clock::now();
+    const std::vector<int32_t> cubes = octree ? media_octree(grid) : std::vector<int32_t>();
+    result.octree_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - octree_start).count();
+    const Buffer octree_buffer = upload(cubes.data(), cubes.size() * sizeof(int32_t), 6);
 
     const glm::vec3 voxel = grid.voxel_size();
     const float ds = settings.step * std::min({voxel.x, voxel.y, voxel.z});
@@ -285,6 +398,7 @@ MediaMarchResult MediaMarcher::march(const MediaGrid& grid, const std::vector<Me
     program_.set("step", ds);
     program_.set("max_steps", max_steps);
     program_.set("walk", settings.deposit == MediaDeposit::voxel_walk ? 1 : 0);
+    program_.set("octree", octree ? 1 : 0);
     // The largest single deposit (the brightest photon over the longest piece of path one
     // deposit covers) maps to 2^30 units, so no deposit overflows 32 bits.
     float max_power = 0.0f;

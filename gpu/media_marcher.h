@@ -6,6 +6,7 @@
 // 32-bit atomic adds (llvmpipe has no 64-bit atomics), so the grid is the same on every run.
 #pragma once
 
+#include <cstdint>
 #include <vector>
 
 #include "gpu/gl_objects.h"
@@ -16,8 +17,11 @@ namespace ag::gpu {
 enum class MediaDeposit { track_length, voxel_walk };
 
 struct MediaMarchSettings {
-    float step = 0.25f;  // Δs in voxels (the smallest voxel edge); no octree yet
+    float step = 0.25f;  // Δs in voxels (the smallest voxel edge)
     MediaDeposit deposit = MediaDeposit::track_length;
+    // His octree (ch. 3.1.3): whole runs of steps at once through cubes where n and σ_t are
+    // constant (media_octree); the same deposits up to float rounding. Track length only.
+    bool octree = true;
     int max_steps = 0;  // per photon; 0 = enough to cross the grid 8 times
 };
 
@@ -28,10 +32,17 @@ struct MediaMarchResult {
     double entered = 0.0;                  // Σ power of the photons marched
     double absorbed = 0.0, escaped = 0.0;  // extinguished in the grid; left it
     double seconds = 0.0;                  // the dispatch, to glFinish
+    double octree_seconds = 0.0;           // building media_octree (CPU)
     // With statistics: `stat_count` per voxel (voxel-major): Σ crossings (chord lengths in voxel
     // edges; 1 per voxel credited by the walk), then Σ crossing × attribute k of each photon.
     std::vector<float> stats;
 };
+
+// His octree (Pfeuti ch. 3.1.3) as an array the size of the grid: per voxel, the edge (2, 4, 8,
+// … voxels) of the largest aligned cube containing it in which n and σ_t are constant, within
+// 2 voxels around it too (the reach of the march's reads); 0 where there is none. Exact
+// equality where he groups n within a threshold ε: the long steps must not change the result.
+std::vector<int32_t> media_octree(const MediaGrid& grid);
 
 class MediaMarcher {
 public:

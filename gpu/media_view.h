@@ -17,6 +17,26 @@ struct MediaViewSettings {
     float phase_k = 0.0f;  // Schlick k of the medium
 };
 
+// One ray of the view march. The radiance scattered towards `origin` counts from `split` (world
+// distance along the ray) on; the march ends at `max_distance`, where the ray leaves the grid, or,
+// with `n_leave` > 0, where the ray, having reached that index (the glass), is back in air.
+struct MediaViewRay {
+    glm::vec3 origin{0.0f};
+    glm::vec3 direction{0.0f, 0.0f, 1.0f};  // unit
+    float max_distance = 1e30f;
+    float split = 0.0f;
+    float n_leave = 0.0f;
+};
+
+// Where a ray's march ended and what it gathered on the way.
+struct MediaViewEnd {
+    glm::vec3 radiance{0.0f};    // single scattering from `split` on, attenuated to the origin
+    float transmittance = 1.0f;  // from the origin to the end
+    glm::vec3 position{0.0f};
+    glm::vec3 direction{0.0f};  // unit: the bent ray's direction of travel there
+    bool ended = false;         // left the glass or the grid (false: max_distance, or never in)
+};
+
 class MediaView {
 public:
     MediaView();
@@ -27,6 +47,11 @@ public:
                  const std::vector<glm::vec3>& flow, const Camera& camera,
                  const MediaViewSettings& settings,
                  const std::vector<float>& max_distance = {}) const;
+    // The same march for any rays.
+    std::vector<MediaViewEnd> march(const MediaGrid& grid, const std::vector<float>& fluence,
+                                    const std::vector<glm::vec3>& flow,
+                                    const std::vector<MediaViewRay>& rays,
+                                    const MediaViewSettings& settings) const;
 
 private:
     Program program_;

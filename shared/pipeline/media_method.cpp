@@ -7,7 +7,10 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "cpu/media_tracking.h"
 #include "cpu/media_voxelizer.h"
+#include "cpu/reference/reference.h"
+#include "cpu/sampling.h"
 #include "gpu/media_view.h"
 #include "shared/media_grid.h"
 #include "shared/qmc.h"
@@ -238,6 +241,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     result.timing.pilot_generation = since(start);
     const gpu::MediaMarchResult piloted = marcher.march(grid, pilots, march, origins, 5);
     result.timing.pilot_marching = piloted.seconds;
+    result.timing.octree += piloted.octree_seconds;
 
     start = Clock::now();
     const PhotonDensity density(side, pilot_density(grid, piloted, source, a));
@@ -306,6 +310,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     result.timing.photon_generation = since(start);
     gpu::MediaMarchResult marched = marcher.march(grid, photons, march, inverse_density, 2);
     result.timing.photon_marching = marched.seconds;
+    result.timing.octree += marched.octree_seconds;
     const glm::vec3 voxel = grid.voxel_size();
     for (float f : marched.fluence)
         result.power_deposited += double(f) * voxel.x * voxel.y * voxel.z;
@@ -405,6 +410,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     gpu::MediaMarchSettings march;
     march.step = settings.march_step;
     march.deposit = settings.deposit;
+    march.octree = settings.octree;
     const gpu::MediaMarcher marcher;
     gpu::MediaMarchResult marched;
     if (!settings.adaptive.enabled) {
@@ -433,6 +439,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         result.timing.photon_generation = since(start);
         marched = marcher.march(grid, photons, march);
         result.timing.photon_marching = marched.seconds;
+        result.timing.octree += marched.octree_seconds;
         for (float f : marched.fluence)
             result.power_deposited += double(f) * double(voxel) * voxel * voxel;
         std::vector<MediaPhoton> left = std::move(marched.photons);
@@ -444,6 +451,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
             if (from_surfaces.empty()) break;
             gpu::MediaMarchResult again = marcher.march(grid, from_surfaces, march);
             result.timing.photon_marching += again.seconds;
+            result.timing.octree += again.octree_seconds;
             result.photons_bounced += from_surfaces.size();
             for (size_t i = 0; i < marched.fluence.size(); ++i) {
                 marched.fluence[i] += again.fluence[i];
@@ -478,6 +486,8 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     }
     start = Clock::now();
     result.volume = view_media(scene, result, camera, settings);
+    if (settings.through_glass)
+        result.specular = view_through_glass(scene, result, camera, settings);
     result.timing.viewing = since(start);
     return result;
 }
@@ -503,6 +513,128 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
     for (int y = 0; y < volume.height; ++y)
         for (int x = 0; x < volume.width; ++x) volume.set_rgb(x, y, volume.rgb(x, y) * media.tint);
     return volume;
+}
+
+namespace {
+
+// The light a diffuse surface sends back along `ray` to where the ray started: its emission and
+// its albedo/π × the direct irradiance from the scene's lights (shadowed, attenuated by the
+// media), times the media's transmittance on the way. Black where the ray meets nothing, a back
+// face, or another mirror or glass (not followed).
+glm::vec3 surface_radiance(const Scene& scene, const cpu::RayTracer& rays,
+                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key) {
+    const cpu::RayHit hit = rays.intersect(ray);
+    if (!hit.hit) return glm::vec3(0.0f);
+    const Object& object = scene.objects[size_t(hit.object)];
+    if (object.material.type != MaterialType::diffuse) return glm::vec3(0.0f);
+    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
+    cpu::HashedStream more(key);
+    glm::vec3 radiance = object.material.emission;
+    const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
+    if (glm::any(glm::greaterThan(albedo, glm::vec3(0.0f))))
+        radiance += albedo / std::numbers::pi_v<float> *
+                    cpu::direct_irradiance(scene, rays, hit.position, hit.normal, 16, 0.5f, 0.5f,
+                                           &tracker, &more);
+    return radiance * tracker.transmittance(ray, hit.t, -1, more);
+}
+
+}  // namespace
+
+Image view_through_glass(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                         const MediaMethodSettings& settings) {
+    const cpu::RayTracer rays(scene);
+    const cpu::MediaTracker tracker(scene);
+    const float eps = rays.epsilon();
+    Image out(camera.width, camera.height);
+    // The pixels whose camera ray meets glass first: its Fresnel reflection there (marched
+    // through the fog to the surface it shows: his isosurface reflection, with the fog), and the
+    // march on into it.
+    struct Pixel {
+        int x = 0, y = 0;
+        glm::vec3 reflected{0.0f};  // F × T to the glass × the surface the reflected ray shows
+        float reflectance = 0.0f;   // F × T to the glass
+        float transmitted = 0.0f;   // 1 − F at the entry
+        float ior = 1.5f;
+    };
+    std::vector<Pixel> pixels;
+    std::vector<gpu::MediaViewRay> entering, reflecting;
+    for (int y = 0; y < camera.height; ++y)
+        for (int x = 0; x < camera.width; ++x) {
+            const glm::vec3 d = camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f);
+            const cpu::RayHit hit = rays.intersect({camera.eye, d});
+            if (!hit.hit) continue;
+            const Material& m = scene.objects[size_t(hit.object)].material;
+            if (m.type != MaterialType::glass) continue;
+            const uint64_t key = cpu::mix64(uint64_t(y) * uint64_t(camera.width) + uint64_t(x));
+            const cpu::SpecularSplit split = cpu::specular_split(m, hit, d, eps);
+            cpu::HashedStream more(key);
+            Pixel p{x, y, glm::vec3(0.0f), 0.0f, 1.0f - split.reflectance, m.ior};
+            p.reflectance =
+                split.reflectance * tracker.transmittance({camera.eye, d}, hit.t, -1, more);
+            p.reflected =
+                p.reflectance * surface_radiance(scene, rays, tracker, split.reflected, key ^ 1u);
+            pixels.push_back(p);
+            gpu::MediaViewRay back;
+            back.origin = split.reflected.origin;
+            back.direction = glm::normalize(split.reflected.direction);
+            const cpu::RayHit seen = rays.intersect(split.reflected);
+            back.max_distance = seen.hit ? seen.t : 1e30f;
+            reflecting.push_back(back);
+            gpu::MediaViewRay r;
+            r.origin = camera.eye;
+            r.direction = d;
+            r.split = hit.t;  // the light scattered before the glass is the volume term's
+            // Once in the glass (its smoothed index begins), until back in air: a grazing ray
+            // may never reach the index deep inside.
+            r.n_leave = 1.0f + 0.01f * (m.ior - 1.0f);
+            entering.push_back(r);
+        }
+    gpu::MediaViewSettings view;
+    view.step = settings.view_step;
+    view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
+    const gpu::MediaView marcher;
+    const std::vector<gpu::MediaViewEnd> inside =
+        marcher.march(media.grids, media.fluence, media.flow, entering, view);
+    // Out of the glass bent: straight on through the fog to the surface behind (n = 1 there).
+    std::vector<gpu::MediaViewRay> behind(pixels.size());
+    std::vector<float> leaving(pixels.size(), 0.0f);  // 1 − F where the ray leaves the glass
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        if (!inside[i].ended) continue;  // out of steps: lost
+        const glm::vec3 o = inside[i].position, d = inside[i].direction;
+        behind[i].origin = o;
+        behind[i].direction = d;
+        const cpu::RayHit hit = rays.intersect({o, d});
+        behind[i].max_distance = hit.hit ? hit.t : 1e30f;
+        // The exit's Fresnel factor, from the glass surface the bent ray came out of (F is the
+        // same from either side).
+        const cpu::RayHit back = rays.intersect({o, -d});
+        if (back.hit && scene.objects[size_t(back.object)].material.type == MaterialType::glass) {
+            float cos_t = 0.0f;
+            leaving[i] = 1.0f - cpu::fresnel_dielectric(std::abs(glm::dot(d, back.normal)),
+                                                        1.0f / pixels[i].ior, cos_t);
+        } else {
+            leaving[i] = 1.0f;
+        }
+    }
+    const std::vector<gpu::MediaViewEnd> after =
+        marcher.march(media.grids, media.fluence, media.flow, behind, view);
+    const std::vector<gpu::MediaViewEnd> reflected =
+        marcher.march(media.grids, media.fluence, media.flow, reflecting, view);
+    for (size_t i = 0; i < pixels.size(); ++i) {
+        const Pixel& p = pixels[i];
+        glm::vec3 seen = inside[i].radiance * media.tint;
+        if (inside[i].ended) {
+            const uint64_t key = cpu::mix64(uint64_t(p.y) * uint64_t(camera.width) + uint64_t(p.x));
+            const glm::vec3 surface = surface_radiance(
+                scene, rays, tracker, {behind[i].origin, behind[i].direction}, key ^ 2u);
+            seen += leaving[i] * inside[i].transmittance *
+                    (after[i].radiance * media.tint + after[i].transmittance * surface);
+        }
+        out.set_rgb(p.x, p.y,
+                    p.reflected + p.reflectance * reflected[i].radiance * media.tint +
+                        p.transmitted * seen);
+    }
+    return out;
 }
 
 Image media_slice_view(const MediaMethodResult& media, MediaField field, int axis, int layer,

@@ -54,6 +54,7 @@ struct MediaMethodSettings {
     float march_step = 0.25f;   // photon step, voxels
     float view_step = 0.5f;     // view-ray step, voxels
     gpu::MediaDeposit deposit = gpu::MediaDeposit::track_length;
+    bool octree = true;  // his octree step lengths in the photon march (track length only)
     MediaAdaptiveSettings adaptive;  // `photons` then counts the importance-sampled photons
     // The order of the uniform photons of a point light (his Table 4.1); Hammersley by default.
     PlaneSampling sampling = PlaneSampling::hammersley;
@@ -63,22 +64,28 @@ struct MediaMethodSettings {
     // up to this many times. The reference pipeline only (the adaptive one ignores it).
     int surface_bounces = 2;
     uint32_t seed = 0;  // the bounced photons' directions
+    // Also what the camera sees through glass (MediaMethodResult::specular).
+    bool through_glass = true;
 };
 
-// Seconds per pass, as his Tables 4.2–4.4 list them (no octree, no copy: the grids are SSBOs).
+// Seconds per pass, as his Tables 4.2–4.4 list them (no copy: the grids are SSBOs). The octree
+// is built on the CPU before each march (pilots, photons, each surface bounce).
 struct MediaMethodTiming {
-    double voxelisation = 0.0, smoothing = 0.0, photon_generation = 0.0, photon_marching = 0.0,
-           viewing = 0.0;
+    double voxelisation = 0.0, smoothing = 0.0, octree = 0.0, photon_generation = 0.0,
+           photon_marching = 0.0, viewing = 0.0;
     // The adaptive pipeline's passes (zero for the reference pipeline).
     double pilot_generation = 0.0, pilot_marching = 0.0, distribution = 0.0, reconstruction = 0.0;
     double total() const {
-        return voxelisation + smoothing + photon_generation + photon_marching + viewing +
+        return voxelisation + smoothing + octree + photon_generation + photon_marching + viewing +
                pilot_generation + pilot_marching + distribution + reconstruction;
     }
 };
 
 struct MediaMethodResult {
     Image volume;  // the `volume` frame term: single scattering before the first surface
+    // The `specular` frame term at the pixels whose camera ray meets glass first (black
+    // elsewhere; view_through_glass), where settings.through_glass.
+    Image specular;
     MediaMethodTiming timing;
     glm::ivec3 grid{0};
     size_t photons_marched = 0;    // photons of the plane that meet the grid
@@ -115,5 +122,15 @@ Image media_slice_view(const MediaMethodResult& media, MediaField field, int axi
 // its resolution: what a camera move needs (the photons stay as they are). Needs a GL context.
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
                  const MediaMethodSettings& settings);
+
+// What the camera sees through the glass (his viewing pass behind the refractive object,
+// ch. 3.1.6): at each pixel whose camera ray meets glass first, the Fresnel reflection there, and
+// the view march on through the smoothed index, bent (eqs. 2.10/2.11), scattering single light
+// inside the glass and behind it, until the ray is back in air; from there straight on (n = 1) to
+// the surface the bent ray meets, traced (his environment map holds only a distant scene; ours is
+// the scene itself), which shows its emission and direct light; the Fresnel transmittance where
+// the ray leaves the glass. Mirrors and glass behind the glass show black. Needs a GL context.
+Image view_through_glass(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                         const MediaMethodSettings& settings);
 
 }  // namespace ag

@@ -75,7 +75,7 @@ const Command kBenchCommand{
     "(default 64): the reference and adaptive pipelines' RMSE against a --ref-photons (default "
     "2M marched) reference at doubling photon counts and the photons each needs at equal RMSE, "
     "Table 4.2's passes, Table 4.1's sampling orders, Table 4.5's uniform / adaptive / "
-    "complement marching; --full: 128^3, one more count each and "
+    "complement marching, his octree against fixed steps; --full: 128^3, one more count each and "
     "Tables 4.3/4.4 on our cube and bunny scenes (docs/media.md).",
     {
         integer("repeat", "N", "repetitions, best time kept", 1, 1000, 5),

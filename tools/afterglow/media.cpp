@@ -20,7 +20,9 @@ const Command kMediaCommand{
     "Render the volume term of the scene's participating media by Pfeuti's method: voxel grids "
     "of n, sigma_s and sigma_t through the ray tracer, n smoothed by a 9^3 Gaussian, photons of "
     "the first point light's photon plane marched along curved paths on the GPU, single "
-    "scattering by a view march. Writes OUT.exr and OUT.png and prints the time of each pass.",
+    "scattering by a view march. Writes OUT.exr and OUT.png, and OUT.specular.exr (what the camera "
+    "sees through the glass: the view march on through it, bent, then the surface behind), and "
+    "prints the time of each pass.",
     {
         text("output,o", "OUT.exr", "the volume term"),
         integer("grid", "N", "voxels along the grid's longest side", 4, 512,
@@ -29,6 +31,9 @@ const Command kMediaCommand{
                 MediaMethodSettings{}.photons),
         choice("deposit", "MODE", "photon deposits:", {"track", "walk"}, "track"),
         number("step", "VOXELS", "photon march step", 0.01, 4.0, MediaMethodSettings{}.march_step),
+        flag("no-octree",
+             "march photons in fixed steps everywhere (default: his octree, whole runs of steps "
+             "at once through cubes of constant index and extinction; the same result)"),
         integer("surface-bounces", "N",
                 "photons leaving the grid go on from the opaque surface they meet (mirror: "
                 "reflected; else cosine, times the grey albedo) and are marched again, up to N "
@@ -87,6 +92,7 @@ int run_media(const Args& args) {
     settings.photons = args.get_int("photons");
     settings.march_step = float(args.get_double("step"));
     settings.surface_bounces = args.get_int("surface-bounces");
+    settings.octree = !args.has("no-octree");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
     settings.adaptive.enabled = args.has("adaptive");
@@ -106,6 +112,9 @@ int run_media(const Args& args) {
     write_image(result.volume, out);
     const std::string png = out.substr(0, out.size() - 4) + ".png";
     write_image(result.volume, png, float(args.get_double("exposure")));
+    // What the camera sees through the glass (the specular term at glass pixels), where any.
+    if (!result.specular.pixels.empty())
+        write_image(result.specular, out.substr(0, out.size() - 4) + ".specular.exr");
     if (args.has("slices")) {
         const int layer = result.grids.size.z / 2;
         const std::string stem = out.substr(0, out.size() - 4);
@@ -123,12 +132,12 @@ int run_media(const Args& args) {
             1e3 * t.distribution, 1e3 * t.reconstruction);
     std::printf(
         "media: grid %dx%dx%d, %zu photons marched (+%zu from surfaces), %dx%d pixels on %s\n"
-        "  voxelisation %.1f ms, smoothing %.1f ms, photon generation %.1f ms, photon marching "
-        "%.1f ms, viewing %.1f ms, total %.1f ms\n",
+        "  voxelisation %.1f ms, smoothing %.1f ms, octree %.1f ms, photon generation %.1f ms, "
+        "photon marching %.1f ms, viewing %.1f ms, total %.1f ms\n",
         result.grid.x, result.grid.y, result.grid.z, result.photons_marched, result.photons_bounced,
         scene.camera.width, scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation,
-        1e3 * t.smoothing, 1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing,
-        1e3 * t.total());
+        1e3 * t.smoothing, 1e3 * t.octree, 1e3 * t.photon_generation, 1e3 * t.photon_marching,
+        1e3 * t.viewing, 1e3 * t.total());
     if (!result.levels.empty() && args.has("slices")) {
         std::vector<float> levels(result.levels.begin(), result.levels.end());
         write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),
