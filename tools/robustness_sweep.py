@@ -21,6 +21,7 @@ import math
 import os
 import re
 import shutil
+import struct
 import subprocess
 import sys
 import tempfile
@@ -240,7 +241,7 @@ f 9 10 12
 f 10 11 12
 """
 
-SCRIPT_FAR_AND_BACK = """-- the cube to the far corner of the world (within the limit) and back, the lamp off and on
+SCRIPT_FAR_AND_BACK = """-- the cube to the far corner of the world and back, the lamp moved, off and on
 function on_frame(scene, frame, time)
     local cube = scene:object("cube")
     local lamp = scene:light("lamp")
@@ -271,7 +272,7 @@ end
 """
 
 
-SCRIPT_OVERLAP = """-- the cube into the sphere and onto the lamp, the lid coplanar with the ceiling and floor
+SCRIPT_OVERLAP = """-- the cube into the sphere and onto the lamp, the lid on the ceiling and the floor
 function on_frame(scene, frame, time)
     local cube = scene:object("cube")
     local lid = scene:object("lid")
@@ -299,7 +300,7 @@ def media_scene(sigma_s, sigma_a, light="point"):
 
 class Case:
     def __init__(self, name, scene, why, files=None, script=None, runs=None, full_only=False,
-                 refuse=None, ci=None, timeout=None):
+                 refuse=None, ci=None, timeout=None, black=False):
         self.name, self.scene, self.why = name, scene, why
         self.files = files or {}          # extra files beside the scene: name -> text
         self.script = script              # Lua source, written as NAME.lua and named by the scene
@@ -308,21 +309,26 @@ class Case:
         self.refuse = refuse              # regex of the expected error (exit 1) instead of a render
         self.ci = ci                      # runs always in the CI selection (a regression's runs)
         self.timeout = timeout            # seconds per run instead of --timeout
+        self.black = black                # every image must be 0 exactly: no light reaches them
 
 
 def cases():
     c = []
     add = lambda *a, **k: c.append(Case(*a, **k))  # noqa: E731
     add("baseline", cornell(), "the base scene every case changes")
-    add("albedo_0", with_all_materials(cornell(), albedo=0.0), "every diffuse albedo exactly 0")
+    add("albedo_0", with_all_materials(cornell(), albedo=0.0), "every diffuse albedo exactly 0",
+        black=True)
     add("albedo_1", with_all_materials(cornell(), albedo=1.0), "every diffuse albedo exactly 1")
     add("furnace_white", furnace(1.0), "closed box, albedo 1, point light inside, camera inside")
     add("furnace_white_quad", furnace(1.0, light="quad"),
         "closed box, albedo 1, quad light under the ceiling")
-    add("furnace_black", furnace(0.0), "closed box, albedo 0")
-    add("mirror_box", furnace(1.0, "mirror"), "closed box of perfect mirrors: specular loops")
-    add("glass_box", furnace(1.0, "glass"), "closed box of glass walls, light and camera inside")
-    add("light_zero", edit(lambda sc: sc["lights"][0].update(intensity=0)), "intensity 0")
+    add("furnace_black", furnace(0.0), "closed box, albedo 0", black=True)
+    add("mirror_box", furnace(1.0, "mirror"), "closed box of perfect mirrors: specular loops",
+        black=True)
+    add("glass_box", furnace(1.0, "glass"), "closed box of glass walls, light and camera inside",
+        black=True)
+    add("light_zero", edit(lambda sc: sc["lights"][0].update(intensity=0)), "intensity 0",
+        black=True)
     add("light_1e15", edit(lambda sc: sc["lights"][0].update(intensity=1e15)),
         "intensity 10^15 (the limit)")
     add("quad_1e15", edit(lambda sc: sc["lights"].__setitem__(0, quad_light(0.4, 0.999, 1e15))),
@@ -332,8 +338,8 @@ def cases():
     add("lights_disabled",
         edit(lambda sc: (sc["lights"].append(quad_light(0.4, 0.999, 2.0)),
                          [light.update(enabled=False) for light in sc["lights"]])),
-        "every light disabled")
-    add("no_lights", edit(lambda sc: sc.update(lights=[])), "no light at all")
+        "every light disabled", black=True)
+    add("no_lights", edit(lambda sc: sc.update(lights=[])), "no light at all", black=True)
     add("light_on_floor", edit(lambda sc: sc["lights"][0].update(position=[0.5, 0.0, 0.5])),
         "point light exactly on the floor")
     add("light_on_corner", edit(lambda sc: sc["lights"][0].update(position=[0.0, 1.0, 1.0])),
@@ -619,6 +625,52 @@ def check_images(afterglow, out, suffixes):
     return problems
 
 
+def write_black_exr(path, width, height):
+    """An uncompressed RGB 32-bit float OpenEXR image of zeros (the file layout of the OpenEXR
+    specification: magic, version 2, header attributes, a line offset table, one scan line per
+    chunk), to compare images against: `afterglow compare IMAGE BLACK` has RMSE 0 exactly when
+    every value of IMAGE is 0."""
+    def attr(name, kind, data):
+        return name.encode() + b"\0" + kind.encode() + b"\0" + struct.pack("<i", len(data)) + data
+    channels = b"".join(c.encode() + b"\0" + struct.pack("<iB3xii", 2, 0, 1, 1) for c in "BGR")
+    box = struct.pack("<iiii", 0, 0, width - 1, height - 1)
+    header = (b"\x76\x2f\x31\x01" + struct.pack("<i", 2) +
+              attr("channels", "chlist", channels + b"\0") +
+              attr("compression", "compression", b"\0") +
+              attr("dataWindow", "box2i", box) + attr("displayWindow", "box2i", box) +
+              attr("lineOrder", "lineOrder", b"\0") +
+              attr("pixelAspectRatio", "float", struct.pack("<f", 1.0)) +
+              attr("screenWindowCenter", "v2f", struct.pack("<ff", 0.0, 0.0)) +
+              attr("screenWindowWidth", "float", struct.pack("<f", 1.0)) + b"\0")
+    line = 3 * 4 * width
+    first = len(header) + 8 * height
+    offsets = b"".join(struct.pack("<Q", first + y * (8 + line)) for y in range(height))
+    lines = b"".join(struct.pack("<ii", y, line) + bytes(line) for y in range(height))
+    with open(path, "wb") as f:
+        f.write(header + offsets + lines)
+
+
+def check_black(afterglow, out, suffixes, black):
+    """Problems where an image that must be black exactly (no light reaches it) is not."""
+    problems = []
+    stem = out[:-len(".exr")]
+    for s in suffixes:
+        path = stem + s + ".exr"
+        if not os.path.exists(path):
+            continue
+        p = subprocess.run([afterglow, "compare", "--json", path, black], capture_output=True,
+                           text=True, timeout=60)
+        try:
+            rmse = json.loads(p.stdout)["rmse"]
+        except (ValueError, KeyError):
+            problems.append("compare with black: " + (p.stderr.strip() or p.stdout.strip()))
+            continue
+        if rmse != 0.0:
+            problems.append("%s: RMSE %g against black; expected 0 (no light reaches it)" % (
+                os.path.basename(path), rmse))
+    return problems
+
+
 def check_csv(path):
     """Problems with converge's CSV: missing, or a NaN or infinite number in it."""
     if not os.path.exists(path):
@@ -691,6 +743,8 @@ def run_one(afterglow, folder, case, run_name, args, suffixes, timeout):
     if p.returncode == 1:
         return "FAIL", "refused a valid scene: " + last[-300:], seconds, argv
     problems = check_images(afterglow, out, suffixes) if suffixes else check_csv(out)
+    if not problems and case.black and suffixes:
+        problems = check_black(afterglow, out, suffixes, os.path.join(folder, "black.exr"))
     if problems:
         return "FAIL", "; ".join(problems)[:400], seconds, argv
     # A NaN warning from an image writer, or a scripted edit refused (the case would not test
@@ -739,6 +793,8 @@ def main(argv=None):
         return 77
     folder = os.path.abspath(a.keep) if a.keep else tempfile.mkdtemp(prefix="ag-robust-")
     os.makedirs(folder, exist_ok=True)
+    w, h = (int(v) for v in SIZE.split("x"))
+    write_black_exr(os.path.join(folder, "black.exr"), w, h)
     run_table = runs()
     jobs = []
     for index, case in enumerate(all_cases):
@@ -755,8 +811,8 @@ def main(argv=None):
     failures = 0
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
         futures = {pool.submit(run_one, afterglow, folder, case, run_name, args, suffixes,
-                               case.timeout or a.timeout): (case, run_name) for case, run_name, args, suffixes
-                   in jobs}
+                               case.timeout or a.timeout): (case, run_name)
+                   for case, run_name, args, suffixes in jobs}
         for fut in concurrent.futures.as_completed(futures):
             case, run_name = futures[fut]
             status, why, seconds, cmd = fut.result()
