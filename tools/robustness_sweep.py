@@ -241,7 +241,7 @@ f 9 10 12
 f 10 11 12
 """
 
-SCRIPT_FAR_AND_BACK = """-- the cube to the far corner of the world and back, the lamp moved, off and on
+SCRIPT_FAR_AND_BACK = """-- the cube to the far corner of the world and back; the lamp moved
 function on_frame(scene, frame, time)
     local cube = scene:object("cube")
     local lamp = scene:light("lamp")
@@ -272,7 +272,7 @@ end
 """
 
 
-SCRIPT_OVERLAP = """-- the cube into the sphere and onto the lamp, the lid on the ceiling and the floor
+SCRIPT_OVERLAP = """-- the cube into the sphere, onto the lamp; the lid on ceiling and floor
 function on_frame(scene, frame, time)
     local cube = scene:object("cube")
     local lid = scene:object("lid")
