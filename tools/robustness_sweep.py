@@ -300,7 +300,7 @@ def media_scene(sigma_s, sigma_a, light="point"):
 
 class Case:
     def __init__(self, name, scene, why, files=None, script=None, runs=None, full_only=False,
-                 refuse=None, ci=None, timeout=None, black=False):
+                 refuse=None, ci=None, timeout=None, black=False, known=None):
         self.name, self.scene, self.why = name, scene, why
         self.files = files or {}          # extra files beside the scene: name -> text
         self.script = script              # Lua source, written as NAME.lua and named by the scene
@@ -310,6 +310,7 @@ class Case:
         self.ci = ci                      # runs always in the CI selection (a regression's runs)
         self.timeout = timeout            # seconds per run instead of --timeout
         self.black = black                # every image must be 0 exactly: no light reaches them
+        self.known = known or {}          # run -> a known failure, reported but not counted
 
 
 def cases():
@@ -442,6 +443,17 @@ def cases():
     add("media_far", moved(scaled(edit(fog(0.5, 0.1)), 1000.0),
                             (9998000.0, -9998000.0, 9998000.0)),
         "fog in the 1000-unit box near (10^7, -10^7, 10^7)")
+    add("light_in_box_coplanar", edit(lambda sc: obj("cube")(sc)["transform"].update(
+        translate=[0.5, 0.85, 0.5])),
+        "the lamp inside the cube whose top face lies in the ceiling's plane: nothing can "
+        "light the room", black=True, known=dict({
+            r: "coincident front and back faces: photons stored on the ceiling inside the cube "
+               "leak (docs/robustness.md)"
+            for r in ("render_iim", "render_irradiance_cache", "render_gpu_pm",
+                      "render_cpu_gather", "render_frame_ms", "reference_pm")},
+            render_vpl_direct="direct.map_size 8 (the base's): shadow maps 8 texels across "
+                              "leak 0.05 through the cube's walls; 0 at 256"),
+        ci=["reference_pt", "render_vpl"])
     add("photons_escape", edit(lambda sc: (
         sc.update(objects=[o for o in sc["objects"] if o["name"] == "floor"]),
         sc["lights"].__setitem__(0, dict(quad_light(0.4, 0.5, 2.0), corners=[
@@ -816,10 +828,13 @@ def main(argv=None):
         for fut in concurrent.futures.as_completed(futures):
             case, run_name = futures[fut]
             status, why, seconds, cmd = fut.result()
-            failures += status != "ok"
+            if run_name in case.known:
+                status, why = ("xfail", case.known[run_name]) if status == "FAIL" else (
+                    "xpass", "known to fail, passed: " + case.known[run_name])
+            failures += status == "FAIL"
             print("%-4s %-22s %-24s %6.2f s %s" % (status, case.name, run_name, seconds, why),
                   flush=True)
-            if status != "ok":
+            if status == "FAIL":
                 print("     " + " ".join(cmd), flush=True)
     print("%d runs, %d failed, %.1f s (scenes in %s)" % (
         len(jobs), failures, time.monotonic() - start, folder))
