@@ -790,7 +790,8 @@ def main(argv=None):
     ap.add_argument("-j", "--jobs", type=int, default=2)
     ap.add_argument("--only", default="", help="regex on CASE/RUN")
     ap.add_argument("--keep", default="", help="write scenes and images here and keep them")
-    ap.add_argument("--timeout", type=float, default=60.0, help="seconds per run")
+    ap.add_argument("--timeout", type=float, default=120.0,
+                    help="seconds a run may take (time it spent stopped not counted)")
     ap.add_argument("--list", action="store_true", help="list the cases and exit")
     a = ap.parse_args(argv)
 
