@@ -213,8 +213,8 @@ ag_cli_test(media_adaptive_quad 1 "the adaptive media pipeline needs a point or 
 # Renderer robustness (docs/robustness.md, "Renderer sweep"): extreme but valid scenes through
 # every indirect method, the references, converge and media at 16x16; fails on a crash, a run
 # over its time limit, a NaN or infinite pixel in any image, or a valid scene refused. The CI
-# selection runs each case once, the methods in turn (73 runs, 41-67 s on 2 loaded cores); every case
-# through every method is labelled slow; tools/robustness_sweep.py --mode full runs everything.
+# selection runs each case once, the methods in turn (73 runs, 41-67 s on 2 loaded cores);
+# every case through every method is labelled slow; --mode full runs everything.
 if(AG_PYTHON)
   set(ag_robust_python ${AG_PYTHON})
 else()
