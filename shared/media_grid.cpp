@@ -65,14 +65,17 @@ void gaussian_smooth(std::vector<float>& values, const glm::ivec3& size, int tap
     }
 }
 
+bool light_in_grid(const glm::vec3& light, const Bounds& grid) {
+    return glm::all(glm::greaterThanEqual(light, grid.min)) &&
+           glm::all(glm::lessThanEqual(light, grid.max));
+}
+
 PhotonSource photon_source(const glm::vec3& light, float intensity, const Bounds& grid) {
     PhotonSource source;
     source.light = light;
     source.intensity = intensity;
     source.grid = grid;
-    const bool inside =
-        glm::all(glm::greaterThan(light, grid.min)) && glm::all(glm::lessThan(light, grid.max));
-    if (inside) {
+    if (light_in_grid(light, grid)) {
         source.kind = PhotonSource::Kind::sphere;
         return source;
     }

@@ -85,6 +85,10 @@ struct PhotonSource {
     glm::vec3 axis{0.0f}, u{0.0f}, v{0.0f};  // the plane at distance 1 along `axis`
     float half = 0.0f;                       // its half-size
 };
+// Whether a point light gets the sphere source: inside the grid or on its boundary. A light on a
+// face, edge or corner has grid corners level with it, which no photon plane in front of it
+// covers; from the sphere, the photons heading out leave the grid at their first step.
+bool light_in_grid(const glm::vec3& light, const Bounds& grid);
 // The source for a point light and grid: the plane when the light lies outside the grid (every
 // corner in front of it), else the sphere.
 PhotonSource photon_source(const glm::vec3& light, float intensity, const Bounds& grid);

@@ -209,3 +209,23 @@ ag_cli_test(media_adaptive 0 "adaptive, [0-9]+ pilots marched; pilot generation"
 ag_cli_test(media_adaptive_quad 1 "the adaptive media pipeline needs a point or spot light"
             media scenes/media_glass_fog.json -o media_adaptive_quad.exr --size 8x8 --grid 8
             --adaptive)
+
+# Renderer robustness (docs/robustness.md, "Renderer sweep"): extreme but valid scenes through
+# every indirect method, the references, converge and media at 16x16; fails on a crash, a run
+# over its time limit, a NaN or infinite pixel in any image, or a valid scene refused. The CI
+# selection runs each case once, the methods in turn (73 runs, 41-67 s on 2 loaded cores);
+# every case through every method is labelled slow; --mode full runs everything.
+if(AG_PYTHON)
+  set(ag_robust_python ${AG_PYTHON})
+else()
+  set(ag_robust_python python3)
+endif()
+foreach(mode ci methods)
+  add_test(NAME cli.robustness_sweep_${mode}
+           COMMAND ${ag_robust_python} ${PROJECT_SOURCE_DIR}/tools/robustness_sweep.py
+                   --afterglow ${AG_BIN} --mode ${mode} -j 2
+           WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+  set_tests_properties(cli.robustness_sweep_${mode} PROPERTIES SKIP_RETURN_CODE 77 PROCESSORS 2)
+endforeach()
+set_tests_properties(cli.robustness_sweep_ci PROPERTIES LABELS gl TIMEOUT 900)
+set_tests_properties(cli.robustness_sweep_methods PROPERTIES LABELS slow TIMEOUT 1800)

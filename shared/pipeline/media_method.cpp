@@ -404,8 +404,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     const float intensity = glm::dot(light->value(), glm::vec3(1.0f / 3.0f));
     // His photon plane for a point light outside the grid; from the light itself where it is
     // inside; from its surface for a quad light.
-    const bool inside = glm::all(glm::greaterThan(light->position, bounds.min)) &&
-                        glm::all(glm::lessThan(light->position, bounds.max));
+    const bool inside = light_in_grid(light->position, bounds);
     start = Clock::now();
     gpu::MediaMarchSettings march;
     march.step = settings.march_step;

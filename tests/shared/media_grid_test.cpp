@@ -45,6 +45,31 @@ TEST(MediaGrid, BoxSolidAngle) {
                 1e-3 * std::sqrt(3.0) / (3.0 * 500.0 * 500.0));
 }
 
+// A point light on the grid's boundary (a face, an edge, a corner; found by the renderer
+// robustness sweep, docs/robustness.md) gets the sphere source like one inside: strictly outside
+// it has grid corners level with it, which no photon plane in front of it covers, and the media
+// method threw ("the light must lie outside the grid") and the pipeline dropped the volume term.
+// Its photons carry the light's whole flux 4πI.
+TEST(MediaGrid, LightOnTheGridBoundaryGetsTheSphereSource) {
+    Bounds b;
+    b.min = glm::vec3(0.0f);
+    b.max = glm::vec3(1.0f);
+    for (const glm::vec3 light : {glm::vec3(0.0f, 0.5f, 0.5f), glm::vec3(1.0f, 0.5f, 0.5f),
+                                  glm::vec3(0.5f, 1.0f, 0.0f), glm::vec3(1.0f, 0.0f, 1.0f)}) {
+        EXPECT_TRUE(light_in_grid(light, b));
+        PhotonSource source;
+        ASSERT_NO_THROW(source = photon_source(light, 2.0f, b));
+        EXPECT_EQ(source.kind, PhotonSource::Kind::sphere);
+        double power = 0.0;
+        for (const MediaPhoton& p : sphere_photons(light, 2.0f, 1000)) power += p.power;
+        EXPECT_NEAR(power, 4.0 * std::numbers::pi * 2.0, 1e-3);
+    }
+    // Just outside a face the plane still covers every corner.
+    EXPECT_FALSE(light_in_grid(glm::vec3(-1e-3f, 0.5f, 0.5f), b));
+    EXPECT_EQ(photon_source(glm::vec3(-1e-3f, 0.5f, 0.5f), 2.0f, b).kind,
+              PhotonSource::Kind::plane);
+}
+
 // His importance-distributed photons (ch. 3.2.3): Hammersley points through the two-stage
 // inversion land in each cell in proportion to its density, and the weights 1/(N p) sum to the
 // area where p > 0 (what keeps the importance-sampled photons' power unbiased; 63/64 here, one
