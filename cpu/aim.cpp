@@ -37,6 +37,22 @@ const std::array<glm::vec2, kDiscSamples>& disc_pattern() {
     return pattern;
 }
 
+// The density at the disc's centre (u = 0) of E(u) = a + g·u fitted to the flux on the part of
+// the disc on the chart: s0 = a·A + g·m1 and s1 = a·m1 + M2·g (flux and its first moment, per
+// disc area; A, m1, M2 the part's area and moments). Where the light falls or rises towards
+// the edge, the mean over the cut disc (s0 / A) is the density at the part's centroid, inside
+// the chart, not at the texel centre on the edge. Bounded to [½, 2] × s0 / A where the part is
+// too thin to fit a slope reliably.
+double density_at_centre(const Aim::DiscPart& part, double s0, const glm::dvec2& s1) {
+    const double mean = s0 / part.area;
+    if (std::abs(glm::determinant(part.second)) < 1e-12) return mean;
+    const glm::dmat2 inv = glm::inverse(part.second);
+    const double denominator = part.area - glm::dot(part.first, inv * part.first);
+    if (!(denominator > 1e-6)) return mean;
+    const double a = (s0 - glm::dot(part.first, inv * s1)) / denominator;
+    return std::clamp(a, 0.5 * mean, 2.0 * mean);
+}
+
 // The mean of the object's albedo texture over texel `t`: n × n points of the texel square in
 // atlas space, each mapped onto the record's triangle by its atlas-space barycentrics (clamped
 // onto the triangle, so points beyond it read its nearest edge).
@@ -98,6 +114,7 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     index.build(points);
     const int k = scene_.settings.aim.knn;
     const bool correct = scene_.settings.aim.boundary_correction;
+    const bool linear = correct && scene_.settings.aim.boundary_linear;
 
     std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
         indirect(texels.size(), glm::vec3(0.0f));
@@ -116,15 +133,37 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
                 r2 = texel * texel / std::numbers::pi;
             }
             // Only the part of the disc on the surface holds photons: divide by its area.
-            if (correct) r2 *= disc_on_surface(texels[i], std::sqrt(r2));
+            DiscPart part;
+            if (correct) part = disc_on_surface(texels[i], std::sqrt(r2));
+            const double disc = std::numbers::pi * r2;
             glm::dvec3 sum(0.0), bounced(0.0);
+            // First moments of the flux about the texel centre, u in units of the radius.
+            std::array<glm::dvec2, 3> sum_u{}, bounced_u{};
+            const double inv_r = 1.0 / std::sqrt(r2);
             for (int j = 0; j < n; ++j) {
                 const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];
-                sum += glm::dvec3(hit.power);
-                if (hit.bounce >= 1) bounced += glm::dvec3(hit.power);
+                const glm::dvec3 power(hit.power);
+                sum += power;
+                if (hit.bounce >= 1) bounced += power;
+                if (part.area >= 1.0 || !linear) continue;
+                const glm::vec3 d = hit.position - t.position;
+                const glm::dvec2 u = inv_r * glm::dvec2(glm::dot(d, part.b1), glm::dot(d, part.b2));
+                for (int c = 0; c < 3; ++c) {
+                    sum_u[size_t(c)] += power[c] * u;
+                    if (hit.bounce >= 1) bounced_u[size_t(c)] += power[c] * u;
+                }
             }
-            e[i] = glm::vec3(sum / (std::numbers::pi * r2));
-            indirect[i] = glm::vec3(bounced / (std::numbers::pi * r2));
+            if (part.area >= 1.0 || !linear) {
+                const double cut = std::numbers::pi * (r2 * part.area);  // as before the fit
+                e[i] = glm::vec3(sum / cut);
+                indirect[i] = glm::vec3(bounced / cut);
+                return;
+            }
+            for (int c = 0; c < 3; ++c) {
+                e[i][c] = float(density_at_centre(part, sum[c] / disc, sum_u[size_t(c)] / disc));
+                indirect[i][c] =
+                    float(density_at_centre(part, bounced[c] / disc, bounced_u[size_t(c)] / disc));
+            }
         },
         16);
 
@@ -163,22 +202,34 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     return int(texels.size());
 }
 
-double Aim::disc_on_surface(int record, double radius) const {
+Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
     const LightmapAtlas& atlas = scene_.atlas;
     const TexelRecord& t = atlas.texels[size_t(record)];
     const Chart& chart = atlas.charts[size_t(t.chart)];
+    DiscPart part;
     // Past the chart's edge a surface of several charts may go on in another chart (elsewhere in
     // the atlas): there the disc is taken to lie on the surface.
-    if (scene_.surfaces[size_t(t.surface)].charts.size() != 1) return 1.0;
+    if (scene_.surfaces[size_t(t.surface)].charts.size() != 1) return part;
     const glm::vec3 n = t.normal;
     const glm::vec3 a = std::abs(n.x) > 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1, 0, 0);
-    const glm::vec3 b1 = glm::normalize(a - n * glm::dot(n, a)), b2 = glm::cross(n, b1);
+    part.b1 = glm::normalize(a - n * glm::dot(n, a));
+    part.b2 = glm::cross(n, part.b1);
     int on = 0;
+    glm::dvec2 first(0.0);
+    glm::dmat2 second(0.0);
     for (const glm::vec2& s : disc_pattern()) {
-        const glm::vec3 p = t.position + float(radius) * (s.x * b1 + s.y * b2);
-        if (on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) ++on;
+        const glm::vec3 p = t.position + float(radius) * (s.x * part.b1 + s.y * part.b2);
+        if (!on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) continue;
+        ++on;
+        const glm::dvec2 u(s);
+        first += u;
+        second += glm::outerProduct(u, u);
     }
-    return std::max(kMinDiscFraction, double(on) / double(kDiscSamples));
+    if (on == kDiscSamples) return part;
+    part.area = std::max(kMinDiscFraction, double(on) / double(kDiscSamples));
+    part.first = first / double(kDiscSamples);
+    part.second = second / double(kDiscSamples);
+    return part;
 }
 
 int Aim::update(PhotonMaps& maps, int* surfaces_rebuilt) {

@@ -46,10 +46,19 @@ public:
     const std::vector<float>& indirect_estimates() const { return indirect_; }
     const std::vector<float>& indirect_floors() const { return indirect_floor_; }
 
+    // The part of a texel's kNN disc that lies on its chart: its area and first and second
+    // moments, in units of the disc (radius 1, area 1), and the tangent frame they are in.
+    struct DiscPart {
+        double area = 1.0;             // fraction of the disc on the chart
+        glm::dvec2 first{0.0};         // ∫ u du over that part
+        glm::dmat2 second{0.0};        // ∫ u uᵀ du over that part
+        glm::vec3 b1{0.0f}, b2{0.0f};  // tangent axes of u
+    };
+
 private:
-    // The fraction of the disc of radius `radius` around texel record `record`, in its tangent
-    // plane, that lies on the surface (its chart). Deterministic: a fixed pattern of points.
-    double disc_on_surface(int record, double radius) const;
+    // The part of the disc of radius `radius` around texel record `record`, in its tangent
+    // plane, on the surface (its chart). Deterministic: a fixed pattern of points.
+    DiscPart disc_on_surface(int record, double radius) const;
 
     const Scene& scene_;
     ThreadPool& pool_;

@@ -97,6 +97,12 @@ struct AimSettings {
     // Divide each texel's kNN flux by the part of its disc that lies on its chart (the room's
     // creases and corners), not by the whole π r² (aim.h, docs/fidelity.md).
     bool boundary_correction = true;
+    // Where the disc is cut by a chart edge, fit a density that varies linearly across the disc
+    // and take its value at the texel centre, not the mean over the cut disc (whose centroid lies
+    // inside the chart): the local-linear estimate (aim.cpp). Off by default: it removes the
+    // rims' overshoot at the texel centres but the settled frame's regions read no better
+    // (docs/fidelity.md, "The rims' overshoot").
+    bool boundary_linear = false;
 };
 
 struct GatherSettings {
@@ -301,6 +307,8 @@ void visit_settings(Settings& s, Visitor& v) {
                          "rebuild when delta_f / surface flux exceeds this"});
     v.field(Field<bool>{"boundary_correction", s.aim.boundary_correction, 0, 1,
                         "density over the part of the kNN disc on the texel's chart"});
+    v.field(Field<bool>{"boundary_linear", s.aim.boundary_linear, 0, 1,
+                        "at chart edges, a linear density fit read at the texel centre"});
     v.end_section();
     v.section("gather", "hemi-plane final gathering into IIMs, Larsen ch. 11");
     v.field(EnumField<GatherBackend, 3>{"backend", s.gather.backend, kGatherBackendNames,

@@ -45,9 +45,10 @@ def check(ok, what):
         failed.append(what)
 
 # Measured (docs/fidelity.md): rim 1.068 / 1.114 with photon seeds 1 / 2, 0.557 without the
-# correction; the rest 1.002 / 1.027, 1.096 without. The rim's excess is not understood (the
-# texel centres lie on the crease itself, where pt's own estimate may read low); the bounds
-# leave room for it and for the seed-to-seed spread, and still fail the uncorrected AIM.
+# correction; the rest 1.002 / 1.027, 1.096 without. The rim's excess is the cut disc's mean
+# standing for the density at its centroid, inside the chart, where the light is brighter
+# (docs/fidelity.md "The rims' overshoot"; aim.boundary_linear removes it, off by default); the
+# bounds leave room for it and for the seed-to-seed spread, and still fail the uncorrected AIM.
 rim = sums["rim"][0] / sums["rim"][1]
 inside = sums["inside"][0] / sums["inside"][1]
 check(0.85 < rim < 1.2, f"texels on chart edges: AIM / pt radiance {rim:.3f} over {sums['rim'][2]} (0.85-1.2)")
