@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "gpu/gl.h"
+#include "shared/input_error.h"
 #include "shared/pipeline/vpl_method.h"
 #include "shared/scene_edit.h"
 
@@ -91,10 +92,15 @@ void Pipeline::update_media() {
         renderer_->set_volume(media_->volume);
     } catch (const std::invalid_argument& e) {
         // Media without a light the method can use (a light switched off in the viewer): no
-        // volume term until the scene changes again.
+        // volume term until the scene changes again. Said once per reason, not silently: a
+        // light the method wrongly refused (one on the medium's boundary) once went unseen.
         media_.reset();
         media_failed_ = true;
         renderer_->set_volume(Image());
+        if (e.what() != media_warning_) {
+            media_warning_ = e.what();
+            warn("no volume term: " + media_warning_);
+        }
     }
 }
 

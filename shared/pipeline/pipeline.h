@@ -11,6 +11,7 @@
 #include <functional>
 #include <future>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "cpu/aim.h"
@@ -154,6 +155,7 @@ private:
     uint64_t media_version_ = 0;
     Camera media_camera_;
     bool media_failed_ = false;  // the scene's media had no light the method can use
+    std::string media_warning_;  // the last reason warned about
 };
 
 }  // namespace ag
