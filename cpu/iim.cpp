@@ -187,15 +187,12 @@ IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
     // Most stale first by the image error they carry (priority), then the longest stale.
     const size_t n = texel_generation_.size();
     if (!coverage_.empty() && int(batch.size()) < budget) {
-        std::vector<int> stale;
+        std::vector<std::pair<float, int>> keyed;  // (priority, record) of the stale seen ones
         for (int t : seen_records_)
             if (!is_pending_[size_t(t)] && texel_generation_[size_t(t)] < aim_generation_ &&
                 !in_batch[size_t(t)])
-                stale.push_back(t);
-        std::vector<std::pair<float, int>> keyed;
-        keyed.reserve(stale.size());
-        for (int t : stale) keyed.emplace_back(priority(t), t);
-        const size_t take = std::min(stale.size(), size_t(budget) - batch.size());
+                keyed.emplace_back(priority(t), t);
+        const size_t take = std::min(keyed.size(), size_t(budget) - batch.size());
         std::partial_sort(keyed.begin(), keyed.begin() + std::ptrdiff_t(take), keyed.end(),
                           [&](const auto& a, const auto& b) {
                               if (a.first != b.first) return a.first > b.first;

@@ -133,6 +133,45 @@ TEST(Aim, IndirectEstimatePerTexel) {
 
 namespace ag::cpu {
 
+namespace {
+// Irradiance over exact, averaged over a square plane's texels (half-width `half` about the
+// origin, texel size `texel`): those within a texel of two edges (corners), of one edge, and more
+// than 3 texels from every edge (middle), with the AIM's irradiance as built on `threads`.
+struct PlaneMeans {
+    double edge = 0.0, corner = 0.0, middle = 0.0;
+    std::vector<glm::vec3> irradiance;
+};
+template <typename Exact>
+PlaneMeans plane_means(const Scene& scene, int threads, float half, float texel, Exact exact) {
+    ThreadPool pool(threads);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());
+    PlaneMeans m;
+    m.irradiance = aim.irradiance();
+    int edge = 0, corner = 0, middle = 0;
+    for (const TexelRecord& t : scene.atlas.texels) {
+        // Distances of the centre from the nearer edges, in texels.
+        const float dx = (half - std::abs(t.position.x)) / texel,
+                    dz = (half - std::abs(t.position.z)) / texel;
+        const double e =
+            aim.irradiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)].x / exact(t);
+        if (dx < 1.0f && dz < 1.0f)
+            m.corner += e, ++corner;
+        else if (dx < 1.0f || dz < 1.0f)
+            m.edge += e, ++edge;
+        else if (dx > 3.0f && dz > 3.0f)
+            m.middle += e, ++middle;
+    }
+    EXPECT_GE(corner, 4);
+    EXPECT_GT(edge, 40);
+    EXPECT_GT(middle, 100);
+    m.edge /= edge, m.corner /= corner, m.middle /= middle;
+    return m;
+}
+}  // namespace
+
 // The kNN estimate's boundary bias (cpu/aim.h): under a sun shining straight down, a plane's
 // irradiance is the sun's everywhere, so every texel should read E_sun, on the plane's edges and
 // in its corners too. Without the boundary correction the discs of those texels reach past the
@@ -165,40 +204,11 @@ TEST(Aim, TexelsOnAPlanesEdgesAndCornersReadTheSunsIrradiance) {
         make_surfaces_and_atlas(s);
         return s;
     };
-    struct Means {
-        double edge = 0.0, corner = 0.0, middle = 0.0;
-        std::vector<glm::vec3> irradiance;
-    };
     auto measure = [&](const Scene& scene, int threads) {
-        ThreadPool pool(threads);
-        PhotonSimulation sim(scene, pool);
-        sim.trace_all();
-        Aim aim(scene, pool);
-        aim.rebuild_all(sim.maps());
-        Means m;
-        m.irradiance = aim.irradiance();
-        int edge = 0, corner = 0, middle = 0;
-        for (const TexelRecord& t : scene.atlas.texels) {
-            // Distances of the centre from the nearer edges, in texels.
-            const float dx = (kHalf - std::abs(t.position.x)) / kTexel,
-                        dz = (kHalf - std::abs(t.position.z)) / kTexel;
-            const double e =
-                aim.irradiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)].x / kSun;
-            if (dx < 1.0f && dz < 1.0f)
-                m.corner += e, ++corner;
-            else if (dx < 1.0f || dz < 1.0f)
-                m.edge += e, ++edge;
-            else if (dx > 3.0f && dz > 3.0f)
-                m.middle += e, ++middle;
-        }
-        EXPECT_GE(corner, 4);
-        EXPECT_GT(edge, 40);
-        EXPECT_GT(middle, 100);
-        m.edge /= edge, m.corner /= corner, m.middle /= middle;
-        return m;
+        return plane_means(scene, threads, kHalf, kTexel, [&](const TexelRecord&) { return kSun; });
     };
     const Scene corrected = make(true), plain = make(false);
-    const Means with = measure(corrected, 2), without = measure(plain, 2);
+    const PlaneMeans with = measure(corrected, 2), without = measure(plain, 2);
     std::printf(
         "E / E_sun: edges %.3f (uncorrected %.3f), corners %.3f (%.3f), middle %.3f "
         "(%.3f)\n",
@@ -243,42 +253,15 @@ TEST(Aim, EdgeTexelsUnderAFallingIrradianceReadItAtTheirCentre) {
         make_surfaces_and_atlas(s);
         return s;
     };
-    struct Means {
-        double edge = 0.0, corner = 0.0, middle = 0.0;
-        std::vector<glm::vec3> irradiance;
-    };
     auto measure = [&](const Scene& scene, int threads) {
-        ThreadPool pool(threads);
-        PhotonSimulation sim(scene, pool);
-        sim.trace_all();
-        Aim aim(scene, pool);
-        aim.rebuild_all(sim.maps());
-        Means m;
-        m.irradiance = aim.irradiance();
-        int edge = 0, corner = 0, middle = 0;
-        for (const TexelRecord& t : scene.atlas.texels) {
-            const float dx = (kHalf - std::abs(t.position.x)) / kTexel,
-                        dz = (kHalf - std::abs(t.position.z)) / kTexel;
+        return plane_means(scene, threads, kHalf, kTexel, [&](const TexelRecord& t) {
             const double d2 = double(t.position.x) * t.position.x +
                               double(t.position.z) * t.position.z + double(kHeight) * kHeight;
-            const double exact = kIntensity * kHeight / (d2 * std::sqrt(d2));
-            const double e =
-                aim.irradiance()[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)].x / exact;
-            if (dx < 1.0f && dz < 1.0f)
-                m.corner += e, ++corner;
-            else if (dx < 1.0f || dz < 1.0f)
-                m.edge += e, ++edge;
-            else if (dx > 3.0f && dz > 3.0f)
-                m.middle += e, ++middle;
-        }
-        EXPECT_GE(corner, 4);
-        EXPECT_GT(edge, 40);
-        EXPECT_GT(middle, 100);
-        m.edge /= edge, m.corner /= corner, m.middle /= middle;
-        return m;
+            return kIntensity * kHeight / (d2 * std::sqrt(d2));  // E = I h / d³
+        });
     };
     const Scene linear = make(true), mean = make(false);
-    const Means with = measure(linear, 2), without = measure(mean, 2);
+    const PlaneMeans with = measure(linear, 2), without = measure(mean, 2);
     std::printf(
         "E / exact: edges %.3f (cut-disc mean %.3f), corners %.3f (%.3f), middle %.3f (%.3f)\n",
         with.edge, without.edge, with.corner, without.corner, with.middle, without.middle);
