@@ -6,6 +6,8 @@
 #include <limits>
 #include <numbers>
 #include <numeric>
+#include <optional>
+#include <tuple>
 
 #include "cpu/knn.h"
 #include "shared/charts.h"
@@ -93,6 +95,11 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     irradiance_.assign(n, glm::vec3(0.0f));
     dirty_flag_.assign(n, 0);
     indirect_.assign(scene_.atlas.texels.size(), -1.0f);
+    raw_e_.assign(scene_.atlas.texels.size(), glm::vec3(0.0f));
+    raw_indirect_.assign(scene_.atlas.texels.size(), glm::vec3(0.0f));
+    reach2_.assign(scene_.atlas.texels.size(), std::numeric_limits<float>::infinity());
+    built_.assign(scene_.surfaces.size(), 0);
+    built_albedo_.assign(scene_.surfaces.size(), glm::vec3(0.0f));
     indirect_floor_.assign(scene_.atlas.texels.size(), 0.0f);
     texture_mean_.resize(scene_.atlas.texels.size());
     pool_.parallel_for(
@@ -102,29 +109,74 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
 }
 
 int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
+    return estimate_surface(maps, surface, nullptr);
+}
+
+int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::vec3>* changed) {
     SurfaceHits& s = maps.surface(surface);
     const std::vector<int>& texels = surface_texels_[size_t(surface)];
-    const Object& object = scene_.objects[size_t(scene_.surfaces[size_t(surface)].object)];
-    const glm::vec3 albedo =
-        object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
+    const glm::vec3 albedo = albedo_of(surface);
 
-    std::vector<glm::vec3> points(s.hits.size());
-    for (size_t i = 0; i < s.hits.size(); ++i) points[i] = s.hits[i].position;
+    // The texels to estimate: all of them, or those whose kNN disc of the last build reaches a
+    // changed hit. Another texel keeps its nearest hits, and so its estimate, bit for bit: a
+    // removed hit farther than its k-th nearest was not among them, an added one farther away
+    // does not join them.
+    std::vector<int> todo;
+    if (!changed) {
+        todo.resize(texels.size());
+        std::iota(todo.begin(), todo.end(), 0);
+    } else if (!changed->empty()) {
+        KnnIndex near_change;
+        near_change.build(*changed);
+        std::vector<char> reached(texels.size(), 0);
+        pool_.parallel_for(
+            texels.size(),
+            [&](size_t i) {
+                const int r = texels[i];
+                if (!std::isfinite(reach2_[size_t(r)])) {
+                    reached[i] = 1;
+                    return;
+                }
+                thread_local std::vector<int> idx;
+                thread_local std::vector<float> d2;
+                const TexelRecord& t = scene_.atlas.texels[size_t(r)];
+                if (near_change.query(t.position, 1, idx, d2) == 1)
+                    reached[i] = d2[0] <= reach2_[size_t(r)] * (1.0f + 1e-5f) ? 1 : 0;
+            },
+            64);
+        for (size_t i = 0; i < texels.size(); ++i)
+            if (reached[i]) todo.push_back(int(i));
+    }
+
     KnnIndex index;
-    index.build(points);
+    if (!todo.empty()) {
+        std::vector<glm::vec3> points(s.hits.size());
+        for (size_t i = 0; i < s.hits.size(); ++i) points[i] = s.hits[i].position;
+        index.build(points);
+    }
     const int k = scene_.settings.aim.knn;
     const bool correct = scene_.settings.aim.boundary_correction;
     const bool linear = correct && scene_.settings.aim.boundary_linear;
 
-    std::vector<glm::vec3> e(texels.size(), glm::vec3(0.0f)),
-        indirect(texels.size(), glm::vec3(0.0f));
+    // Unscaled estimates per texel of the surface (kept per record between builds).
+    std::vector<glm::vec3> e(texels.size()), indirect(texels.size());
+    for (size_t i = 0; i < texels.size(); ++i) {
+        e[i] = raw_e_[size_t(texels[i])];
+        indirect[i] = raw_indirect_[size_t(texels[i])];
+    }
     pool_.parallel_for(
-        texels.size(),
-        [&](size_t i) {
+        todo.size(),
+        [&](size_t job) {
+            const size_t i = size_t(todo[job]);
             const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
             thread_local std::vector<int> idx;
             thread_local std::vector<float> d2;
             const int n = index.query(t.position, k, idx, d2);
+            // Changes farther than the k-th nearest hit leave the estimate as it is; with fewer
+            // than k hits, any change reaches it.
+            reach2_[size_t(texels[i])] =
+                n == k ? d2[size_t(n - 1)] : std::numeric_limits<float>::infinity();
+            e[i] = indirect[i] = glm::vec3(0.0f);
             if (n == 0) return;
             // Density estimate over the disc through the n-th nearest hit (Jensen; Larsen ch. 10).
             double r2 = double(d2[size_t(n - 1)]);
@@ -167,6 +219,15 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
         },
         16);
 
+    for (int i : todo) {
+        raw_e_[size_t(texels[size_t(i)])] = e[size_t(i)];
+        raw_indirect_[size_t(texels[size_t(i)])] = indirect[size_t(i)];
+    }
+    built_albedo_[size_t(surface)] = albedo;
+    built_[size_t(surface)] = 1;
+    s.changes.clear();
+    s.changes_overflow = false;
+
     // Scale the surface's estimates so that their integral, Σ E·area, equals the flux its photon
     // hits actually carry: the AIM conserves energy per surface. Without the boundary correction
     // the kNN disc reaches past the surface's edges and the estimate falls there (to about ½ on
@@ -199,7 +260,40 @@ int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
     }
     s.delta_f = 0.0;
     s.signed_delta = glm::dvec3(0.0);
-    return int(texels.size());
+    return int(todo.size());
+}
+
+std::optional<std::vector<glm::vec3>> Aim::net_changes(const SurfaceHits& s, double* energy_out) {
+    if (s.changes_overflow) return std::nullopt;
+    // A hit removed and added again (a re-traced photon that landed where it did) cancels: sort
+    // the changes by what they are, sum the signs of equal ones.
+    std::vector<uint32_t> order(s.changes.size());
+    std::iota(order.begin(), order.end(), 0u);
+    auto key = [&](uint32_t i) {
+        const HitChange& c = s.changes[i];
+        return std::make_tuple(c.position.x, c.position.y, c.position.z, c.power.x, c.power.y,
+                               c.power.z, c.bounce);
+    };
+    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+        const auto ka = key(a), kb = key(b);
+        return ka != kb ? ka < kb : a < b;
+    });
+    std::vector<glm::vec3> out;
+    double e = 0.0;
+    for (size_t i = 0; i < order.size();) {
+        size_t j = i;
+        int sum = 0;
+        while (j < order.size() && key(order[j]) == key(order[i]))
+            sum += s.changes[order[j++]].sign;
+        if (sum != 0) {
+            const HitChange& c = s.changes[order[i]];
+            out.push_back(c.position);
+            e += std::abs(double(sum) * energy(c.power));
+        }
+        i = j;
+    }
+    if (energy_out) *energy_out = e;
+    return out;
 }
 
 Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
@@ -251,28 +345,54 @@ int Aim::rebuild_round_robin(PhotonMaps& maps, int max_texels, int* surfaces_reb
 }
 
 int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surfaces_rebuilt) {
-    std::vector<int> candidates;
+    // A surface built before re-estimates only the texels its net hit changes reach; one whose
+    // hits came back as they were (every change cancelled) and whose albedo is the same is left
+    // alone. A surface never built, or whose changes overflowed, is rebuilt whole.
+    struct Candidate {
+        int surface;
+        double delta;  // Σ |energy| of the net changes (or the gross Δf where not known)
+        std::optional<std::vector<glm::vec3>> changed;
+    };
+    std::vector<Candidate> candidates;
     for (int s = 0; s < int(maps.surface_count()); ++s) {
-        const SurfaceHits& h = maps.surface(s);
-        if (h.delta_f <= 0.0) continue;
+        SurfaceHits& h = maps.surface(s);
+        const bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
+        if (h.delta_f <= 0.0 && !recoloured) continue;
+        Candidate c{s, h.delta_f, std::nullopt};
+        if (built_[size_t(s)]) {
+            c.changed = net_changes(h, &c.delta);
+            if (c.changed && c.changed->empty() && !recoloured) {
+                h.changes.clear();
+                h.delta_f = 0.0;
+                h.signed_delta = glm::dvec3(0.0);
+                continue;
+            }
+        }
         const double flux = std::abs(energy(h.flux));
-        if (flux > 0.0 && h.delta_f / flux <= double(scene_.settings.aim.delta_threshold)) continue;
-        candidates.push_back(s);
+        if (!recoloured && flux > 0.0 &&
+            c.delta / flux <= double(scene_.settings.aim.delta_threshold))
+            continue;
+        candidates.push_back(std::move(c));
     }
     // Largest Δf / A first (Larsen ch. 10); ties by surface id for determinism.
-    std::stable_sort(candidates.begin(), candidates.end(), [&](int a, int b) {
-        const double ka =
-            maps.surface(a).delta_f / std::max(1e-30f, scene_.surfaces[size_t(a)].area);
-        const double kb =
-            maps.surface(b).delta_f / std::max(1e-30f, scene_.surfaces[size_t(b)].area);
-        return ka > kb;
-    });
+    auto key = [&](const Candidate& c) {
+        return c.delta / std::max(1e-30f, scene_.surfaces[size_t(c.surface)].area);
+    };
+    std::stable_sort(candidates.begin(), candidates.end(),
+                     [&](const Candidate& a, const Candidate& b) { return key(a) > key(b); });
     const int budget = std::min<int>(int(candidates.size()), max_surfaces);
     int texels = 0, surfaces = 0;
-    for (int i = 0; i < budget && (surfaces == 0 || texels < max_texels); ++i, ++surfaces)
-        texels += rebuild_surface(maps, candidates[size_t(i)]);
+    for (int i = 0; i < budget && (surfaces == 0 || texels < max_texels); ++i, ++surfaces) {
+        Candidate& c = candidates[size_t(i)];
+        texels += estimate_surface(maps, c.surface, c.changed ? &*c.changed : nullptr);
+    }
     if (surfaces_rebuilt) *surfaces_rebuilt = surfaces;
     return texels;
+}
+
+glm::vec3 Aim::albedo_of(int surface) const {
+    const Object& object = scene_.objects[size_t(scene_.surfaces[size_t(surface)].object)];
+    return object.material.type == MaterialType::diffuse ? object.material.albedo : glm::vec3(0.0f);
 }
 
 int Aim::rebuild_all(PhotonMaps& maps) {

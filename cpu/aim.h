@@ -7,6 +7,7 @@
 #pragma once
 
 #include <glm/glm.hpp>
+#include <optional>
 #include <vector>
 
 #include "cpu/photon_map.h"
@@ -34,6 +35,12 @@ public:
     // Rebuilds one surface's texels from its hits and resets its Δf.
     int rebuild_surface(PhotonMaps& maps, int surface);
 
+    // The hits added or removed since the surface's AIM was built, those that came back as they
+    // were cancelled: their positions, and the Σ |energy| of the net changes in `energy`. None
+    // where the changes overflowed (anything may have changed).
+    static std::optional<std::vector<glm::vec3>> net_changes(const SurfaceHits& s,
+                                                             double* energy = nullptr);
+
     // Per atlas texel (width × height, row-major): reflected radiance and irradiance.
     const std::vector<glm::vec3>& radiance() const { return radiance_; }
     const std::vector<glm::vec3>& irradiance() const { return irradiance_; }
@@ -56,6 +63,13 @@ public:
     };
 
 private:
+    // Estimates the surface's texels from its hits (all of them without `changed`; with it, only
+    // those whose last kNN disc reaches one of the changed positions), rescales the surface to
+    // its flux and writes radiance, irradiance and the indirect estimate of every texel. Resets
+    // Δf and the change list. Returns the texels estimated.
+    int estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::vec3>* changed);
+    glm::vec3 albedo_of(int surface) const;
+
     // The part of the disc of radius `radius` around texel record `record`, in its tangent
     // plane, on the surface (its chart). Deterministic: a fixed pattern of points.
     DiscPart disc_on_surface(int record, double radius) const;
@@ -73,6 +87,13 @@ private:
     std::vector<int> dirty_;
     size_t round_robin_ = 0;  // next surface for rebuild_round_robin
     std::vector<char> dirty_flag_;
+    // Per record, as last estimated: E and its bounced part before the surface's flux scale, and
+    // the squared distance to the k-th nearest hit (infinite with fewer hits: any change
+    // reaches it). Per surface: built at least once, and the albedo it was built with.
+    std::vector<glm::vec3> raw_e_, raw_indirect_;
+    std::vector<float> reach2_;
+    std::vector<char> built_;
+    std::vector<glm::vec3> built_albedo_;
 };
 
 }  // namespace ag::cpu

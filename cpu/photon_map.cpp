@@ -10,7 +10,16 @@ void PhotonMaps::resize(size_t surfaces, size_t lights, int groups_per_light) {
     groups_.assign(lights, std::vector<PhotonGroup>(size_t(groups_per_light)));
 }
 
-void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& power, uint8_t bounce, double sign) {
+void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& power,
+                            uint8_t bounce, double sign) {
+    if (!s.changes_overflow) {
+        if (s.changes.size() >= 4 * s.hits.size() + 64) {
+            s.changes_overflow = true;
+            std::vector<HitChange>().swap(s.changes);
+        } else {
+            s.changes.push_back(HitChange{position, power, bounce, int8_t(sign > 0.0 ? 1 : -1)});
+        }
+    }
     s.flux += sign * glm::dvec3(power);
     s.signed_delta += sign * glm::dvec3(power);
     const double e = std::abs(energy(power));
@@ -24,7 +33,7 @@ void PhotonMaps::clear_group(int light, int g) {
         if (v.hit < 0) continue;
         SurfaceHits& s = surfaces_[size_t(v.surface)];
         const PhotonHit removed = s.hits[size_t(v.hit)];
-        add_energy(s, removed.power, removed.bounce, -1.0);
+        add_energy(s, removed.position, removed.power, removed.bounce, -1.0);
         // Swap-remove: the last hit takes the freed slot; patch its owner's path vertex.
         const size_t last = s.hits.size() - 1;
         if (size_t(v.hit) != last) {
@@ -54,7 +63,7 @@ void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* ph
                 v.hit = int32_t(s.hits.size());
                 s.hits.push_back(PhotonHit{t.local_position, t.power, uint32_t(light), uint32_t(g),
                                            uint32_t(group.vertices.size()), t.bounce});
-                add_energy(s, t.power, t.bounce, +1.0);
+                add_energy(s, t.local_position, t.power, t.bounce, +1.0);
             }
             group.vertices.push_back(v);
         }
@@ -69,9 +78,9 @@ void PhotonMaps::rescale_group(int light, int g, const glm::vec3& ratio) {
         if (v.hit < 0) continue;
         SurfaceHits& s = surfaces_[size_t(v.surface)];
         PhotonHit& hit = s.hits[size_t(v.hit)];
-        add_energy(s, hit.power, hit.bounce, -1.0);
+        add_energy(s, hit.position, hit.power, hit.bounce, -1.0);
         hit.power *= ratio;
-        add_energy(s, hit.power, hit.bounce, +1.0);
+        add_energy(s, hit.position, hit.power, hit.bounce, +1.0);
     }
 }
 

@@ -37,8 +37,22 @@ struct PhotonGroup {
     bool traced = false;                 // holds hits of the current light state
 };
 
+// A hit added (+1) or removed (−1) since the surface's AIM was last built. A group re-traced
+// along the same paths removes and re-adds the same hits: those cancel (Aim::update).
+struct HitChange {
+    glm::vec3 position{0.0f};  // object space, as the hit's
+    glm::vec3 power{0.0f};
+    uint8_t bounce = 0;
+    int8_t sign = 0;
+};
+
 struct SurfaceHits {
     std::vector<PhotonHit> hits;
+    // Hits added and removed since the AIM rebuild, in order; when they outnumber the hits
+    // (a surface left unbuilt through many edits) they are dropped and `changes_overflow` says
+    // that anything may have changed.
+    std::vector<HitChange> changes;
+    bool changes_overflow = false;
     glm::dvec3 flux{0.0};          // Σ power of the stored hits
     double delta_f = 0.0;          // Σ |energy| of hits added/removed since the AIM rebuild
     double delta_i = 0.0;          // same, hits with bounce ≥ 1 only, since the IIM update
@@ -69,7 +83,8 @@ public:
     size_t hit_count() const;
 
 private:
-    void add_energy(SurfaceHits& s, const glm::vec3& power, uint8_t bounce, double sign);
+    void add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& power,
+                    uint8_t bounce, double sign);
 
     std::vector<SurfaceHits> surfaces_;
     std::vector<std::vector<PhotonGroup>> groups_;  // [light][group]

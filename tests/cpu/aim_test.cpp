@@ -7,8 +7,11 @@
 #include <cmath>
 #include <cstdio>
 #include <numbers>
+#include <optional>
+#include <vector>
 
 #include "cpu/photon_simulation.h"
+#include "shared/scene_edit.h"
 #include "test_scenes.h"
 
 namespace ag::cpu {
@@ -276,6 +279,105 @@ TEST(Aim, EdgeTexelsUnderAFallingIrradianceReadItAtTheirCentre) {
     EXPECT_GT(without.corner, 1.25);
     EXPECT_EQ(measure(linear, 1).irradiance, with.irradiance);
     EXPECT_EQ(measure(linear, 3).irradiance, with.irradiance);
+}
+
+}  // namespace ag::cpu
+
+namespace ag::cpu {
+
+namespace {
+
+// Radiance, irradiance and indirect estimates of every texel, for exact comparison.
+struct AimState {
+    std::vector<glm::vec3> radiance, irradiance;
+    std::vector<float> indirect;
+    bool operator==(const AimState&) const = default;
+};
+
+AimState state_of(const Aim& aim) {
+    return {aim.radiance(), aim.irradiance(), aim.indirect_estimates()};
+}
+
+}  // namespace
+
+// Groups re-traced along the paths they had remove and re-add the same hits: those cancel, and
+// no AIM texel is estimated again (with the gross Δf every surface they touch was rebuilt).
+TEST(AimUpdate, HitsThatComeBackAsTheyWereRebuildNothing) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());
+    aim.take_dirty_texels();
+    const AimState before = state_of(aim);
+
+    EXPECT_GT(sim.invalidate_all(), 0);
+    sim.frame(1 << 30);
+    double gross = 0.0;
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s) {
+        gross += sim.maps().surface(s).delta_f;
+        const std::optional<std::vector<glm::vec3>> net = Aim::net_changes(sim.maps().surface(s));
+        ASSERT_TRUE(net.has_value());
+        EXPECT_TRUE(net->empty()) << "surface " << s << ": " << net->size() << " net changes";
+    }
+    EXPECT_GT(gross, 0.0);  // every hit was removed and added again
+    int surfaces = -1;
+    EXPECT_EQ(aim.update(sim.maps(), 1 << 30, 1 << 30, &surfaces), 0);
+    EXPECT_EQ(surfaces, 0);
+    EXPECT_TRUE(aim.take_dirty_texels().empty());
+    EXPECT_TRUE(state_of(aim) == before);
+    for (int s = 0; s < int(sim.maps().surface_count()); ++s)
+        EXPECT_EQ(sim.maps().surface(s).delta_f, 0.0);
+}
+
+// After an edit the AIM re-estimates only the texels whose kNN disc reaches a changed hit, and
+// ends bit for bit where a whole rebuild from the same hits ends.
+TEST(AimUpdate, LocalUpdateEqualsAWholeRebuild) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    // A black cube: light bounced off it would carry the change everywhere (a photon leaving
+    // from another point lands elsewhere); here only its own hits and its shadow's edges change.
+    const int cube = scene.find_object("cube");
+    scene.objects[size_t(cube)].material.albedo = glm::vec3(0.0f);
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());
+
+    // A nudge: few photons land elsewhere (the cube's shadow edges, its faces' hits).
+    translate_object(scene, cube, {2.0f, 0.0f, -1.0f});
+    for (int i = 0; i < 1000 && (i == 0 || !sim.settled()); ++i) sim.frame(1 << 30);
+    ASSERT_TRUE(sim.settled());
+    const int estimated = aim.update(sim.maps(), 1 << 30, 1 << 30, nullptr);
+    std::printf("a nudged black cube: %d of %zu texels estimated again\n", estimated,
+                scene.atlas.texels.size());
+    EXPECT_GT(estimated, 0);
+    EXPECT_LT(estimated, int(scene.atlas.texels.size()) / 2)
+        << "a local edit re-estimates far fewer texels than there are";
+
+    Aim fresh(scene, pool);
+    fresh.rebuild_all(sim.maps());
+    const AimState got = state_of(aim), expected = state_of(fresh);
+    int differ = 0;
+    for (size_t a = 0; a < got.radiance.size(); ++a)
+        differ +=
+            got.radiance[a] != expected.radiance[a] || got.irradiance[a] != expected.irradiance[a];
+    for (size_t r = 0; r < got.indirect.size(); ++r)
+        differ += got.indirect[r] != expected.indirect[r];
+    EXPECT_EQ(differ, 0) << "texels where the local update differs from a rebuild";
+
+    // An albedo edit changes no hit on the surface itself, but its radiance.
+    const int wall = scene.find_object("left_wall");
+    ASSERT_GE(wall, 0);
+    scene.objects[size_t(wall)].material.albedo *= 0.5f;
+    aim.take_dirty_texels();
+    int surfaces = 0;
+    aim.update(sim.maps(), 1 << 30, 1 << 30, &surfaces);
+    EXPECT_GT(surfaces, 0);
+    Aim recoloured(scene, pool);
+    recoloured.rebuild_all(sim.maps());
+    EXPECT_TRUE(state_of(aim) == state_of(recoloured));
 }
 
 }  // namespace ag::cpu
