@@ -182,6 +182,26 @@ CausticsRenderer::~CausticsRenderer() {
 
 void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
                               const std::vector<glm::vec3>& powers, bool cull) {
+    // No photons (a scene without mirrors or glass, or none traced yet): the term is zero
+    // whatever the view. Drawing the scene for it cost as much as the frame's own G-buffer
+    // (25 ms of a 50 ms settled frame on the conference room at 64²).
+    if (positions.empty()) {
+        if (!showing_none_) {
+            gl::BindFramebuffer(GL_FRAMEBUFFER, result_fbo_.get());
+            const GLenum one = GL_COLOR_ATTACHMENT0;
+            gl::DrawBuffers(1, &one);
+            const GLfloat zero[4] = {0.0f, 0.0f, 0.0f, 0.0f};
+            gl::ClearBufferfv(GL_COLOR, 0, zero);
+            gl::BindFramebuffer(GL_FRAMEBUFFER, 0);
+            ++revision_;
+            last_inputs_ = Inputs{};
+            showing_none_ = true;
+        }
+        tiles_filtered_ = 0;
+        filter_ms_ = query_ms_ = 0.0;
+        return;
+    }
+    showing_none_ = false;
     // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas (the G-buffer).
     if (own_g_buffer_) own_g_buffer_->render();
     const GBuffer::View& view = g_buffer_->last_view();

@@ -68,6 +68,7 @@ private:
         bool operator==(const Inputs&) const = default;
     } last_inputs_;
     uint64_t revision_ = 0;
+    bool showing_none_ = false;  // the texture holds zeros from a render without photons
     double filter_ms_ = 0.0, query_ms_ = 0.0;
 };
 

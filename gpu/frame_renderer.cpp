@@ -780,6 +780,7 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
                      (all_terms || !frame_accumulation);
     // Every term is kept as it is: the term attachments and the frame already hold the mean.
     drew_ = !(all_terms && !fresh);
+    drew_direct_ = drew_ && fresh;
     if (!drew_) return;
 
     // Frame k of the mean: the light samples at jitter k (frame 0 at their centres) and, with all

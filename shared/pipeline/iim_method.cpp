@@ -104,6 +104,7 @@ void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
 }
 
 void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
+    const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     mode_ = in.mode;
     if (in.aim_changed) iim_.aim_changed();
     const bool timed = scene_.settings.schedule.frame_ms > 0.0f;
@@ -115,7 +116,7 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());
     // Round robin through every texel, a new cycle when one ends.
     if (in.mode == PipelineMode::full_budget && iim_.pending() == 0) iim_.invalidate_all();
-    const cpu::IimFrameStats s = gather(in, budget);
+    const cpu::IimFrameStats s = gather(in, budget, start);
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
     // New values fade in over blend_frames so the thesis's trickle of ≤ 20 texels a frame never
@@ -128,7 +129,8 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     texture_.update(iim_.shown(), changed);
 }
 
-cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget) {
+cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget,
+                                     std::chrono::steady_clock::time_point start) {
     if (in.work_ms <= 0.0 || in.mode == PipelineMode::full) {
         const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
         gathered_ = iim_.last_gathered();
@@ -144,7 +146,10 @@ cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget) {
     // measured budget frame after frame. Between chunks the photon work is taken over as soon
     // as it is done, so the rest of the frame gathers with the new AIMs, a frame earlier.
     using Clock = std::chrono::steady_clock;
-    const Clock::time_point start = Clock::now();
+    const Clock::time_point loop_start = Clock::now();
+    auto ms_since = [](Clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    };
     cpu::IimFrameStats total;
     gathered_.clear();
     int chunk = std::min(budget, std::clamp(budget / 3, kFirstChunkTexels, kChunkTexels));
@@ -159,10 +164,11 @@ cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget) {
         gathered_.insert(gathered_.end(), iim_.last_gathered().begin(), iim_.last_gathered().end());
         if (s.gathered < chunk) break;  // nothing left to gather, refresh or refine
         if (in.poll_hand_over && in.poll_hand_over()) iim_.aim_changed();
-        const double ms = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+        const double ms = ms_since(start);
         const int left = budget - total.gathered;
         if (ms >= in.work_ms || left <= 0) break;
-        const double fits = std::floor((in.work_ms - ms) / (ms / double(total.gathered)));
+        const double fits =
+            std::floor((in.work_ms - ms) / (ms_since(loop_start) / double(total.gathered)));
         chunk = int(std::clamp<double>(fits, double(std::min(left, kFirstChunkTexels)),
                                        double(std::min(left, kChunkTexels))));
     }

@@ -3,6 +3,7 @@
 // and blended in by cpu::Iim, uploaded to an atlas-sized texture the frame reads per surface point.
 #pragma once
 
+#include <chrono>
 #include <memory>
 #include <vector>
 
@@ -65,7 +66,10 @@ private:
     void update_coverage(bool objects_moved, uint64_t frame);
     static constexpr uint64_t kCoverageFrames = 8;
     // Gathers this frame's texels: `budget` at once, or with a time share in chunks (below).
-    cpu::IimFrameStats gather(const IndirectInputs& in, int budget);
+    // `start`: when the frame's indirect work began (the screen coverage and the queueing of
+    // moved regions count against the share, as they count in the frame).
+    cpu::IimFrameStats gather(const IndirectInputs& in, int budget,
+                              std::chrono::steady_clock::time_point start);
     // A chunk is at most one pass of the GL gather (its 256 layers).
     static constexpr int kChunkTexels = 256, kFirstChunkTexels = 8;
     std::vector<int> gathered_;  // texel records gathered in the last update()

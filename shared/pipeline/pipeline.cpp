@@ -198,6 +198,7 @@ PipelineStats Pipeline::frame() {
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
     stats.drawn = renderer_->drew();
+    stats.drawn_direct = renderer_->drew_direct();
     if (on_gl_drawn_) on_gl_drawn_();
 
     t = Clock::now();

@@ -28,6 +28,8 @@ struct PipelineStats {
     bool early_hand_over = false;
     // The frame's passes were drawn (false: the accumulated mean was complete and kept).
     bool drawn = true;
+    // It drew the direct light anew (every light's shadows), as the frame of an edit does.
+    bool drawn_direct = true;
     double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0,
            frame_ms = 0;
 };

@@ -9,9 +9,6 @@ namespace {
 // The workers share the cores with the GL thread (and a software GL rasteriser): they aim at
 // this share of the frame, so the hand-over rarely waits.
 constexpr double kWorkerShare = 0.8;
-// When drawing alone overruns the target, gathering still gets this share of it: the frame rate
-// cannot hold there, and the picture keeps converging.
-constexpr double kMinGatherShare = 0.25;
 
 int fit(double ms, const RunningCost& cost, int fallback) {
     if (!cost.known() || cost.value() <= 0.0) return fallback;
@@ -34,8 +31,13 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // Until a cost is known, gather the fixed count once to measure it.
     const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
     const double share = std::max(target - draw, kMinGatherShare * target);
+    // The frame of an edit draws every light's shadows anew: what such a frame cost when one
+    // was last measured (priming's first frames, the last edit), or twice the usual drawing
+    // until one is.
+    const double edit_draw =
+        direct_draw_ms_.known() ? std::max(direct_draw_ms_.value(), draw) : kEditDrawFactor * draw;
     const double gather_ms =
-        edited ? std::max(kEditGatherShare * share, target - kEditDrawFactor * draw) : share;
+        edited ? std::max(target - edit_draw, kMinGatherShare * target) : share;
     b.gather_ms = gather_ms;
     b.iim_texels =
         std::clamp(fit(gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
@@ -90,8 +92,9 @@ void FrameScheduler::measure(const PipelineStats& s) {
     // cost is learnt from frames that drew, or the first frame after a quiet spell (an edit's)
     // would plan its gathering for a frame that costs nothing to draw (two_rooms: 9 ms against
     // 20 ms).
-    if (s.drawn || !draw_ms_.known())
-        draw_ms_.add(s.draw_ms + std::max(0.0, s.gather_ms - gather_part));
+    const double drawing = s.draw_ms + std::max(0.0, s.gather_ms - gather_part);
+    if (s.drawn || !draw_ms_.known()) draw_ms_.add(drawing);
+    if (s.drawn_direct) direct_draw_ms_.add(drawing);
     // Only frames that re-traced groups measure a photon's cost: a frame of verification alone
     // (one photon a group) is dominated by its fixed costs (edits, the moved-object query).
     const int photons = s.photons.photons_verified + s.photons.photons_retraced;

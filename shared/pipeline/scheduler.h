@@ -42,14 +42,17 @@ public:
     // Budgets for the next frame: the fixed counts of the settings without a target; with one,
     // what the measured costs say fits (the counts then cap them only with counts_cap). In the
     // frame of an edit after frames without one (`edited`) drawing costs more than the running
-    // estimate says (moved geometry, shadow volumes, cube-map faces; not known in advance): the
-    // GL thread then leaves kEditDrawFactor times the estimate for drawing, and gathers at least
-    // kEditGatherShare of the usual share. Where drawing is a small part of the target, that
-    // leaves most of the frame to gathering, which reads the edit's AIMs as soon as the workers
-    // hand them over (between gather chunks).
+    // estimate says: it draws every light's shadows anew (a settled frame keeps its complete
+    // direct mean), and moved geometry besides. The GL thread then leaves for drawing what the
+    // last frames that drew the direct light anew cost (the conference room at 64²: 154 ms
+    // against 50 ms for a settled frame), or kEditDrawFactor times the usual estimate until one
+    // is measured, and gathers with the rest, at least kMinGatherShare of the target. The
+    // gathering reads the edit's AIMs as soon as the workers hand them over (between chunks).
     FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false) const;
-    static constexpr double kEditGatherShare = 0.5;
     static constexpr double kEditDrawFactor = 2.0;
+    // When drawing alone overruns the target, gathering still gets this share of it: the frame
+    // rate cannot hold there, and the picture keeps converging.
+    static constexpr double kMinGatherShare = 0.25;
     // AIM texels the workers may still rebuild, `elapsed_ms` into their frame.
     int aim_texels_left(const Settings& settings, double elapsed_ms) const;
     // Learns from a finished frame.
@@ -61,12 +64,14 @@ public:
               double aim_ms);
 
     const RunningCost& draw_ms() const { return draw_ms_; }
+    const RunningCost& direct_draw_ms() const { return direct_draw_ms_; }
     const RunningCost& gather_ms_per_texel() const { return gather_ms_per_texel_; }
     const RunningCost& photon_ms() const { return photon_ms_; }
     const RunningCost& aim_ms_per_texel() const { return aim_ms_per_texel_; }
 
 private:
     RunningCost draw_ms_;              // GL thread, besides gathering: caustics, frame, uploads
+    RunningCost direct_draw_ms_;       // the same, frames that drew the direct light anew
     RunningCost gather_ms_per_texel_;  // GL thread, per IIM texel, with the backend in use
     RunningCost photon_ms_;            // workers, per photon traced (verified or re-traced)
     RunningCost aim_ms_per_texel_;     // workers, per AIM texel rebuilt

@@ -74,6 +74,34 @@ TEST_F(CausticsTest, TileCullingChangesNothing) {
     EXPECT_GT(total, 0.0);
 }
 
+// Without photons the term is zero and nothing is drawn for it (no G-buffer, no filter); a
+// caustic shown before is cleared, and photons coming back are filtered as before.
+TEST_F(CausticsTest, NoPhotonsClearTheTermAndPhotonsComeBack) {
+    const Scene scene = floor_scene(12.0f);
+    SceneMeshes meshes(scene);
+    CausticsRenderer caustics(scene, meshes, 128, 128);
+    std::vector<glm::vec3> positions, powers;
+    disc_photons(0.6f, 2000, positions, powers);
+    caustics.render(positions, powers, true);
+    const std::vector<glm::vec3> lit = caustics.read_radiance();
+    const uint64_t lit_revision = caustics.revision();
+    double total = 0.0;
+    for (const glm::vec3& p : lit) total += p.x;
+    ASSERT_GT(total, 0.0);
+
+    caustics.render({}, {}, true);
+    const uint64_t none_revision = caustics.revision();
+    EXPECT_NE(none_revision, lit_revision);
+    EXPECT_EQ(caustics.tiles_filtered(), 0);
+    for (const glm::vec3& p : caustics.read_radiance()) ASSERT_EQ(p, glm::vec3(0.0f));
+    caustics.render({}, {}, true);
+    EXPECT_EQ(caustics.revision(), none_revision);  // nothing changed: the frame may accumulate
+
+    caustics.render(positions, powers, true);
+    EXPECT_NE(caustics.revision(), none_revision);
+    EXPECT_EQ(caustics.read_radiance(), lit);
+}
+
 TEST_F(CausticsTest, SummedWorldRadianceHoldsWhenTheCameraZoomsOut) {
     std::vector<glm::vec3> positions, powers;
     disc_photons(0.8f, 6000, positions, powers);

@@ -12,9 +12,10 @@ namespace ag {
 namespace {
 
 PipelineStats measured(double draw_ms, int texels, double gather_ms, int photons, double photon_ms,
-                       int aim_texels, double aim_ms) {
+                       int aim_texels, double aim_ms, bool direct = false) {
     PipelineStats s;
     s.draw_ms = draw_ms;
+    s.drawn_direct = direct;
     s.iim_texels_gathered = texels;
     s.gather_ms = gather_ms;
     s.photons.photons_retraced = photons;
@@ -64,15 +65,22 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
     EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
-    // The frame of an edit leaves twice the usual drawing time (its one-time costs are not
-    // known): (33 − 20) / 0.1.
+    // The frame of an edit draws the direct light anew. Until a frame that did so is measured,
+    // it leaves twice the usual drawing time: (33 − 20) / 0.1.
     EXPECT_EQ(scheduler.budgets(settings, 100000, true).iim_texels, 130);
     EXPECT_NEAR(scheduler.budgets(settings, 100000, true).gather_ms, 13.0, 1e-9);
-    // Where drawing is most of the frame, it still gathers half the usual share: drawing 14 ms,
-    // (33 − 14) / 2 / 0.1 texels, not (33 − 28) / 0.1.
+    // Then what such a frame cost (the conference room: 154 ms against 50 ms for a settled
+    // frame; twice the estimate left its edit frame at 268 ms of a 200 ms target): drawing the
+    // direct light anew 22 ms, (33 − 22) / 0.1 texels, while other frames keep their share.
+    FrameScheduler edits;
+    edits.measure(measured(22.0, 20, 2.0, 1000, 5.0, 100, 1.0, true));
+    for (int f = 0; f < 40; ++f) edits.measure(measured(10.0, 20, 2.0, 1000, 5.0, 100, 1.0));
+    EXPECT_NEAR(edits.budgets(settings, 100000).iim_texels, 230, 1);
+    EXPECT_NEAR(edits.budgets(settings, 100000, true).gather_ms, 11.0, 1e-6);
+    // Where drawing the direct light is most of the frame, gathering keeps a quarter of it.
     FrameScheduler busy;
-    busy.measure(measured(14.0, 20, 2.0, 1000, 5.0, 100, 1.0));
-    EXPECT_EQ(busy.budgets(settings, 100000, true).iim_texels, 95);
+    busy.measure(measured(30.0, 20, 2.0, 1000, 5.0, 100, 1.0, true));
+    EXPECT_EQ(busy.budgets(settings, 100000, true).iim_texels, int(0.25 * 33 / 0.1));
     // Never more texels than there are, never none.
     EXPECT_EQ(scheduler.budgets(settings, 50).iim_texels, 50);
     // Drawing alone overruns the target: gathering keeps a quarter of it.
