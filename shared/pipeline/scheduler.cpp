@@ -31,11 +31,11 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // Until a cost is known, gather the fixed count once to measure it.
     const double draw = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
     const double share = std::max(target - draw, kMinGatherShare * target);
-    // The frame of an edit draws every light's shadows anew: what such a frame cost when one
-    // was last measured (priming's first frames, the last edit), or twice the usual drawing
-    // until one is.
+    // The frame of an edit draws every light's shadows anew (what frames that did so cost:
+    // priming's first frames, earlier edits) and moved geometry besides (shadow volumes, cube-map
+    // faces; not known in advance, twice the usual drawing): the larger of the two.
     const double edit_draw =
-        direct_draw_ms_.known() ? std::max(direct_draw_ms_.value(), draw) : kEditDrawFactor * draw;
+        std::max(direct_draw_ms_.known() ? direct_draw_ms_.value() : 0.0, kEditDrawFactor * draw);
     const double gather_ms =
         edited ? std::max(target - edit_draw, kMinGatherShare * target) : share;
     b.gather_ms = gather_ms;

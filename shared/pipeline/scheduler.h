@@ -43,11 +43,12 @@ public:
     // what the measured costs say fits (the counts then cap them only with counts_cap). In the
     // frame of an edit after frames without one (`edited`) drawing costs more than the running
     // estimate says: it draws every light's shadows anew (a settled frame keeps its complete
-    // direct mean), and moved geometry besides. The GL thread then leaves for drawing what the
-    // last frames that drew the direct light anew cost (the conference room at 64²: 154 ms
-    // against 50 ms for a settled frame), or kEditDrawFactor times the usual estimate until one
-    // is measured, and gathers with the rest, at least kMinGatherShare of the target. The
-    // gathering reads the edit's AIMs as soon as the workers hand them over (between chunks).
+    // direct mean), and moved geometry besides (shadow volumes, cube-map faces). The GL thread
+    // then leaves for drawing the larger of what the last frames that drew the direct light anew
+    // cost (the conference room at 64²: 154 ms against 50 ms for a settled frame) and
+    // kEditDrawFactor times the usual estimate (two_rooms' door: 16–27 ms against 12 ms), and
+    // gathers with the rest, at least kMinGatherShare of the target. The gathering reads the
+    // edit's AIMs as soon as the workers hand them over (between chunks).
     FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false) const;
     static constexpr double kEditDrawFactor = 2.0;
     // When drawing alone overruns the target, gathering still gets this share of it: the frame
