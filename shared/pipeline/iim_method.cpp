@@ -93,15 +93,9 @@ void IimMethod::choose_backend() {
 }
 
 void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
-    if (objects_moved && !moved_since_coverage_) first_move_frame_ = frame;
     moved_since_coverage_ = moved_since_coverage_ || objects_moved;
     const bool camera_moved = covered_frame_ == 0 || !same_view(covered_camera_, scene_.camera);
-    // After an object moves, the frame of the move keeps the coverage it has (the camera stands
-    // where it stood, and most of the picture shows what it showed) and the next frame measures
-    // it: the pass draws the whole scene (about 20 ms on the conference room), which the frame of
-    // an edit, the one the picture waits for, should not pay.
-    if (!camera_moved && !(moved_since_coverage_ && frame > first_move_frame_ &&
-                           frame >= covered_frame_ + kCoverageFrames))
+    if (!camera_moved && !(moved_since_coverage_ && frame >= covered_frame_ + kCoverageFrames))
         return;
     iim_.set_coverage(coverage_.update());
     covered_camera_ = scene_.camera;

@@ -62,8 +62,7 @@ private:
     std::vector<Bounds> moved_regions();
     static Bounds world_bounds(const Object& o);
     // Measures the texels' screen coverage again when the camera changed, or when objects moved
-    // (from the frame after the first move on) and the last measurement is `kCoverageFrames`
-    // frames old; hands it to the IIM.
+    // and the last measurement is `kCoverageFrames` frames old; hands it to the IIM.
     void update_coverage(bool objects_moved, uint64_t frame);
     static constexpr uint64_t kCoverageFrames = 8;
     // Gathers this frame's texels: `budget` at once, or with a time share in chunks (below).
@@ -92,7 +91,6 @@ private:
     Camera covered_camera_;       // the camera coverage_ was measured with
     uint64_t covered_frame_ = 0;  // the frame it was measured in; 0 = never
     bool moved_since_coverage_ = false;
-    uint64_t first_move_frame_ = 0;  // the frame of the first move since the measurement
 };
 
 }  // namespace ag
