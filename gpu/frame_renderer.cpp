@@ -284,6 +284,18 @@ void main() {
 }
 )";
 
+// A media method's `specular` term at the pixels it covers (alpha 1: the camera ray meets glass
+// first) over the cube maps' (set_specular_through_glass); the other pixels keep theirs.
+const char* kGlassSpecularFragment = R"(
+uniform sampler2D through_glass;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+void main() {
+    vec4 t = texelFetch(through_glass, ivec2(gl_FragCoord.xy), 0);
+    if (t.a < 0.5) discard;
+    out_specular = vec4(t.rgb, 1.0);
+}
+)";
+
 // The running mean of the terms: mix(mean, current, weight) per term, weight = 1/frames (the
 // draw buffers choose which terms are written).
 const char* kMeanFragment = R"(
@@ -402,6 +414,9 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
         throw GlError("frame: framebuffer incomplete");
 
     compose_ = Program("frame compose", kFullScreenTriangleVertex, kComposeFragment);
+    glass_specular_ =
+        Program("frame specular through glass", kFullScreenTriangleVertex, kGlassSpecularFragment);
+    glass_specular_texture_ = make_float_texture(width, height);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
@@ -947,12 +962,55 @@ void FrameRenderer::set_volume(const Image& volume) {
                 glm::vec4(volume.rgb(x, y), 1.0f);
 }
 
+void FrameRenderer::set_specular_through_glass(const Image& specular,
+                                               const std::vector<uint8_t>& covered) {
+    glass_specular_rgba_.clear();
+    if (specular.pixels.empty()) return;
+    if (specular.width != width_ || specular.height != height_ ||
+        covered.size() != size_t(width_) * size_t(height_))
+        throw std::invalid_argument(
+            "FrameRenderer::set_specular_through_glass: the image is not frame-sized");
+    glass_specular_rgba_.resize(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x)
+            glass_specular_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] = glm::vec4(
+                specular.rgb(x, y), covered[size_t(y) * size_t(width_) + size_t(x)] ? 1.0f : 0.0f);
+    gl::BindTexture(GL_TEXTURE_2D, glass_specular_texture_.get());
+    gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
+                      glass_specular_rgba_.data());
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+}
+
 void FrameRenderer::compose() {
     // The G-buffer pass wrote a zero volume term; a media method's replaces it.
     if (!volume_rgba_.empty()) {
         gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
         gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
                           volume_rgba_.data());
+    }
+    // Where a media method traced what the camera sees through glass, its term replaces the
+    // cube maps' (straight through both interfaces, no media), after the running mean: it is
+    // the same every frame until the method runs again.
+    if (!glass_specular_rgba_.empty()) {
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+        GLenum buffers[kFrameTermCount];
+        for (size_t t = 0; t < kFrameTermCount; ++t)
+            buffers[t] = t == size_t(FrameTerm::specular) ? GLenum(GL_COLOR_ATTACHMENT0 + t)
+                                                          : GLenum(GL_NONE);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
+        gl::Viewport(0, 0, width_, height_);
+        gl::Disable(GL_DEPTH_TEST);
+        gl::Disable(GL_BLEND);
+        gl::Disable(GL_STENCIL_TEST);
+        glass_specular_.use();
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, glass_specular_texture_.get());
+        glass_specular_.set("through_glass", 0);
+        gl::BindVertexArray(empty_vao_.get());
+        gl::DrawArrays(GL_TRIANGLES, 0, 3);
+        gl::Enable(GL_DEPTH_TEST);
+        for (size_t t = 0; t < kFrameTermCount; ++t) buffers[t] = GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
     }
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;

@@ -80,6 +80,11 @@ public:
     // The `volume` term from a media method (rows top-first, width × height), composed into
     // every later frame; an empty image sets it back to zero (the frame has no media of its own).
     void set_volume(const Image& volume);
+    // A media method's `specular` term (rows top-first, width × height) at the pixels where
+    // `covered` (row-major, top-first) is set — those whose camera ray meets glass first, traced
+    // through the smoothed index and the fog — in place of the cube maps' term there, in every
+    // later frame; an empty image sets it back to the cube maps' everywhere.
+    void set_specular_through_glass(const Image& specular, const std::vector<uint8_t>& covered);
 
     int width() const { return width_; }
     int height() const { return height_; }
@@ -141,6 +146,10 @@ private:
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
     std::vector<glm::vec4> volume_rgba_;        // set_volume's term, rows bottom-first
+    // set_specular_through_glass's term (alpha: covered), rows bottom-first, and its texture.
+    std::vector<glm::vec4> glass_specular_rgba_;
+    Texture glass_specular_texture_;
+    Program glass_specular_;
     Texture frame_;
     Framebuffer compose_fbo_;
     VertexArray empty_vao_;

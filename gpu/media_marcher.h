@@ -7,6 +7,7 @@
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "gpu/gl_objects.h"
@@ -32,7 +33,7 @@ struct MediaMarchResult {
     double entered = 0.0;                  // Σ power of the photons marched
     double absorbed = 0.0, escaped = 0.0;  // extinguished in the grid; left it
     double seconds = 0.0;                  // the dispatch, to glFinish
-    double octree_seconds = 0.0;           // building media_octree (CPU)
+    double octree_seconds = 0.0;           // building media_octree (CPU), or finding it cached
     // With statistics: `stat_count` per voxel (voxel-major): Σ crossings (chord lengths in voxel
     // edges; 1 per voxel credited by the walk), then Σ crossing × attribute k of each photon.
     std::vector<float> stats;
@@ -55,8 +56,21 @@ public:
                            const MediaMarchSettings& settings,
                            const std::vector<glm::vec4>& attributes = {}, int stat_count = 0) const;
 
+    // How many times this marcher built the octree: once per distinct n and σ_t grids (the
+    // pilots, the photons and each surface bounce of one grid share one).
+    int octree_builds() const { return octree_builds_; }
+
 private:
+    const std::vector<int32_t>& cached_octree(const MediaGrid& grid) const;
+
     Program program_;
+    struct OctreeKey {
+        glm::ivec3 size{0};
+        std::vector<float> n, sigma_t;
+    };
+    mutable std::optional<OctreeKey> octree_key_;
+    mutable std::vector<int32_t> octree_;
+    mutable int octree_builds_ = 0;
 };
 
 }  // namespace ag::gpu

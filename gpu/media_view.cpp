@@ -4,6 +4,7 @@
 #include <string>
 
 #include "gpu/media_ray_step.h"
+#include "shared/media.h"
 
 namespace ag::gpu {
 
@@ -21,10 +22,22 @@ uniform ivec3 size;
 uniform vec3 grid_min;
 uniform vec3 voxel;
 uniform float step;  // world units
-uniform float phase_k;
 uniform int max_steps;
+// Schlick k for the spread of the photons' directions (schlick_spread_table): entry i at
+// R = 1 − (i / (kSpreadEntries − 1))²; entry 0 alone without the spread (his phase).
+const int kSpreadEntries = SPREAD_ENTRIES;
+uniform float spread_k[kSpreadEntries];
+uniform int use_spread;
 
 const float kPi = 3.14159265358979;
+
+// The phase's k for light of mean resultant length r (|flow| / fluence).
+float phase_k_for(float r) {
+    if (use_spread == 0) return spread_k[0];
+    float s = sqrt(clamp(1.0 - r, 0.0, 1.0)) * float(kSpreadEntries - 1);
+    int i = min(int(s), kSpreadEntries - 2);
+    return mix(spread_k[i], spread_k[i + 1], s - float(i));
+}
 
 int cell_index(ivec3 c) { return (c.z * size.y + c.y) * size.x + c.x; }
 
@@ -111,6 +124,7 @@ void main() {
             vec4 l = tri_light(gm);
             float flow_length = length(l.yzw);
             float c = flow_length > 0.0 ? dot(l.yzw / flow_length, -along) : 0.0;
+            float phase_k = phase_k_for(l.x > 0.0 ? flow_length / l.x : 1.0);
             float denom = 1.0 - phase_k * c;
             float phase = (1.0 - phase_k * phase_k) / (4.0 * kPi * denom * denom);
             // ∫ T σ_s p φ over the segment with σ constant: T (1 − e^{−σ_t ℓ}) / σ_t.
@@ -148,8 +162,13 @@ void main() {
 
 }  // namespace
 
+namespace {
+constexpr int kSpreadEntries = 129;
+}  // namespace
+
 MediaView::MediaView()
-    : program_("media view march", std::string(kViewCompute) + kMediaRayStep + kViewMarch) {}
+    : program_("media view march", "#define SPREAD_ENTRIES " + std::to_string(kSpreadEntries) +
+                                       "\n" + kViewCompute + kMediaRayStep + kViewMarch) {}
 
 std::vector<MediaViewEnd> MediaView::march(const MediaGrid& grid, const std::vector<float>& fluence,
                                            const std::vector<glm::vec3>& flow,
@@ -186,7 +205,9 @@ std::vector<MediaViewEnd> MediaView::march(const MediaGrid& grid, const std::vec
     program_.set("grid_min", grid.bounds.min);
     program_.set("voxel", voxel);
     program_.set("step", settings.step * std::min({voxel.x, voxel.y, voxel.z}));
-    program_.set("phase_k", settings.phase_k);
+    const std::vector<float> spread = schlick_spread_table(settings.phase_k, kSpreadEntries);
+    gl::Uniform1fv(program_.location("spread_k"), kSpreadEntries, spread.data());
+    program_.set("use_spread", settings.phase_spread ? 1 : 0);
     program_.set("max_steps",
                  int(4.0f * float(grid.size.x + grid.size.y + grid.size.z) / settings.step));
     gl::DispatchCompute(GLuint((rays.size() + 63) / 64), 1, 1);

@@ -1,6 +1,7 @@
 // The viewing pass of Pfeuti 2009 (ch. 3.1.6): one invocation per pixel marches the camera ray
 // through the grids, bending it by the smoothed index (eqs. 2.10/2.11), and sums single
-// scattering: T · σ_s · p_Schlick(mean photon direction, towards the camera) · fluence.
+// scattering: T · σ_s · p_Schlick(mean photon direction, towards the camera) · fluence, the phase
+// broadened by the spread of the photons' directions (ours).
 #pragma once
 
 #include <vector>
@@ -15,6 +16,11 @@ namespace ag::gpu {
 struct MediaViewSettings {
     float step = 0.5f;     // in voxels (the smallest edge)
     float phase_k = 0.0f;  // Schlick k of the medium
+    // Ours, not his: the phase is broadened by the spread of the photons' directions in the
+    // voxel (schlick_spread_table, with R = |flow| / fluence), so that light arriving from many
+    // directions (bounced from surfaces, crossing in a caustic, around a light inside the grid)
+    // is not all taken to come along its mean direction. False: his p(mean direction).
+    bool phase_spread = true;
 };
 
 // One ray of the view march. The radiance scattered towards `origin` counts from `split` (world

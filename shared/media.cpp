@@ -72,6 +72,31 @@ glm::vec3 sample_schlick(const glm::vec3& forward, float k, float u1, float u2) 
     return glm::normalize(s * std::cos(phi) * t + s * std::sin(phi) * bt + c * forward);
 }
 
+double schlick_mean_cosine(double k) {
+    if (std::abs(k) < 1e-3) return 2.0 * k / 3.0;
+    return (2.0 * k + (1.0 - k * k) * std::log((1.0 - k) / (1.0 + k))) / (2.0 * k * k);
+}
+
+double schlick_k_for_mean_cosine(double g) {
+    // g(k) rises monotonically from −1 to 1 over k ∈ (−1, 1).
+    double lo = -1.0 + 1e-15, hi = 1.0 - 1e-15;
+    for (int i = 0; i < 100; ++i) {
+        const double mid = 0.5 * (lo + hi);
+        (schlick_mean_cosine(mid) < g ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+std::vector<float> schlick_spread_table(float k, int entries) {
+    std::vector<float> table(size_t(std::max(entries, 2)));
+    const double g = schlick_mean_cosine(k);
+    for (size_t i = 0; i < table.size(); ++i) {
+        const double s = double(i) / double(table.size() - 1);
+        table[i] = i == 0 ? k : float(schlick_k_for_mean_cosine((1.0 - s * s) * g));
+    }
+    return table;
+}
+
 bool ray_box(const Bounds& b, const glm::vec3& o, const glm::vec3& d, float t0, float t1,
              float& enter, float& exit) {
     for (int a = 0; a < 3; ++a) {

@@ -48,6 +48,19 @@ float schlick_phase(float cos_theta, float k);
 // A direction distributed by schlick_phase about the direction of travel `forward` (unit), from
 // uniform (u1, u2); its pdf is schlick_phase of the returned direction.
 glm::vec3 sample_schlick(const glm::vec3& forward, float k, float u1, float u2);
+// The mean cosine g of schlick_phase: (2k + (1 − k²) ln((1 − k)/(1 + k))) / (2k²), odd in k,
+// 2k/3 for small k, 0.9934 at k = 0.999.
+double schlick_mean_cosine(double k);
+// The k whose schlick_phase has mean cosine g (|g| < 1), by bisection.
+double schlick_k_for_mean_cosine(double g);
+// The phase seen by light whose directions spread about their mean with mean resultant length
+// R ∈ [0, 1] (R = |Σ power × direction| / Σ power; 1: one direction, 0: light from all sides
+// alike): Schlick with the k whose mean cosine is R × that of `k`. For Henyey–Greenstein lobes this
+// is exact (zonal convolution multiplies the Legendre coefficients g^l, so HG(g₁) ⊛ HG(g₂) =
+// HG(g₁g₂)); for Schlick it keeps the mean cosine and both limits exact. Tabulated at
+// R = 1 − s², s = i / (entries − 1): entry 0 is `k` itself, the last 0 (isotropic); the steps in s
+// resolve R near 1, where a forward k changes fastest.
+std::vector<float> schlick_spread_table(float k, int entries);
 
 // The entry and exit distances of ray o + t·d (t ∈ [t0, t1]) in box b; false if it misses.
 bool ray_box(const Bounds& b, const glm::vec3& o, const glm::vec3& d, float t0, float t1,

@@ -486,7 +486,7 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     start = Clock::now();
     result.volume = view_media(scene, result, camera, settings);
     if (settings.through_glass)
-        result.specular = view_through_glass(scene, result, camera, settings);
+        result.specular = view_through_glass(scene, result, camera, settings, &result.glass);
     result.timing.viewing = since(start);
     return result;
 }
@@ -506,6 +506,7 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
     view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
+    view.phase_spread = settings.phase_spread;
     Image volume =
         gpu::MediaView().render(media.grids, media.fluence, media.flow, camera, view, max_distance);
     // Grey to the light's colour.
@@ -540,11 +541,12 @@ glm::vec3 surface_radiance(const Scene& scene, const cpu::RayTracer& rays,
 }  // namespace
 
 Image view_through_glass(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
-                         const MediaMethodSettings& settings) {
+                         const MediaMethodSettings& settings, std::vector<uint8_t>* glass) {
     const cpu::RayTracer rays(scene);
     const cpu::MediaTracker tracker(scene);
     const float eps = rays.epsilon();
     Image out(camera.width, camera.height);
+    if (glass) glass->assign(size_t(camera.width) * size_t(camera.height), 0);
     // The pixels whose camera ray meets glass first: its Fresnel reflection there (marched
     // through the fog to the surface it shows: his isosurface reflection, with the fog), and the
     // march on into it.
@@ -564,6 +566,7 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
             if (!hit.hit) continue;
             const Material& m = scene.objects[size_t(hit.object)].material;
             if (m.type != MaterialType::glass) continue;
+            if (glass) (*glass)[size_t(y) * size_t(camera.width) + size_t(x)] = 1;
             const uint64_t key = cpu::mix64(uint64_t(y) * uint64_t(camera.width) + uint64_t(x));
             const cpu::SpecularSplit split = cpu::specular_split(m, hit, d, eps);
             cpu::HashedStream more(key);
@@ -591,6 +594,7 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
     view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
+    view.phase_spread = settings.phase_spread;
     const gpu::MediaView marcher;
     const std::vector<gpu::MediaViewEnd> inside =
         marcher.march(media.grids, media.fluence, media.flow, entering, view);

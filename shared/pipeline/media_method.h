@@ -53,6 +53,7 @@ struct MediaMethodSettings {
     int photons = 122000;       // on the photon plane (his Table 4.1 count)
     float march_step = 0.25f;   // photon step, voxels
     float view_step = 0.5f;     // view-ray step, voxels
+    bool phase_spread = true;   // the view's phase broadened by the photons' spread (ours)
     gpu::MediaDeposit deposit = gpu::MediaDeposit::track_length;
     bool octree = true;  // his octree step lengths in the photon march (track length only)
     MediaAdaptiveSettings adaptive;  // `photons` then counts the importance-sampled photons
@@ -69,7 +70,8 @@ struct MediaMethodSettings {
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no copy: the grids are SSBOs). The octree
-// is built on the CPU before each march (pilots, photons, each surface bounce).
+// is built on the CPU once for the grids and kept for every march on them (pilots, photons, each
+// surface bounce).
 struct MediaMethodTiming {
     double voxelisation = 0.0, smoothing = 0.0, octree = 0.0, photon_generation = 0.0,
            photon_marching = 0.0, viewing = 0.0;
@@ -86,6 +88,7 @@ struct MediaMethodResult {
     // The `specular` frame term at the pixels whose camera ray meets glass first (black
     // elsewhere; view_through_glass), where settings.through_glass.
     Image specular;
+    std::vector<uint8_t> glass;  // per pixel of `specular` (row-major): 1 where it is the term
     MediaMethodTiming timing;
     glm::ivec3 grid{0};
     size_t photons_marched = 0;    // photons of the plane that meet the grid
@@ -130,7 +133,9 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
 // the surface the bent ray meets, traced (his environment map holds only a distant scene; ours is
 // the scene itself), which shows its emission and direct light; the Fresnel transmittance where
 // the ray leaves the glass. Mirrors and glass behind the glass show black. Needs a GL context.
+// `glass`, where given, gets 1 at those pixels and 0 elsewhere (row-major, top row first).
 Image view_through_glass(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
-                         const MediaMethodSettings& settings);
+                         const MediaMethodSettings& settings,
+                         std::vector<uint8_t>* glass = nullptr);
 
 }  // namespace ag

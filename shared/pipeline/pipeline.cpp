@@ -84,12 +84,17 @@ void Pipeline::update_media() {
     camera.width = media_settings_.width;
     camera.height = media_settings_.height;
     try {
-        if (scene_changed)
+        if (scene_changed) {
             media_ = std::make_unique<MediaMethodResult>(render_media(scene_, media_settings_));
-        else
+        } else {
             media_->volume = view_media(scene_, *media_, camera, media_settings_);
+            if (media_settings_.through_glass)
+                media_->specular =
+                    view_through_glass(scene_, *media_, camera, media_settings_, &media_->glass);
+        }
         media_failed_ = false;
         renderer_->set_volume(media_->volume);
+        renderer_->set_specular_through_glass(media_->specular, media_->glass);
     } catch (const std::invalid_argument& e) {
         // Media without a light the method can use (a light switched off in the viewer): no
         // volume term until the scene changes again. Said once per reason, not silently: a
@@ -97,6 +102,7 @@ void Pipeline::update_media() {
         media_.reset();
         media_failed_ = true;
         renderer_->set_volume(Image());
+        renderer_->set_specular_through_glass(Image(), {});
         if (e.what() != media_warning_) {
             media_warning_ = e.what();
             warn("no volume term: " + media_warning_);

@@ -347,6 +347,19 @@ TEST_F(MediaMarcherTest, OctreeStepsLeaveTheDepositsAsTheyAre) {
     EXPECT_NEAR(total_b, total_a, 1e-5 * total_a);
     EXPECT_LT(worst_exit, 1e-2f * grid.voxel_size().x);
     EXPECT_NEAR(b.absorbed, a.absorbed, 1e-5 * a.absorbed);
+
+    // The octree is kept while the grids stay the same (the pilots, the photons and each surface
+    // bounce march one grid): a second march builds nothing and deposits bit for bit the same; a
+    // changed σ_t builds it again. Fails if the marcher rebuilds every time or keeps a stale one.
+    EXPECT_EQ(marcher.octree_builds(), 1);
+    const MediaMarchResult again = marcher.march(grid, photons, octree);
+    EXPECT_EQ(marcher.octree_builds(), 1);
+    EXPECT_EQ(again.fluence, b.fluence);
+    MediaGrid thicker = grid;
+    for (float& t : thicker.sigma_t) t *= 2.0f;
+    const MediaMarchResult other = marcher.march(thicker, photons, octree);
+    EXPECT_EQ(marcher.octree_builds(), 2);
+    EXPECT_EQ(other.fluence, MediaMarcher().march(thicker, photons, octree).fluence);
 }
 
 // The adaptive pipeline's statistics (ch. 3.2): photons along +x through an n = 1 grid, one per

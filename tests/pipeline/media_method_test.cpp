@@ -407,6 +407,121 @@ TEST_F(MediaViewTest, MirrorSendsLightIntoTheFogAsAnImageLight) {
     EXPECT_LT(worst, 0.03);
 }
 
+double mean_red(const Image& image) {
+    double sum = 0.0;
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x) sum += image.rgb(x, y).x;
+    return sum / double(std::max(1, image.width * image.height));
+}
+
+// A very forward phase (k = 0.999) in fog over a white floor (scenes/media_fog_floor.json): the
+// camera looks down into fog lit by the point light above it and by the floor. The light's own
+// photons travel away from the camera, so nearly all the fog sends towards it is the floor's
+// light, which arrives from the whole upper hemisphere. The method (one surface bounce), its
+// phase broadened by the spread of the photons' directions, against pt's volume term
+// (--volume-bounces 1, which follows the same light: camera → fog → floor → light). His p(mean
+// photon direction) takes all of a voxel's light to come along the mean of the downward and the
+// upward photons and is far too dark: the robustness sweep's "100× below pt" at k = 0.999 in part.
+TEST_F(MediaViewTest, ForwardPhaseSeesTheFloorsLightInTheFog) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_fog_floor.json");
+    scene.camera.width = scene.camera.height = 24;
+    cpu::ReferenceSettings settings;
+    settings.spp = 256;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    const Image pt =
+        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::volume)];
+    MediaMethodSettings method;
+    method.grid = 32;
+    method.photons = 50000;
+    method.surface_bounces = 1;
+    const MediaMethodResult media = render_media(scene, method);
+    method.phase_spread = false;
+    const Image his = view_media(scene, media, scene.camera, method);
+    const double mean_pt = mean_red(pt), mean_spread = mean_red(media.volume),
+                 mean_his = mean_red(his);
+    const double rel_spread = compare_images(media.volume, pt).rel_mse,
+                 rel_his = compare_images(his, pt).rel_mse;
+    std::printf(
+        "forward phase over a floor: mean %.5f (relMSE %.4f) with the spread, %.5f (%.4f) his, "
+        "pt %.5f\n",
+        mean_spread, rel_spread, mean_his, rel_his, mean_pt);
+    // Measured: −21% and relMSE 0.117 with the spread (one mean direction and its spread per
+    // voxel still blur where the floor's light is seen: pt shows the floor's outline sharp), his
+    // 36× too dark.
+    EXPECT_NEAR(mean_spread, mean_pt, 0.3 * mean_pt);
+    EXPECT_LT(rel_spread, 0.2);
+    EXPECT_LT(mean_his, 0.2 * mean_pt);
+}
+
+// The pipeline's frame sees through the glass as the media method does
+// (scenes/media_glass_checker.json): where the camera ray meets glass first the frame's specular
+// term is the method's traced term (the view march on through the smoothed index, bent, and the
+// fog), not the cube maps' (straight through both interfaces, no fog), also after a camera move.
+// At 64², box-filtered to 32², it is near pt's specular term; the cube maps' term, which the frame
+// showed before, is far from it. Fails if the term is not routed into the frame, is not redone
+// when the camera moves, or covers the wrong pixels.
+TEST_F(MediaViewTest, PipelineSeesThroughTheGlass) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_checker.json");
+    scene.settings.gather.backend = GatherBackend::cpu;
+    cpu::ReferenceSettings reference;
+    reference.spp = 256;
+    reference.volume_bounces = 1;
+    ThreadPool pool(2);
+    const Image pt =
+        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::specular)];
+    const auto frame_specular = [&](bool through_glass) {
+        MediaMethodSettings settings;
+        settings.grid = 64;
+        settings.photons = 5000;
+        settings.surface_bounces = 0;
+        settings.through_glass = through_glass;
+        PipelineOptions options{2 * pt.width, 2 * pt.height};
+        options.media = settings;
+        settings.width = options.width;
+        settings.height = options.height;
+        Scene local = scene;
+        Pipeline pipeline(local, options);
+        // The frame's specular term where the method covers the pixel: the method's own, traced
+        // for the camera as it is now.
+        const auto expect_traced = [&](const char* when) {
+            const Image specular = pipeline.images().aov[size_t(FrameTerm::specular)];
+            const MediaMethodResult* media = pipeline.media();
+            EXPECT_NE(media, nullptr) << when;
+            if (!media) return specular;
+            Camera camera = local.camera;
+            camera.width = settings.width;
+            camera.height = settings.height;
+            std::vector<uint8_t> glass;
+            const Image expected = view_through_glass(local, *media, camera, settings, &glass);
+            size_t covered = 0;
+            for (int y = 0; y < specular.height; ++y)
+                for (int x = 0; x < specular.width; ++x) {
+                    if (!glass[size_t(y) * size_t(specular.width) + size_t(x)]) continue;
+                    ++covered;
+                    const glm::vec3 a = specular.rgb(x, y), b = expected.rgb(x, y);
+                    EXPECT_NEAR(a.x, b.x, 1e-6f + 1e-5f * b.x) << when << " " << x << " " << y;
+                    EXPECT_NEAR(a.z, b.z, 1e-6f + 1e-5f * b.z) << when << " " << x << " " << y;
+                }
+            EXPECT_GT(covered, size_t(specular.width * specular.height) / 10) << when;
+            return specular;
+        };
+        pipeline.frame();
+        if (!through_glass) return pipeline.images().aov[size_t(FrameTerm::specular)];
+        const Image first = expect_traced("first frame");
+        local.camera.eye += glm::vec3(0.15f, 0.1f, 0.0f);
+        pipeline.frame();
+        expect_traced("after the camera moved");
+        return first;
+    };
+    const double traced = compare_images(box_downsample(frame_specular(true), 2), pt).rel_mse;
+    const double cube_maps = compare_images(box_downsample(frame_specular(false), 2), pt).rel_mse;
+    std::printf("frame through the glass: relMSE %.5f traced, %.5f the cube maps' term\n", traced,
+                cube_maps);
+    EXPECT_LT(traced, 0.05);
+    EXPECT_GT(cube_maps, 2.0 * traced);
+}
+
 }  // namespace
 
 }  // namespace ag::gpu

@@ -95,7 +95,7 @@ void print_passes(const HisPasses& his, const Row& reference, const Row& adaptiv
     const auto ms = [](int v) { return std::to_string(v) + " ms"; };
     line("voxelisation (+ smoothing)", ms(his.voxelisation), ms(his.voxelisation),
          r.voxelisation + r.smoothing, a.voxelisation + a.smoothing);
-    line("octree (CPU, before each march)", "5 ms", "5 ms", r.octree, a.octree);
+    line("octree (CPU, once per grid)", "5 ms", "5 ms", r.octree, a.octree);
     line("pilot photon generation", "-", "< 1 ms", 0.0, a.pilot_generation);
     line("pilot photon marching", "-", ms(his.pilot_marching), 0.0, a.pilot_marching);
     line("photon distribution", "-", ms(his.distribution), 0.0, a.distribution);

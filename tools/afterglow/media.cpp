@@ -34,6 +34,9 @@ const Command kMediaCommand{
         flag("no-octree",
              "march photons in fixed steps everywhere (default: his octree, whole runs of steps "
              "at once through cubes of constant index and extinction; the same result)"),
+        flag("his-phase",
+             "the view march's phase at each voxel's mean photon direction alone, as his (default: "
+             "broadened by the spread of the photons' directions there)"),
         integer("surface-bounces", "N",
                 "photons leaving the grid go on from the opaque surface they meet (mirror: "
                 "reflected; else cosine, times the grey albedo) and are marched again, up to N "
@@ -63,6 +66,10 @@ const Command kMediaCommand{
                "adaptive, a light inside the grid: cells whose density exceeds the floor by more "
                "than X of the peak's excess form the dense set",
                0.0, 1.0, MediaAdaptiveSettings{}.dense_cut),
+        integer("seed", "N",
+                "adaptive: the pilots' jitter and the rotation of the importance-sampled "
+                "Hammersley points; also the surface bounces' directions",
+                0, 0x7fffffff, 0),
         flag("his-sphere",
              "adaptive, a light inside the grid: his pipeline (thresholds and filter on the "
              "fluence itself, one set of photons through the smooth density) instead of ours"),
@@ -93,6 +100,7 @@ int run_media(const Args& args) {
     settings.march_step = float(args.get_double("step"));
     settings.surface_bounces = args.get_int("surface-bounces");
     settings.octree = !args.has("no-octree");
+    settings.phase_spread = !args.has("his-phase");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
                                                      : gpu::MediaDeposit::track_length;
     settings.adaptive.enabled = args.has("adaptive");
@@ -105,6 +113,8 @@ int run_media(const Args& args) {
     settings.adaptive.free_space = !args.has("his-sphere");
     settings.adaptive.stratified = !args.has("his-sphere");
     settings.adaptive.dense_cut = float(args.get_double("dense-cut"));
+    settings.seed = uint32_t(args.get_int("seed"));
+    settings.adaptive.seed = settings.seed;
     auto context = gpu::make_gl_context(args.gl_backend());
     // A scene without media or a point light is bad input: exit 1 with its message.
     const MediaMethodResult result = render_media(scene, settings);
