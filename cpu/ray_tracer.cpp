@@ -54,12 +54,13 @@ unsigned attach_mesh(RTCDevice device, RTCScene scene, const Mesh& mesh,
     return id;
 }
 
-// What the filter keeps of a face for intersect to make its hit.
+// What the filter keeps of a face for intersect to make its hit (no initialisers, as
+// HitCandidate).
 struct EmbreeHit {
-    float t = 0.0f;
-    unsigned inst = 0, geom = 0, prim = 0;
-    glm::vec2 uv{0.0f};
-    glm::vec3 ng{0.0f};  // Embree's unnormalised normal, in the instance's space
+    float t;
+    unsigned inst, geom, prim;
+    glm::vec2 uv;
+    glm::vec3 ng;  // Embree's unnormalised normal, in the instance's space
 };
 
 // One intersect query's state; Embree hands the context (the first member) back to the filter.
@@ -67,6 +68,7 @@ struct CoincidentQuery {
     RTCIntersectContext context;
     const std::vector<int>* instance_object;
     const std::vector<int>* static_geom_object;
+    float tmax;  // the caller's: the window never reaches past it
     CoincidentHits<EmbreeHit> hits;
 };
 
@@ -98,7 +100,7 @@ void keep_coincident(const RTCFilterFunctionNArguments* args) {
     set_facing(c, {RTCRayN_dir_x(ray, n, 0), RTCRayN_dir_y(ray, n, 0), RTCRayN_dir_z(ray, n, 0)},
                h.ng);
     q->hits.add(c, h);
-    RTCRayN_tfar(ray, n, 0) = q->hits.cull_t();
+    RTCRayN_tfar(ray, n, 0) = std::min(q->tmax, q->hits.cull_t());
 }
 
 void set_instance_transform(RTCGeometry instance, const Transform& t) {
@@ -258,6 +260,7 @@ RayHit RayTracer::intersect(const Ray& ray) const {
     CoincidentQuery q{{},
                       &impl_->instance_object,
                       &impl_->static_geom_object,
+                      ray.tmax,
                       {std::max(coincident_, coincident_tolerance(0.0f, ray.origin)),
                        glm::length(ray.direction)}};
     rtcInitIntersectContext(&q.context);

@@ -1,5 +1,5 @@
-// The closest hit among coincident faces, one rule for every ray caster (cpu/ray_tracer.cpp over
-// Embree, ag::intersect over the flat BVH; gpu/gpu_bvh.cpp's GLSL follows it). Float rounding
+// The closest hit among coincident faces, the rule of cpu/ray_tracer.cpp (every CPU tracer's
+// closest hit goes through it; the flat BVH gpu_pm walks does not follow it yet). Float rounding
 // (vertices placed by a transform, a ray taken into an instance's space, t itself) puts coplanar
 // faces a few float steps apart in either order, so "the nearest" among them is an accident of
 // rounding and traversal order. Faces whose hits lie within a tolerance of the nearest one,
@@ -32,12 +32,13 @@ inline float coincident_tolerance(float scene_diagonal, const glm::vec3& origin)
                     kCoincidentSteps * std::max({o.x, o.y, o.z}));
 }
 
-// One face a ray meets.
+// One face a ray meets. No initialisers: CoincidentHits holds kMax of them per ray, and filling
+// them for every ray cost more than the rule's own work (bench photons).
 struct HitCandidate {
-    float t = 0.0f;
-    uint32_t object = 0, triangle = 0;
-    bool back = false;  // the ray meets the face from behind (direction · normal > 0)
-    float cos = 0.0f;   // |cos| between the ray and the face
+    float t;
+    uint32_t object, triangle;
+    bool back;  // the ray meets the face from behind (direction · normal > 0)
+    float cos;  // |cos| between the ray and the face
 };
 
 // The facing and cosine of a hit, from the ray's direction and the face's (unnormalised) normal
@@ -118,8 +119,8 @@ private:
     float tolerance_, speed_, window_;
     float near_ = std::numeric_limits<float>::infinity();
     int count_ = 0;
-    std::array<HitCandidate, size_t(kMax)> hits_{};
-    std::array<Payload, size_t(kMax)> payloads_{};
+    std::array<HitCandidate, size_t(kMax)> hits_;  // [0, count_) hold faces
+    std::array<Payload, size_t(kMax)> payloads_;
 };
 
 }  // namespace ag
