@@ -1,6 +1,7 @@
 // Ray casting against the scene through Embree 3. All Embree API use lives in ray_tracer.cpp (so a
 // move to Embree 4 touches one file). Static objects share one BVH; every dynamic object has its
 // own BVH placed by an instance transform, so moving an object re-commits only the top level.
+// Hits at the same distance are ordered by one rule (intersect, below), not by Embree's traversal.
 #pragma once
 
 #include <cstdint>
@@ -42,7 +43,16 @@ public:
     // Returns true if anything changed. Not thread-safe against concurrent queries.
     bool update(const Scene& scene);
 
+    // The closest hit. Among faces that lie within float resolution of the nearest one along the
+    // ray (coplanar faces of two objects, a shared edge), the one the ray meets from behind wins,
+    // then the lowest object and triangle: a closed object stays closed where one of its faces
+    // lies in another surface's plane (a lamp in a box flush with the ceiling lights nothing),
+    // and the answer depends on the geometry only, not on the order the BVH visits it.
     RayHit intersect(const Ray& ray) const;
+    // Embree's own closest hit among coincident faces (whichever its traversal meets first), for
+    // `afterglow bench photons` to measure what the rule above costs. Not for rendering.
+    RayHit intersect_unordered(const Ray& ray) const;
+    // Any hit in [tmin, tmax]: which coincident face blocks the ray does not matter.
     bool occluded(const Ray& ray) const;
 
     // Offset along the normal that keeps a new ray from re-hitting the surface it leaves.
@@ -53,6 +63,7 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
     float epsilon_ = 1e-4f;
+    float coincident_ = 1e-5f;  // the scene's part of the coincident-face tolerance (world units)
 };
 
 }  // namespace ag::cpu

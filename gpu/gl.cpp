@@ -28,6 +28,20 @@ void check_gl(const char* where) {
         }() + " in " + where);
 }
 
+std::string take_gl_errors() {
+    // An implementation holds at most one error per kind (Mesa holds one); a lost context may
+    // report forever, so the loop is bounded.
+    std::string errors;
+    for (int i = 0; i < 16; ++i) {
+        const GLenum e = gl::GetError();
+        if (e == GL_NO_ERROR) break;
+        char buf[16];
+        std::snprintf(buf, sizeof buf, "0x%04x", unsigned(e));
+        errors += (errors.empty() ? "" : ", ") + std::string(buf);
+    }
+    return errors;
+}
+
 }  // namespace ag::gpu
 
 namespace ag::gpu {

@@ -161,4 +161,10 @@ public:
 // Throws GlError if glGetError reports an error (`where` names the call site).
 void check_gl(const char* where);
 
+// Reads every pending GL error and returns them as "0x0501, 0x0506" ("" when none). Work that
+// failed by throwing before its check_gl (an incomplete framebuffer, a refused size) may leave an
+// error pending, and the next unit of work on the same context would then fail at its first
+// check_gl; call this after catching such a failure (compare-methods between variants).
+std::string take_gl_errors();
+
 }  // namespace ag::gpu

@@ -1,7 +1,10 @@
 // Scenes built in code for the CPU tests.
 #pragma once
 
+#include <glm/gtc/quaternion.hpp>
+#include <numbers>
 #include <string>
+#include <vector>
 
 #include "shared/charts.h"
 #include "shared/scene.h"
@@ -56,6 +59,48 @@ inline Scene plane_under_light(float half_size, float height, float intensity, f
     s.lights.push_back(l);
     init_versions(s);
     return s;
+}
+
+// A ceiling quad at height `ceiling_y` facing down and a closed box of side 0.3 (faces outwards)
+// whose top lies at y = 1, in the ceiling's plane by default (the robustness sweep's
+// light_in_box_coplanar case): the box static or dynamic. Objects: 0 ceiling, 1 box.
+inline constexpr glm::vec3 kBoxUnderCeilingCentre(0.5f, 0.85f, 0.5f);
+inline Scene box_under_ceiling(bool dynamic_box, float ceiling_y = 1.0f) {
+    Scene s;
+    s.path = "box_under_ceiling";
+    Object ceiling;
+    ceiling.name = "ceiling";
+    ceiling.mesh = make_quad(1.0f, 1.0f);
+    ceiling.transform.translation = glm::vec3(0.5f, ceiling_y, 0.5f);
+    ceiling.transform.rotation =
+        glm::angleAxis(std::numbers::pi_v<float>, glm::vec3(1.0f, 0.0f, 0.0f));
+    s.objects.push_back(ceiling);
+    Object box;
+    box.name = "box";
+    box.mesh = make_box(glm::vec3(0.3f));
+    box.transform.translation = kBoxUnderCeilingCentre;
+    box.dynamic = dynamic_box;
+    s.objects.push_back(box);
+    init_versions(s);
+    return s;
+}
+
+// Rays from four lamp positions inside that box up through a 24 × 24 grid of points on its top
+// (the lamp's photons): {origin, direction}.
+struct TestRay {
+    glm::vec3 origin, direction;
+};
+inline std::vector<TestRay> rays_up_through_the_box_top() {
+    std::vector<TestRay> rays;
+    for (const glm::vec3 lamp : {glm::vec3(0.5f, 0.946f, 0.5f), glm::vec3(0.41f, 0.8f, 0.57f),
+                                 glm::vec3(0.6f, 0.99f, 0.43f), glm::vec3(0.5f, 0.71f, 0.5f)})
+        for (int i = 0; i < 24; ++i)
+            for (int j = 0; j < 24; ++j) {
+                const glm::vec3 to(0.36f + 0.28f * (float(i) + 0.5f) / 24.0f, 1.0f,
+                                   0.36f + 0.28f * (float(j) + 0.5f) / 24.0f);
+                rays.push_back({lamp, to - lamp});
+            }
+    return rays;
 }
 
 }  // namespace ag::test

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "cpu/reference/reference.h"
+#include "gpu/gl.h"
 #include "gpu/gl_context.h"
 #include "shared/frame_terms.h"
 #include "shared/image.h"
@@ -190,6 +191,11 @@ MethodResult run_variant(const Variant& v, const Scene& base, const std::string&
         r.memory_mib = (rss_peak - rss_before) / (1024.0 * 1024.0);
     } catch (const std::exception& e) {
         r.missing = e.what();
+        // The variant may have thrown before reading an error it caused; left pending, it would
+        // fail the next variant at its first check_gl.
+        const std::string pending = gpu::take_gl_errors();
+        if (!pending.empty())
+            r.missing += " (GL errors it left pending, now cleared: " + pending + ")";
         return r;
     }
     r.flicker = flicker.value();
