@@ -10,6 +10,8 @@
 #include <tuple>
 
 #include "cpu/knn.h"
+#include "cpu/reference/reference.h"
+#include "cpu/sampling.h"
 #include "shared/charts.h"
 
 namespace ag::cpu {
@@ -17,6 +19,7 @@ namespace ag::cpu {
 namespace {
 
 constexpr int kTextureSubsamples = 4;  // per texel side, for its mean albedo
+constexpr int kDirectSubsamples = 4;   // per texel side, for its mean direct irradiance (exact)
 
 // Points of the disc that measure how much of it can receive photons: a sunflower (Vogel)
 // spiral, each point standing for 1/64 of the disc's area. A fixed pattern keeps the AIM
@@ -106,6 +109,39 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
         texture_mean_.size(),
         [&](size_t i) { texture_mean_[i] = texel_texture_mean(scene_, scene_.atlas.texels[i]); },
         256);
+    if (scene_.settings.aim.exact_direct) rays_ = std::make_unique<RayTracer>(scene_);
+}
+
+glm::vec3 Aim::direct_over_texel(int record) const {
+    const TexelRecord& t = scene_.atlas.texels[size_t(record)];
+    const Transform& transform = scene_.objects[size_t(t.object)].transform;
+    // One area-light sample per point: the grid's 16 points together sample the light as the
+    // frame's direct term does (settings.direct.area_light_samples, 16 by default).
+    const int quad_samples = std::max(
+        1, scene_.settings.direct.area_light_samples / (kDirectSubsamples * kDirectSubsamples));
+    glm::dvec3 sum(0.0);
+    int points = 0;
+    for (int j = 0; j < kDirectSubsamples; ++j)
+        for (int i = 0; i < kDirectSubsamples; ++i) {
+            const glm::vec2 offset =
+                (glm::vec2(float(i), float(j)) + 0.5f) / float(kDirectSubsamples) - 0.5f;
+            const std::optional<FootprintPoint> fp = texel_point_at(scene_, record, offset);
+            if (!fp) continue;
+            const glm::vec3 p = transform.apply_point(fp->position);
+            const glm::vec3 n = transform.apply_vector(fp->normal);
+            // Inside another solid (a ray along the normal meets a back face first): no light
+            // arrives there and no one sees it.
+            const RayHit above = rays_->intersect({p + rays_->epsilon() * n, n, 0.0f, 1e30f});
+            if (above.hit && glm::dot(above.normal, n) > 0.0f) continue;
+            const int k = j * kDirectSubsamples + i;
+            sum += glm::dvec3(
+                direct_irradiance(scene_, *rays_, p, n, quad_samples,
+                                  hashed_uniform(uint64_t(record), uint64_t(2 * k)),
+                                  hashed_uniform(uint64_t(record), uint64_t(2 * k + 1))));
+            ++points;
+        }
+    if (points == 0) return glm::vec3(0.0f);
+    return glm::vec3(sum / double(points));
 }
 
 int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
@@ -116,6 +152,8 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     SurfaceHits& s = maps.surface(surface);
     const std::vector<int>& texels = surface_texels_[size_t(surface)];
     const glm::vec3 albedo = albedo_of(surface);
+    // Exact direct light follows the geometry, not only the hits: every texel again.
+    if (rays_) changed = nullptr;
 
     // The texels to estimate: all of them, or those whose kNN disc of the last build reaches a
     // changed hit. Another texel keeps its nearest hits, and so its estimate, bit for bit: a
@@ -148,15 +186,28 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
             if (reached[i]) todo.push_back(int(i));
     }
 
+    // With exact direct light the kNN estimate is over the hits that bounced at least once (the
+    // direct hits' light comes from shadow rays), and it is scaled to their flux alone.
+    const bool exact = rays_ != nullptr;
+    if (exact) rays_->update(scene_);
+    std::vector<int> used;  // indices into s.hits of the hits the estimate counts
+    used.reserve(s.hits.size());
+    glm::dvec3 used_flux(0.0);
+    for (size_t i = 0; i < s.hits.size(); ++i) {
+        if (exact && s.hits[i].bounce < 1) continue;
+        used.push_back(int(i));
+        used_flux += glm::dvec3(s.hits[i].power);
+    }
     KnnIndex index;
     if (!todo.empty()) {
-        std::vector<glm::vec3> points(s.hits.size());
-        for (size_t i = 0; i < s.hits.size(); ++i) points[i] = s.hits[i].position;
+        std::vector<glm::vec3> points(used.size());
+        for (size_t i = 0; i < used.size(); ++i) points[i] = s.hits[size_t(used[i])].position;
         index.build(points);
     }
     const int k = scene_.settings.aim.knn;
     const bool correct = scene_.settings.aim.boundary_correction;
     const bool linear = correct && scene_.settings.aim.boundary_linear;
+    std::vector<glm::vec3> direct(exact ? texels.size() : 0, glm::vec3(0.0f));
 
     // Unscaled estimates per texel of the surface (kept per record between builds).
     std::vector<glm::vec3> e(texels.size()), indirect(texels.size());
@@ -169,6 +220,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         [&](size_t job) {
             const size_t i = size_t(todo[job]);
             const TexelRecord& t = scene_.atlas.texels[size_t(texels[i])];
+            if (exact) direct[i] = direct_over_texel(texels[i]);
             thread_local std::vector<int> idx;
             thread_local std::vector<float> d2;
             const int n = index.query(t.position, k, idx, d2);
@@ -193,7 +245,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
             std::array<glm::dvec2, 3> sum_u{}, bounced_u{};
             const double inv_r = 1.0 / std::sqrt(r2);
             for (int j = 0; j < n; ++j) {
-                const PhotonHit& hit = s.hits[size_t(idx[size_t(j)])];
+                const PhotonHit& hit = s.hits[size_t(used[size_t(idx[size_t(j)])])];
                 const glm::dvec3 power(hit.power);
                 sum += power;
                 if (hit.bounce >= 1) bounced += power;
@@ -233,14 +285,17 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     // the kNN disc reaches past the surface's edges and the estimate falls there (to about ½ on
     // an edge, ¼ in a corner), and this scale lifts the whole surface instead, leaving its edges
     // dark and its middle bright.
+    // With exact direct light only the bounced hits' estimate is scaled, to their flux.
     glm::dvec3 estimated(0.0);
     for (size_t i = 0; i < texels.size(); ++i)
         estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(texels[i])].area);
+    const glm::dvec3 flux = exact ? used_flux : s.flux;
     for (int c = 0; c < 3; ++c) {
-        const double scale = estimated[c] > 0.0 ? s.flux[c] / estimated[c] : 0.0;
+        const double scale = estimated[c] > 0.0 ? flux[c] / estimated[c] : 0.0;
         for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
         for (glm::vec3& v : indirect) v[c] = float(double(v[c]) * scale);
     }
+    for (size_t i = 0; i < direct.size(); ++i) e[i] += direct[i];
     double mean_indirect = 0.0;
     for (const glm::vec3& v : indirect) mean_indirect += double(energy(v));
     const float floor_indirect =
@@ -359,7 +414,7 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
         const bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
         if (h.delta_f <= 0.0 && !recoloured) continue;
         Candidate c{s, h.delta_f, std::nullopt};
-        if (built_[size_t(s)]) {
+        if (built_[size_t(s)] && !rays_) {
             c.changed = net_changes(h, &c.delta);
             if (c.changed && c.changed->empty() && !recoloured) {
                 h.changes.clear();

@@ -3,14 +3,17 @@
 // diffusely reflected radiance L = ρ/π · E in the shared atlas layout. f is the fraction of the
 // disc that lies on the surface's chart (the kNN estimate's boundary bias, which otherwise
 // halves the estimate along chart edges: the room's creases and corners). Surfaces are rebuilt
-// in order of Δf / area, above a threshold, under a per-frame budget.
+// in order of Δf / area, above a threshold, under a per-frame budget. With aim.exact_direct the
+// direct part comes from shadow rays over each texel and the kNN estimate counts bounced hits only.
 #pragma once
 
 #include <glm/glm.hpp>
+#include <memory>
 #include <optional>
 #include <vector>
 
 #include "cpu/photon_map.h"
+#include "cpu/ray_tracer.h"
 #include "shared/parallel.h"
 #include "shared/scene.h"
 
@@ -73,6 +76,10 @@ private:
     // The part of the disc of radius `radius` around texel record `record`, in its tangent
     // plane, on the surface (its chart). Deterministic: a fixed pattern of points.
     DiscPart disc_on_surface(int record, double radius) const;
+    // aim.exact_direct: the direct irradiance from the lights averaged over texel record
+    // `record`'s footprint (a 4 × 4 grid of its points on the chart; points inside another
+    // solid, such as the floor under a box, are left out), with hard shadows from every object.
+    glm::vec3 direct_over_texel(int record) const;
 
     const Scene& scene_;
     ThreadPool& pool_;
@@ -94,6 +101,7 @@ private:
     std::vector<float> reach2_;
     std::vector<char> built_;
     std::vector<glm::vec3> built_albedo_;
+    std::unique_ptr<RayTracer> rays_;  // aim.exact_direct only: shadow rays for the direct part
 };
 
 }  // namespace ag::cpu
