@@ -234,19 +234,7 @@ TEST(Aim, TexelsOnAPlanesEdgesAndCornersReadTheSunsIrradiance) {
 TEST(Aim, EdgeTexelsUnderAFallingIrradianceReadItAtTheirCentre) {
     constexpr float kHalf = 1000.0f, kTexel = 100.0f, kHeight = 700.0f, kIntensity = 1e6f;
     auto make = [&](bool linear) {
-        Scene s;
-        s.path = "plane_under_point";
-        Object plane;
-        plane.name = "plane";
-        plane.mesh = make_quad(2.0f * kHalf, 2.0f * kHalf);
-        plane.material.albedo = glm::vec3(0.0f);  // no bounces
-        s.objects.push_back(plane);
-        Light lamp;
-        lamp.name = "lamp";
-        lamp.type = LightType::point;
-        lamp.position = glm::vec3(0.0f, kHeight, 0.0f);
-        lamp.intensity = glm::vec3(kIntensity);
-        s.lights.push_back(lamp);
+        Scene s = test::plane_under_light(kHalf, kHeight, kIntensity, 0.0f);  // no bounces
         s.settings.photons.groups = 64;
         s.settings.photons.photons_per_group = 2000;
         s.settings.aim.knn = 200;
@@ -294,25 +282,13 @@ TEST(Aim, ExactDirectKeepsAHardShadowHard) {
     constexpr float kHalf = 1000.0f, kTexel = 100.0f, kHeight = 1000.0f, kIntensity = 1e6f;
     constexpr float kSlabHalf = 200.0f, kSlabY = 500.0f, kSlabHalfThick = 10.0f;
     auto make = [&](bool exact) {
-        Scene s;
-        s.path = "slab_shadow";
-        Object plane;
-        plane.name = "plane";
-        plane.mesh = make_quad(2.0f * kHalf, 2.0f * kHalf);
-        plane.material.albedo = glm::vec3(0.0f);  // no bounces
-        s.objects.push_back(plane);
+        Scene s = test::plane_under_light(kHalf, kHeight, kIntensity, 0.0f);  // no bounces
         Object slab;
         slab.name = "slab";
         slab.mesh = make_box(glm::vec3(2.0f * kSlabHalf, 2.0f * kSlabHalfThick, 2.0f * kSlabHalf));
         slab.material.albedo = glm::vec3(0.0f);
         slab.transform.translation = glm::vec3(0.0f, kSlabY, 0.0f);
         s.objects.push_back(slab);
-        Light lamp;
-        lamp.name = "lamp";
-        lamp.type = LightType::point;
-        lamp.position = glm::vec3(0.0f, kHeight, 0.0f);
-        lamp.intensity = glm::vec3(kIntensity);
-        s.lights.push_back(lamp);
         s.settings.photons.groups = 64;
         s.settings.photons.photons_per_group = 500;
         s.settings.aim.knn = 50;
