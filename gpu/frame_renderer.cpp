@@ -157,7 +157,21 @@ layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
 layout(location = kFrameTermVolume) out vec4 out_volume;  // no media in the GPU frame yet
+#ifdef WRITE_SURFACE
+// The surface the deferred direct-light passes shade: world position, unit normal, and the
+// albedo with alpha 1 (a diffuse surface; mirrors, glass and the background leave alpha 0).
+// Only in frames that draw the direct light anew: the two extra varyings cost llvmpipe's
+// triangle setup a third of a settled frame of the conference room.
+layout(location = kFrameTermCount + 0) out vec4 out_position;
+layout(location = kFrameTermCount + 1) out vec4 out_normal;
+layout(location = kFrameTermCount + 2) out vec4 out_albedo;
+#endif
 void main() {
+#ifdef WRITE_SURFACE
+    out_position = vec4(v_world, 1.0);
+    out_normal = vec4(normalize(v_normal), 0.0);
+    out_albedo = vec4(surface_albedo(albedo), 1.0);
+#endif
     out_volume = vec4(0.0, 0.0, 0.0, 1.0);
     out_direct = vec4(emission, 1.0);
     // L_indirect = albedo × E/π, from the lightmap (IIM) or from a screen-space method's image.
@@ -179,7 +193,13 @@ layout(location = kFrameTermIndirect) out vec4 out_indirect;
 layout(location = kFrameTermCaustics) out vec4 out_caustics;
 layout(location = kFrameTermSpecular) out vec4 out_specular;
 layout(location = kFrameTermVolume) out vec4 out_volume;  // no media in the GPU frame yet
+layout(location = kFrameTermCount + 0) out vec4 out_position;
+layout(location = kFrameTermCount + 1) out vec4 out_normal;
+layout(location = kFrameTermCount + 2) out vec4 out_albedo;  // alpha 0: no direct light here
 void main() {
+    out_position = vec4(0.0);
+    out_normal = vec4(0.0);
+    out_albedo = vec4(0.0);
     out_volume = vec4(0.0, 0.0, 0.0, 1.0);
     out_direct = vec4(0.0, 0.0, 0.0, 1.0);
     out_indirect = vec4(0.0, 0.0, 0.0, 1.0);
@@ -229,6 +249,55 @@ void main() {
         }
     }
     out_direct = vec4(direct_from(light_index, v_world, n, surface_albedo(albedo)), 0.0);
+}
+)";
+
+// The same two passes deferred (the frame): one full-screen triangle per light sample shades the
+// surface the G-buffer pass left in each pixel, with the same arithmetic as the forward passes
+// above (which the cube maps still use), so a light costs a screen's pixels, not the scene's
+// triangles again (the conference room's 277k triangles: four lights drew in 120 ms, now a few).
+const char* kSurfaceGlsl = R"(
+uniform sampler2D surface_position, surface_normal, surface_albedo_map;
+// The G-buffer's surface at this pixel; false where it holds no diffuse surface.
+bool surface_at(out vec3 p, out vec3 n, out vec3 albedo) {
+    ivec2 q = ivec2(gl_FragCoord.xy);
+    vec4 a = texelFetch(surface_albedo_map, q, 0);
+    p = texelFetch(surface_position, q, 0).xyz;
+    n = texelFetch(surface_normal, q, 0).xyz;
+    albedo = a.rgb;
+    return a.a > 0.5;
+}
+)";
+const std::string kDeferredLightingFragment = std::string(kLightsGlsl) + kSurfaceGlsl + R"(
+uniform int light_index;
+layout(location = 0) out vec4 out_direct;
+void main() {
+    vec3 p, n, albedo;
+    if (!surface_at(p, n, albedo)) discard;
+    out_direct = vec4(direct_from(light_index, p, n, albedo), 0.0);
+}
+)";
+const std::string kDeferredLightingMappedFragment =
+    std::string(kLightsGlsl) + kSurfaceGlsl + kVplMapGlsl + R"(
+uniform int light_index;
+uniform sampler2DArray light_maps;
+uniform int map_layer, map_layers, map_kind;
+uniform float offset_scale, relative_bias;
+layout(location = 0) out vec4 out_direct;
+void main() {
+    vec3 p, n, albedo;
+    if (!surface_at(p, n, albedo)) discard;
+    if (map_layer >= 0) {
+        int layer = map_layer;
+        vec3 d = p - vpl_position(layer);
+        if (map_layers == 2 && dot(d, vpl_normal(layer)) < 0.0) layer += 1;
+        if (!vpl_map_visible(light_maps, layer, p, n, length(d), map_kind, offset_scale,
+                             relative_bias)) {
+            out_direct = vec4(0.0);
+            return;
+        }
+    }
+    out_direct = vec4(direct_from(light_index, p, n, albedo), 0.0);
 }
 )";
 
@@ -389,11 +458,17 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     check_light_samples(scene);
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
+    gbuffer_surface_ = Program("frame g-buffer with the surface", kSceneVertex,
+                               "#define WRITE_SURFACE\n" + kGbufferFragment);
     gbuffer_specular_ =
         Program("frame g-buffer, mirrors and glass", kSceneVertex, kGbufferSpecularFragment);
     lighting_ = Program("frame lighting", kSceneVertex, kLightingFragment);
     lighting_mapped_ =
         Program("frame lighting, shadow maps", kSceneVertex, kLightingMappedFragment);
+    lighting_deferred_ =
+        Program("frame lighting, deferred", kFullScreenTriangleVertex, kDeferredLightingFragment);
+    lighting_deferred_mapped_ = Program("frame lighting, deferred, shadow maps",
+                                        kFullScreenTriangleVertex, kDeferredLightingMappedFragment);
     volume_ = Program("shadow volumes", kVolumeVertex, kVolumeFragment);
     environment_ = Program("cube-map environment", kSceneVertex, kEnvironmentFragment);
     inner_ = Program("glass inner map", kSceneVertex, kInnerFragment);
@@ -412,6 +487,23 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
                                 depth_stencil_.get());
     if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
         throw GlError("frame: framebuffer incomplete");
+    // The surface attachments after the terms, and the deferred lighting's framebuffer: the
+    // direct term over the same depth and stencil (the G-buffer's textures are read, not drawn).
+    for (size_t i = 0; i < surface_.size(); ++i) {
+        surface_[i] = make_float_texture(width, height);
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermCount + i),
+                                 GL_TEXTURE_2D, surface_[i].get(), 0);
+    }
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("frame: framebuffer with surface attachments incomplete");
+    lighting_fbo_ = make_framebuffer();
+    gl::BindFramebuffer(GL_FRAMEBUFFER, lighting_fbo_.get());
+    gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_TEXTURE_2D,
+                             aov_[size_t(FrameTerm::direct)].get(), 0);
+    gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
+                                depth_stencil_.get());
+    if (gl::CheckFramebufferStatus(GL_FRAMEBUFFER) != GL_FRAMEBUFFER_COMPLETE)
+        throw GlError("frame: lighting framebuffer incomplete");
 
     compose_ = Program("frame compose", kFullScreenTriangleVertex, kComposeFragment);
     glass_specular_ =
@@ -611,11 +703,16 @@ bool FrameRenderer::update_light_maps(const std::vector<LightSample>& lights) {
 }
 
 void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
-                                     const glm::mat4& view_projection, GLenum draw_buffer) {
+                                     const glm::mat4& view_projection, GLenum draw_buffer,
+                                     bool deferred) {
     // With shadow maps they were rendered for these samples before the pass began.
     const bool mapped = light_maps_ && maps_valid_ &&
                         scene_.settings.direct.method == DirectMethod::vpl &&
                         scene_.settings.direct.shadows && mapped_lights_ == lights;
+    if (deferred) {  // the direct term over the frame's depth and stencil
+        gl::BindFramebuffer(GL_FRAMEBUFFER, lighting_fbo_.get());
+        draw_buffer = GL_COLOR_ATTACHMENT0;
+    }
     gl::DepthMask(GL_FALSE);
     gl::Enable(GL_STENCIL_TEST);
     gl::Enable(GL_DEPTH_CLAMP);
@@ -637,7 +734,9 @@ void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
         gl::DepthFunc(GL_LEQUAL);
         gl::Enable(GL_BLEND);
         gl::BlendFunc(GL_ONE, GL_ONE);  // alpha + 0: a cube map's distances stay
-        const Program& program = mapped ? lighting_mapped_ : lighting_;
+        const Program& program = deferred
+                                     ? (mapped ? lighting_deferred_mapped_ : lighting_deferred_)
+                                     : (mapped ? lighting_mapped_ : lighting_);
         program.use();
         program.set("view_projection", view_projection);
         set_light_uniforms(program, {lights[i]});
@@ -654,15 +753,41 @@ void FrameRenderer::add_direct_light(const std::vector<LightSample>& lights,
             program.set("offset_scale", light_maps_->offset_scale());
             program.set("relative_bias", VplShadowMaps::kRelativeBias);
         }
-        for (size_t o = 0; o < scene_.objects.size(); ++o) {
-            const Object& obj = scene_.objects[o];
-            if (obj.material.type != MaterialType::diffuse) continue;
-            program.set("model", model_matrix(obj));
-            program.set("albedo", base_albedo(obj));
-            meshes_.bind_albedo(program, o, kAlbedoUnit);
-            meshes_.draw(o);
+        if (deferred) {
+            // Every pixel the G-buffer pass left a diffuse surface in (the depth test is off:
+            // the triangle lies at no depth; the stencil still says where the light is shadowed).
+            constexpr int kSurfaceUnit = 3;  // position, normal, albedo on units 3, 4, 5
+            static_assert(kSurfaceUnit + 2 < kLightMapUnit);
+            const char* names[3] = {"surface_position", "surface_normal", "surface_albedo_map"};
+            for (size_t t = 0; t < surface_.size(); ++t) {
+                gl::ActiveTexture(GLenum(GL_TEXTURE0 + kSurfaceUnit + t));
+                gl::BindTexture(GL_TEXTURE_2D, surface_[t].get());
+                program.set(names[t], kSurfaceUnit + int(t));
+            }
+            gl::ActiveTexture(GL_TEXTURE0);
+            gl::Disable(GL_DEPTH_TEST);
+            gl::BindVertexArray(empty_vao_.get());
+            gl::DrawArrays(GL_TRIANGLES, 0, 3);
+            gl::Enable(GL_DEPTH_TEST);
+        } else {
+            for (size_t o = 0; o < scene_.objects.size(); ++o) {
+                const Object& obj = scene_.objects[o];
+                if (obj.material.type != MaterialType::diffuse) continue;
+                program.set("model", model_matrix(obj));
+                program.set("albedo", base_albedo(obj));
+                meshes_.bind_albedo(program, o, kAlbedoUnit);
+                meshes_.draw(o);
+            }
         }
         gl::Disable(GL_BLEND);
+    }
+    if (deferred) {
+        for (size_t t = 0; t < surface_.size(); ++t) {
+            gl::ActiveTexture(GLenum(GL_TEXTURE0 + 3 + t));
+            gl::BindTexture(GL_TEXTURE_2D, 0);
+        }
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
     }
     gl::Disable(GL_DEPTH_CLAMP);
     gl::Disable(GL_STENCIL_TEST);
@@ -828,16 +953,27 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     const std::vector<LightSample> frame_lights =
         move_lights ? light_samples(scene_, light_sample_jitter(k)) : lights;
     if (fresh) update_light_maps(frame_lights);
-    begin_scene_pass(fbo_.get(), kFrameTermCount, width_, height_, glm::vec4(0, 0, 0, 1));
+    // The surface attachments only for a frame that draws the direct light anew (writing them
+    // costs a frame of the conference room at 64² a third more).
+    const bool surface = fresh && !forward_direct_;
+    begin_scene_pass(fbo_.get(), kFrameTermCount + (surface ? int(surface_.size()) : 0), width_,
+                     height_, glm::vec4(0, 0, 0, 1));
+    if (surface) {
+        const GLfloat none[4] = {0.0f, 0.0f, 0.0f, 0.0f};  // no surface: alpha 0
+        for (size_t t = 0; t < surface_.size(); ++t)
+            gl::ClearBufferfv(GL_COLOR, GLint(kFrameTermCount + t), none);
+    }
 
-    // 1. G-buffer: depth, emission, indirect, specular, caustics.
-    gbuffer_.use();
-    gbuffer_.set("view_projection", view_projection);
-    gbuffer_.set("iim", 0);
-    gbuffer_.set("iim_in_screen", in_screen ? 1 : 0);
-    gbuffer_.set("caustics", 1);
-    gbuffer_.set("has_caustics", caustics ? 1 : 0);
-    gbuffer_.set("screen", glm::vec2(float(width_), float(height_)));
+    // 1. G-buffer: depth, emission, indirect, specular, caustics (and the surface for the
+    //    deferred direct light).
+    const Program& gbuffer = surface ? gbuffer_surface_ : gbuffer_;
+    gbuffer.use();
+    gbuffer.set("view_projection", view_projection);
+    gbuffer.set("iim", 0);
+    gbuffer.set("iim_in_screen", in_screen ? 1 : 0);
+    gbuffer.set("caustics", 1);
+    gbuffer.set("has_caustics", caustics ? 1 : 0);
+    gbuffer.set("screen", glm::vec2(float(width_), float(height_)));
     gl::ActiveTexture(GL_TEXTURE0);
     gl::BindTexture(GL_TEXTURE_2D, iim);
     gl::ActiveTexture(GL_TEXTURE1);
@@ -845,10 +981,10 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     for (size_t o = 0; o < scene_.objects.size(); ++o) {
         const Object& obj = scene_.objects[o];
         if (obj.material.type != MaterialType::diffuse) continue;
-        gbuffer_.set("model", model_matrix(obj));
-        gbuffer_.set("albedo", base_albedo(obj));
-        meshes_.bind_albedo(gbuffer_, o, kAlbedoUnit);
-        gbuffer_.set("emission", obj.material.emission);
+        gbuffer.set("model", model_matrix(obj));
+        gbuffer.set("albedo", base_albedo(obj));
+        meshes_.bind_albedo(gbuffer, o, kAlbedoUnit);
+        gbuffer.set("emission", obj.material.emission);
         meshes_.draw(o);
     }
     gbuffer_specular_.use();
@@ -878,7 +1014,7 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     //    n² samples a frame, n²·k after k frames; once the mean is complete, it is kept.
     if (fresh)
         add_direct_light(frame_lights, view_projection,
-                         GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect));
+                         GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect), !forward_direct_);
     if (accumulating)
         accumulate(fresh, all_terms);
     else

@@ -111,6 +111,10 @@ public:
     // after an edit always does, a frame of a complete direct mean does not. It costs several
     // times a frame that does not (the conference room at 64²: 154 ms against 50 ms).
     bool drew_direct() const { return drew_direct_; }
+    // The frame's direct light drawn forward, every diffuse object again per light sample (as
+    // the cube maps are), instead of deferred over the G-buffer's surface: the same arithmetic
+    // at the same fragments, for tests that hold the two to each other.
+    void set_forward_direct(bool forward) { forward_direct_ = forward; }
 
 private:
     // Renders the listed faces (object × 6 + face, GL face order).
@@ -122,9 +126,12 @@ private:
                                           const std::vector<LightSample>& lights);
     glm::vec3 cube_centre(size_t object) const;  // where its cube maps are rendered from (world)
     // Adds each light's direct light on the diffuse objects into `draw_buffer` of the bound
-    // framebuffer, outside its shadow volumes (the depth buffer must hold the scene).
+    // framebuffer, outside its shadow volumes (the depth buffer must hold the scene): forward,
+    // drawing the objects again per light (the cube maps), or `deferred`, one full-screen pass
+    // per light over the surface the frame's G-buffer pass left (into the direct term; the
+    // frame's framebuffer is bound again after).
     void add_direct_light(const std::vector<LightSample>& lights, const glm::mat4& view_projection,
-                          GLenum draw_buffer);
+                          GLenum draw_buffer, bool deferred = false);
     void draw_shadow_volumes(const LightSample& light, const glm::mat4& view_projection);
     // direct.method vpl (Barczak §4.2): renders a hemispherical shadow map for each light sample
     // that is not a sun (one about a one-sided sample's normal, two back to back for a point
@@ -142,6 +149,11 @@ private:
     const SceneMeshes& meshes_;
     int width_, height_;
     Program gbuffer_, gbuffer_specular_, lighting_, volume_, environment_, inner_;
+    Program gbuffer_surface_, lighting_deferred_, lighting_deferred_mapped_;
+    // The G-buffer's surface (attachments kFrameTermCount…: world position, unit normal, albedo
+    // with alpha 1 where a diffuse surface is) and the deferred lighting's framebuffer.
+    std::array<Texture, 3> surface_;
+    Framebuffer lighting_fbo_;
     void compose();
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
@@ -213,6 +225,7 @@ private:
     bool mean_complete_ = false;
     bool drew_ = false;
     bool drew_direct_ = false;
+    bool forward_direct_ = false;
 };
 
 }  // namespace ag::gpu

@@ -85,6 +85,43 @@ TEST_F(FrameTest, PointUnderOccluderIsBlackInDirectAndBesideItIsLit) {
               0.1f * expected);
 }
 
+// The direct light is drawn deferred, one full-screen pass per light sample over the surface the
+// G-buffer pass left; the forward passes (every object again per light, as the cube maps draw it)
+// are the same arithmetic at the same fragments. Cornell (quad light samples, the glass sphere
+// leaving its pixels unlit) with shadow volumes and with shadow maps, a sun beside them.
+TEST_F(FrameTest, DeferredDirectLightMatchesTheForwardPasses) {
+    for (DirectMethod method : {DirectMethod::shadow_volumes, DirectMethod::vpl}) {
+        Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
+        scene.settings.direct.method = method;
+        Light sun;
+        sun.name = "sun";
+        sun.type = LightType::sun;
+        sun.direction = glm::normalize(glm::vec3(0.3f, -1.0f, 0.2f));
+        sun.irradiance = glm::vec3(0.5f);
+        scene.lights.push_back(sun);
+        SceneMeshes meshes(scene);
+        LightmapTexture iim(scene.atlas);
+        auto direct = [&](bool forward) {
+            FrameRenderer renderer(scene, meshes, 64, 64);
+            renderer.set_forward_direct(forward);
+            renderer.render(iim.id());
+            return renderer.read_back().aov[size_t(FrameTerm::direct)];
+        };
+        const Image deferred = direct(false), forward = direct(true);
+        double sum = 0.0;
+        int lit = 0;
+        for (size_t i = 0; i < deferred.pixels.size(); ++i) {
+            ASSERT_NEAR(deferred.pixels[i], forward.pixels[i],
+                        1e-5f * std::max(1.0f, forward.pixels[i]))
+                << "value " << i << ", method " << int(method);
+            sum += deferred.pixels[i];
+            lit += deferred.pixels[i] > 0.0f;
+        }
+        EXPECT_GT(sum, 0.0);
+        EXPECT_GT(lit, int(deferred.pixels.size() / 2));
+    }
+}
+
 TEST_F(FrameTest, ComponentImagesSumToTheFrame) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
     scene.camera.width = scene.camera.height = 96;
