@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "cpu/sampling.h"
+#include "shared/camera.h"
 #include "shared/lightmap_sample.h"
 #include "shared/qmc.h"
 
@@ -187,6 +188,38 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
         stats_.invalid += r.back_fraction > kBackFaceInvalidFraction;
     stats_.rays = uint64_t(texels.size()) * uint64_t(count);
     return results;
+}
+
+std::vector<float> CpuGather::texel_coverage(int width, int height) {
+    prepare();
+    Camera camera = scene_.camera;
+    camera.width = width;
+    camera.height = height;
+    const size_t pixels = size_t(width) * size_t(height);
+    // Per pixel: the lookup in atlas texel coordinates, or x < 0 where no lightmap is seen.
+    std::vector<glm::vec2> lookups(pixels, glm::vec2(-1.0f));
+    pool_.parallel_for(
+        pixels,
+        [&](size_t p) {
+            const int x = int(p % size_t(width)), y = int(p / size_t(width));
+            Ray ray;
+            ray.origin = camera.eye;
+            ray.direction = camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f);
+            const RayHit hit = rays_.intersect(ray);
+            if (!hit.hit) return;
+            const Object& o = scene_.objects[size_t(hit.object)];
+            const bool lightmapped = o.material.type == MaterialType::diffuse &&
+                                     size_t(hit.object) < scene_.atlas.corner_uvs.size() &&
+                                     !scene_.atlas.corner_uvs[size_t(hit.object)].empty();
+            if (lightmapped)
+                lookups[p] = lightmap_uv(scene_.atlas, hit.object, hit.triangle, hit.barycentric);
+        },
+        64);
+    std::vector<float> coverage(scene_.atlas.texels.size(), 0.0f);
+    const float pixel = 1.0f / float(pixels);
+    for (const glm::vec2& l : lookups)
+        if (l.x >= 0.0f) add_lookup_coverage(scene_.atlas, l, pixel, coverage);
+    return coverage;
 }
 
 }  // namespace ag::cpu

@@ -47,6 +47,12 @@ public:
     std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points,
                                             const std::vector<glm::vec3>& aim_radiance);
     const CpuGatherStats& last_stats() const { return stats_; }
+    // How much of the screen each texel record covers (gpu::TexelCoverage's measure, by rays):
+    // one ray through each pixel centre of the scene's camera at `width` × `height`, counted by
+    // add_lookup_coverage where it meets a lightmapped surface first. On llvmpipe the raster
+    // pass costs what drawing the scene costs (bumpy_133k_box: 18 ms); the rays cost a
+    // fraction of it. Sums in pixel order: the same on any thread count.
+    std::vector<float> texel_coverage(int width, int height);
 
 private:
     void prepare();  // brings the tracer and the point set up to date

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "gpu/g_buffer.h"
+#include "shared/lightmap_sample.h"
 
 namespace ag::gpu {
 
@@ -63,37 +64,10 @@ const std::vector<float>& TexelCoverage::update() {
         read_rgba(fbo_.get(), GL_COLOR_ATTACHMENT0, 0, 0, width_, height_);
     std::fill(coverage_.begin(), coverage_.end(), 0.0f);
     const float pixel = 1.0f / float(size_t(width_) * size_t(height_));
-    const LightmapAtlas& atlas = scene_.atlas;
-    // The frame reads the lightmap bilinearly: each pixel depends on the four texels around its
-    // lookup, by their weights. Crediting only the texel under the lookup left three of four
-    // texels of small, far objects (the conference room's chairs) "unseen" and last in the queue.
-    // Gutter texels hold copies of their chart's: a pixel's whole weight goes to the texel
-    // records among the four.
-    auto record_at = [&](int x, int y) {
-        return x < 0 || y < 0 || x >= atlas.width || y >= atlas.height ? -1 : atlas.texel_at(x, y);
-    };
     for (size_t p = 0; p < size_t(width_) * size_t(height_); ++p) {
         const float* texel = &rgba[4 * p];
-        if (texel[3] <= 0.0f || atlas.width <= 0) continue;
-        const float u = texel[0] - 0.5f, v = texel[1] - 0.5f;
-        const float x0 = std::floor(u), y0 = std::floor(v);
-        const float fx = u - x0, fy = v - y0;
-        const int x = int(x0), y = int(y0);
-        const int records[4] = {record_at(x, y), record_at(x + 1, y), record_at(x, y + 1),
-                                record_at(x + 1, y + 1)};
-        const float weights[4] = {(1.0f - fx) * (1.0f - fy), fx * (1.0f - fy), (1.0f - fx) * fy,
-                                  fx * fy};
-        float sum = 0.0f;
-        for (int k = 0; k < 4; ++k) sum += records[k] >= 0 ? weights[k] : 0.0f;
-        if (sum <= 0.0f) {
-            // Only gutter texels around the lookup: the record under it, as the chart's edge.
-            const int under = record_at(int(std::floor(texel[0])), int(std::floor(texel[1])));
-            if (under >= 0) coverage_[size_t(under)] += pixel;
-            continue;
-        }
-        for (int k = 0; k < 4; ++k)
-            if (records[k] >= 0 && weights[k] > 0.0f)
-                coverage_[size_t(records[k])] += weights[k] / sum * pixel;
+        if (texel[3] > 0.0f)
+            add_lookup_coverage(scene_.atlas, glm::vec2(texel[0], texel[1]), pixel, coverage_);
     }
     return coverage_;
 }

@@ -199,4 +199,33 @@ void repair_invalid_texels(const LightmapAtlas& atlas, std::vector<glm::vec3>& v
     }
 }
 
+void add_lookup_coverage(const LightmapAtlas& atlas, glm::vec2 lookup, float weight,
+                         std::vector<float>& coverage) {
+    if (atlas.width <= 0) return;
+    // Crediting only the texel under the lookup left three of four texels of small, far
+    // objects (the conference room's chairs) "unseen" and last in the queue.
+    auto record_at = [&](int x, int y) {
+        return x < 0 || y < 0 || x >= atlas.width || y >= atlas.height ? -1 : atlas.texel_at(x, y);
+    };
+    const float u = lookup.x - 0.5f, v = lookup.y - 0.5f;
+    const float x0 = std::floor(u), y0 = std::floor(v);
+    const float fx = u - x0, fy = v - y0;
+    const int x = int(x0), y = int(y0);
+    const int records[4] = {record_at(x, y), record_at(x + 1, y), record_at(x, y + 1),
+                            record_at(x + 1, y + 1)};
+    const float weights[4] = {(1.0f - fx) * (1.0f - fy), fx * (1.0f - fy), (1.0f - fx) * fy,
+                              fx * fy};
+    float sum = 0.0f;
+    for (int k = 0; k < 4; ++k) sum += records[k] >= 0 ? weights[k] : 0.0f;
+    if (sum <= 0.0f) {
+        // Only gutter texels around the lookup: the record under it, as the chart's edge.
+        const int under = record_at(int(std::floor(lookup.x)), int(std::floor(lookup.y)));
+        if (under >= 0) coverage[size_t(under)] += weight;
+        return;
+    }
+    for (int k = 0; k < 4; ++k)
+        if (records[k] >= 0 && weights[k] > 0.0f)
+            coverage[size_t(records[k])] += weights[k] / sum * weight;
+}
+
 }  // namespace ag

@@ -27,6 +27,15 @@ int triangle_chart(const LightmapAtlas& atlas, int object, int triangle);
 glm::vec3 sample_lightmap(const LightmapAtlas& atlas, const std::vector<glm::vec3>& texels,
                           int object, int triangle, glm::vec2 barycentric);
 
+// Screen coverage (the IIM schedule's "how much of the screen a texel covers"): a pixel whose
+// frame reads the lightmap bilinearly at `lookup` (atlas texel coordinates, as lightmap_uv)
+// depends on the four texels around it; `weight` (the pixel's share of the screen) is split
+// among the texel records among the four by their bilinear weights (gutters hold copies of
+// their chart's texels), or goes to the record under the lookup where only gutters surround
+// it. `coverage` is per texel record. The GL pass and the CPU rays both count through this.
+void add_lookup_coverage(const LightmapAtlas& atlas, glm::vec2 lookup, float weight,
+                         std::vector<float>& coverage);
+
 // Fills the texels whose record is marked invalid (valid_per_record[r] == 0) from valid texels of
 // the same chart: layer by layer outwards from the valid ones, each texel the mean of its valid
 // or already filled 8-neighbours, so islands fill too. Texels of a chart with no valid texel

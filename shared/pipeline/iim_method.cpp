@@ -97,7 +97,12 @@ void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
     const bool camera_moved = covered_frame_ == 0 || !same_view(covered_camera_, scene_.camera);
     if (!camera_moved && !(moved_since_coverage_ && frame >= covered_frame_ + kCoverageFrames))
         return;
-    iim_.set_coverage(coverage_.update());
+    // Measured on the side the gather runs on: the one this machine does faster (rasterising
+    // bumpy_133k_box's 131k triangles on llvmpipe took 18 ms of an edit's frame).
+    if (backend_ == GatherBackend::cpu)
+        iim_.set_coverage(cpu_gather_.texel_coverage(coverage_.width(), coverage_.height()));
+    else
+        iim_.set_coverage(coverage_.update());
     covered_camera_ = scene_.camera;
     covered_frame_ = std::max<uint64_t>(frame, 1);
     moved_since_coverage_ = false;
@@ -119,6 +124,7 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     const cpu::IimFrameStats s = gather(in, budget, start);
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
+    stats.texel_gather_ms = texel_gather_ms_;
     // New values fade in over blend_frames so the thesis's trickle of ≤ 20 texels a frame never
     // pops. With a frame-time target the scheduler updates as much as fits, by priority, and the
     // values show at once, as brute force shows them: the light follows the edit without lag.
@@ -131,8 +137,15 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
 
 cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget,
                                      std::chrono::steady_clock::time_point start) {
+    using Clock = std::chrono::steady_clock;
+    auto ms_since = [](Clock::time_point t) {
+        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+    };
+    texel_gather_ms_ = 0.0;
     if (in.work_ms <= 0.0 || in.mode == PipelineMode::full) {
+        const Clock::time_point t = Clock::now();
         const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
+        texel_gather_ms_ = ms_since(t);
         gathered_ = iim_.last_gathered();
         return s;
     }
@@ -145,17 +158,15 @@ cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget,
     // batches gather less efficiently, and stopping on predictions made from them shrank the
     // measured budget frame after frame. Between chunks the photon work is taken over as soon
     // as it is done, so the rest of the frame gathers with the new AIMs, a frame earlier.
-    using Clock = std::chrono::steady_clock;
     const Clock::time_point loop_start = Clock::now();
-    auto ms_since = [](Clock::time_point t) {
-        return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-    };
     cpu::IimFrameStats total;
     gathered_.clear();
     int chunk = std::min(budget, std::clamp(budget / 3, kFirstChunkTexels, kChunkTexels));
     iim_.defer_repairs();  // once for the frame, not per chunk (it scans every invalid texel)
     while (chunk > 0) {
+        const Clock::time_point chunk_start = Clock::now();
         const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), chunk, in.frame);
+        texel_gather_ms_ += ms_since(chunk_start);
         total.gathered += s.gathered;
         total.invalid += s.invalid;
         total.relocated += s.relocated;

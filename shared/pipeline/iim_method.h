@@ -72,7 +72,8 @@ private:
                               std::chrono::steady_clock::time_point start);
     // A chunk is at most one pass of the GL gather (its 256 layers).
     static constexpr int kChunkTexels = 256, kFirstChunkTexels = 8;
-    std::vector<int> gathered_;  // texel records gathered in the last update()
+    std::vector<int> gathered_;     // texel records gathered in the last update()
+    double texel_gather_ms_ = 0.0;  // of it, the time in the gatherers
 
     const Scene& scene_;
     cpu::Iim iim_;

@@ -32,6 +32,12 @@ struct PipelineStats {
     bool drawn_direct = true;
     double photon_ms = 0, aim_ms = 0, caustic_ms = 0, gather_ms = 0, draw_ms = 0, wait_ms = 0,
            frame_ms = 0;
+    // The part of gather_ms spent in the gatherers themselves (IIM texels), without the screen
+    // coverage pass, the uploads and the repairs around them; negative where a method does not
+    // tell them apart. The scheduler learns a texel's cost from it: an edit's frame spent 42 of
+    // its 42 ms "gathering" 54 texels on bumpy_133k_box, half of it the coverage pass, and the
+    // budgets of the frames after it stayed at a quarter of what fits.
+    double texel_gather_ms = -1;
 };
 
 }  // namespace ag

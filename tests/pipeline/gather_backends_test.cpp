@@ -17,6 +17,7 @@
 #include "gpu/hemi_plane_gather.h"
 #include "gpu/lightmap_texture.h"
 #include "gpu/scene_meshes.h"
+#include "gpu/texel_coverage.h"
 #include "shared/charts.h"
 #include "shared/lightmap_sample.h"
 #include "shared/scene_edit.h"
@@ -242,6 +243,37 @@ TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
                 100.0 * worst, 100.0 * std::sqrt(sum_sq / std::max(1, compared)));
     EXPECT_LT(std::sqrt(sum_sq / std::max(1, compared)), 0.0125);
     EXPECT_GT(compared, int(all.size()) * 3 / 4);
+}
+
+// The IIM schedule's screen coverage measured by rays on the CPU (what a CPU-gathering pipeline
+// uses) against the GL raster pass: both look up the lightmap at every pixel centre, so they agree
+// but for pixels on silhouettes and chart edges; and the rays' sums are the same on any thread
+// count.
+TEST_F(GatherAgreementTest, CoverageByRaysMatchesTheRasterPass) {
+    const Scene scene = load_scene(AG_SOURCE_DIR "/scenes/cornell.json");
+    gpu::SceneMeshes meshes(scene);
+    gpu::TexelCoverage raster(scene, meshes, 96, 80, 48);  // counted at 48 × 40
+    const std::vector<float> gl = raster.update();
+    ThreadPool one(1), two(2);
+    cpu::CpuGather gather1(scene, one, nullptr), gather2(scene, two, nullptr);
+    const std::vector<float> rays = gather1.texel_coverage(48, 40);
+    ASSERT_EQ(rays.size(), gl.size());
+    EXPECT_EQ(rays, gather2.texel_coverage(48, 40));
+    const float pixel = 1.0f / (48.0f * 40.0f);
+    const float total_gl = std::accumulate(gl.begin(), gl.end(), 0.0f);
+    const float total_rays = std::accumulate(rays.begin(), rays.end(), 0.0f);
+    EXPECT_NEAR(total_rays, total_gl, 3.0f * pixel);
+    double difference = 0.0;
+    int both = 0, either = 0;
+    for (size_t r = 0; r < gl.size(); ++r) {
+        difference += std::abs(double(gl[r]) - double(rays[r]));
+        both += gl[r] > 0.0f && rays[r] > 0.0f;
+        either += gl[r] > 0.0f || rays[r] > 0.0f;
+    }
+    // Differences only where a pixel centre falls within float error of an edge.
+    EXPECT_LT(difference, 0.01 * total_gl);
+    EXPECT_GT(both, either * 98 / 100);
+    EXPECT_GT(total_gl, 0.5f);
 }
 
 }  // namespace

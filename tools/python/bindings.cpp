@@ -148,6 +148,7 @@ py::dict stats_dict(const PipelineStats& s) {
     d["aim_ms"] = s.aim_ms;
     d["caustic_ms"] = s.caustic_ms;
     d["gather_ms"] = s.gather_ms;
+    d["texel_gather_ms"] = s.texel_gather_ms;
     d["draw_ms"] = s.draw_ms;
     d["wait_ms"] = s.wait_ms;
     d["early_hand_over"] = s.early_hand_over;
