@@ -17,11 +17,13 @@ bool same_view(const Camera& a, const Camera& b) {
 
 IimMethod::IimMethod(const Scene& scene, const gpu::SceneMeshes& meshes,
                      const gpu::LightmapTexture& aim_texture,
-                     const std::vector<glm::vec3>& aim_values, int width, int height)
+                     const std::vector<glm::vec3>& aim_values, int width, int height,
+                     int gather_threads)
     : scene_(scene),
       iim_(scene),
       texture_(scene.atlas),
       gl_gather_(scene, meshes, 256, &aim_texture),
+      cpu_pool_(std::max(1, gather_threads)),
       cpu_gather_(scene, cpu_pool_, &aim_values),
       coverage_(scene, meshes, width, height) {
     backend_ = scene_.settings.gather.backend;

@@ -24,11 +24,11 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
                                                      const std::vector<glm::vec3>& aim_values,
-                                                     int width, int height) {
+                                                     int width, int height, int gather_threads) {
     switch (scene.settings.indirect.method) {
         case IndirectMethodKind::iim:
             return std::make_unique<IimMethod>(scene, meshes, aim_texture, aim_values, width,
-                                               height);
+                                               height, gather_threads);
         case IndirectMethodKind::gpu_pm:
             return std::make_unique<GpuPmMethod>(scene, meshes, width, height);
         case IndirectMethodKind::vpl:
@@ -59,7 +59,8 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     renderer_ = std::make_unique<gpu::FrameRenderer>(scene_, *meshes_, width, height);
     caustics_ = std::make_unique<gpu::CausticsRenderer>(scene_, *meshes_, width, height);
     staged_aim_.assign(size_t(scene_.atlas.width) * size_t(scene_.atlas.height), glm::vec3(0.0f));
-    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_, width, height);
+    indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_, width, height,
+                                     pool_.size());
     uses_photon_maps_ = indirect_->uses_photon_maps();
     if (mode_ == PipelineMode::full_budget) {
         // The baseline knows nothing of what changed: no verification, no moved-object query.

@@ -52,7 +52,7 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
                                                      const gpu::SceneMeshes& meshes,
                                                      const gpu::LightmapTexture& aim_texture,
                                                      const std::vector<glm::vec3>& aim_values,
-                                                     int width, int height);
+                                                     int width, int height, int gather_threads = 1);
 
 class Pipeline {
 public:
