@@ -97,7 +97,7 @@ void FrameScheduler::measure(const PipelineStats& s) {
     // The first frame compiles the shaders (llvmpipe compiles at a program's first draw) and
     // fills the textures: on bumpy_133k_box it drew in 156 ms, every later frame that drew the
     // direct light anew in 27-48 ms, and the edit's frame planned for 156 ms of drawing.
-    const bool first = s.frame <= 1;
+    const bool first = s.frame == 1;
     if ((s.drawn && !first) || !draw_ms_.known()) draw_ms_.add(drawing);
     if (s.drawn_direct && !first) direct_draw_ms_.add(drawing);
     // Only frames that re-traced groups measure a photon's cost: a frame of verification alone
