@@ -518,6 +518,8 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     empty_vao_ = make_vertex_array();
 
     for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
+    for (const Object& o : scene.objects)
+        if (o.material.type == MaterialType::diffuse) diffuse_triangles_ += o.mesh.triangles.size();
     volume_vbo_ = make_buffer();
     volume_vao_ = make_vertex_array();
     gl::BindVertexArray(volume_vao_.get());
@@ -955,7 +957,11 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     if (fresh) update_light_maps(frame_lights);
     // The surface attachments only for a frame that draws the direct light anew (writing them
     // costs a frame of the conference room at 64² a third more).
-    const bool surface = fresh && !forward_direct_;
+    const bool deferred =
+        direct_pass_ == DirectPass::deferred ||
+        (direct_pass_ == DirectPass::automatic &&
+         frame_lights.size() * diffuse_triangles_ > size_t(width_) * size_t(height_));
+    const bool surface = fresh && deferred;
     begin_scene_pass(fbo_.get(), kFrameTermCount + (surface ? int(surface_.size()) : 0), width_,
                      height_, glm::vec4(0, 0, 0, 1));
     if (surface) {
@@ -1014,7 +1020,7 @@ void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
     //    n² samples a frame, n²·k after k frames; once the mean is complete, it is kept.
     if (fresh)
         add_direct_light(frame_lights, view_projection,
-                         GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect), !forward_direct_);
+                         GLenum(GL_COLOR_ATTACHMENT0 + kFrameTermDirect), deferred);
     if (accumulating)
         accumulate(fresh, all_terms);
     else

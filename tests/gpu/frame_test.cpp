@@ -103,7 +103,8 @@ TEST_F(FrameTest, DeferredDirectLightMatchesTheForwardPasses) {
         LightmapTexture iim(scene.atlas);
         auto direct = [&](bool forward) {
             FrameRenderer renderer(scene, meshes, 64, 64);
-            renderer.set_forward_direct(forward);
+            renderer.set_direct_pass(forward ? FrameRenderer::DirectPass::forward
+                                             : FrameRenderer::DirectPass::deferred);
             renderer.render(iim.id());
             return renderer.read_back().aov[size_t(FrameTerm::direct)];
         };
