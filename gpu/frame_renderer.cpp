@@ -296,6 +296,23 @@ void main() {
 }
 )";
 
+// The camera ray's transmittance through the media up to the surface, multiplied into the
+// surface's terms by blending (dst × src; set_volume): pt's components are attenuated so.
+const char* kAttenuateFragment = R"(
+uniform sampler2D transmittance;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+void main() {
+    vec4 t = vec4(texelFetch(transmittance, ivec2(gl_FragCoord.xy), 0).rgb, 1.0);
+    out_direct = t;
+    out_indirect = t;
+    out_caustics = t;
+    out_specular = t;
+}
+)";
+
 // The running mean of the terms: mix(mean, current, weight) per term, weight = 1/frames (the
 // draw buffers choose which terms are written).
 const char* kMeanFragment = R"(
@@ -417,6 +434,9 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     glass_specular_ =
         Program("frame specular through glass", kFullScreenTriangleVertex, kGlassSpecularFragment);
     glass_specular_texture_ = make_float_texture(width, height);
+    attenuate_ =
+        Program("frame media transmittance", kFullScreenTriangleVertex, kAttenuateFragment);
+    transmittance_texture_ = make_float_texture(width, height);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
@@ -950,11 +970,27 @@ void FrameRenderer::accumulate(bool fresh, bool all_terms) {
     gl::Enable(GL_DEPTH_TEST);
 }
 
-void FrameRenderer::set_volume(const Image& volume) {
+void FrameRenderer::set_volume(const Image& volume, const Image& transmittance) {
     volume_rgba_.clear();
+    transmittance_rgba_.clear();
+    const auto frame_sized = [&](const Image& image) {
+        if (image.width != width_ || image.height != height_)
+            throw std::invalid_argument("FrameRenderer::set_volume: the image is not frame-sized");
+    };
+    if (!transmittance.pixels.empty()) {
+        frame_sized(transmittance);
+        transmittance_rgba_.resize(size_t(width_) * size_t(height_));
+        for (int y = 0; y < height_; ++y)
+            for (int x = 0; x < width_; ++x)
+                transmittance_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
+                    glm::vec4(transmittance.rgb(x, y), 1.0f);
+        gl::BindTexture(GL_TEXTURE_2D, transmittance_texture_.get());
+        gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
+                          transmittance_rgba_.data());
+        gl::BindTexture(GL_TEXTURE_2D, 0);
+    }
     if (volume.pixels.empty()) return;
-    if (volume.width != width_ || volume.height != height_)
-        throw std::invalid_argument("FrameRenderer::set_volume: the image is not frame-sized");
+    frame_sized(volume);
     volume_rgba_.resize(size_t(width_) * size_t(height_));
     for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x)
@@ -987,6 +1023,33 @@ void FrameRenderer::compose() {
         gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
         gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
                           volume_rgba_.data());
+    }
+    // The surface's terms dimmed by the media in front of it, after the running mean (which
+    // keeps them undimmed; the transmittance is the same every frame until the method runs
+    // again); the volume term is not (it is what the media add on the way).
+    if (!transmittance_rgba_.empty()) {
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+        GLenum buffers[kFrameTermCount];
+        for (size_t t = 0; t < kFrameTermCount; ++t)
+            buffers[t] =
+                t == size_t(FrameTerm::volume) ? GLenum(GL_NONE) : GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
+        gl::Viewport(0, 0, width_, height_);
+        gl::Disable(GL_DEPTH_TEST);
+        gl::Disable(GL_STENCIL_TEST);
+        gl::Enable(GL_BLEND);
+        gl::BlendEquation(GL_FUNC_ADD);
+        gl::BlendFuncSeparate(GL_ZERO, GL_SRC_COLOR, GL_ZERO, GL_ONE);  // dst × transmittance
+        attenuate_.use();
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, transmittance_texture_.get());
+        attenuate_.set("transmittance", 0);
+        gl::BindVertexArray(empty_vao_.get());
+        gl::DrawArrays(GL_TRIANGLES, 0, 3);
+        gl::Disable(GL_BLEND);
+        gl::Enable(GL_DEPTH_TEST);
+        for (size_t t = 0; t < kFrameTermCount; ++t) buffers[t] = GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
     }
     // Where a media method traced what the camera sees through glass, its term replaces the
     // cube maps' (straight through both interfaces, no media), after the running mean: it is

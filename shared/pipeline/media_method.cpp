@@ -484,24 +484,43 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         camera.height = settings.height;
     }
     start = Clock::now();
-    result.volume = view_media(scene, result, camera, settings);
+    result.volume = view_media(scene, result, camera, settings, &result.transmittance);
     if (settings.through_glass)
         result.specular = view_through_glass(scene, result, camera, settings, &result.glass);
     result.timing.viewing = since(start);
     return result;
 }
 
+// Ratio-tracking estimates averaged per pixel for the camera ray's transmittance in perturbed
+// media (homogeneous ones are exact with one).
+constexpr int kTransmittanceEstimates = 8;
+
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
-                 const MediaMethodSettings& settings) {
+                 const MediaMethodSettings& settings, Image* transmittance) {
     // The view march stops at the first surface the camera ray meets (the volume term's
     // definition; the straight ray, as the frame's other terms see it).
     const cpu::RayTracer rays(scene);
+    const cpu::MediaTracker tracker(scene);
     std::vector<float> max_distance(size_t(camera.width) * size_t(camera.height));
+    if (transmittance) *transmittance = Image(camera.width, camera.height);
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
-            const cpu::RayHit hit = rays.intersect(
-                {camera.eye, camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f)});
-            max_distance[size_t(y) * size_t(camera.width) + size_t(x)] = hit.hit ? hit.t : 1e30f;
+            const cpu::Ray ray{camera.eye,
+                               camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f)};
+            const cpu::RayHit hit = rays.intersect(ray);
+            const size_t i = size_t(y) * size_t(camera.width) + size_t(x);
+            max_distance[i] = hit.hit ? hit.t : 1e30f;
+            if (!transmittance) continue;
+            // What dims the surface the straight camera ray meets, as pt's delta tracking does:
+            // exact in homogeneous media; the mean of kTransmittanceEstimates ratio-tracking
+            // estimates in perturbed ones. Along the straight ray, not the view march's bent one:
+            // near glass the smoothed index bends the march into the glass's absorbing interior.
+            float sum = 0.0f;
+            for (int k = 0; k < kTransmittanceEstimates; ++k) {
+                cpu::HashedStream more(cpu::mix64(i * kTransmittanceEstimates + size_t(k)));
+                sum += tracker.transmittance(ray, max_distance[i], -1, more);
+            }
+            transmittance->set_rgb(x, y, glm::vec3(sum / float(kTransmittanceEstimates)));
         }
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
@@ -630,8 +649,9 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
             const uint64_t key = cpu::mix64(uint64_t(p.y) * uint64_t(camera.width) + uint64_t(p.x));
             const glm::vec3 surface = surface_radiance(
                 scene, rays, tracker, {behind[i].origin, behind[i].direction}, key ^ 2u);
-            seen += leaving[i] * inside[i].transmittance *
-                    (after[i].radiance * media.tint + after[i].transmittance * surface);
+            // `surface` carries the fog's transmittance from the exit to the surface already.
+            seen +=
+                leaving[i] * inside[i].transmittance * (after[i].radiance * media.tint + surface);
         }
         out.set_rgb(p.x, p.y,
                     p.reflected + p.reflectance * reflected[i].radiance * media.tint +
