@@ -14,7 +14,15 @@ namespace {
 
 constexpr int kLightMapUnit = 6;  // direct.method vpl: the light samples' shadow maps
 
-const char* kLightsGlsl = R"(
+// World media boxes the frame's direct light crosses (set_light_uniforms; scenes with more are
+// refused by the FrameRenderer).
+#define AG_FRAME_MEDIA_BOXES 8
+constexpr int kMaxFrameMediaBoxes = AG_FRAME_MEDIA_BOXES;
+#define AG_FRAME_STRINGIFY_(x) #x
+#define AG_FRAME_STRINGIFY(x) AG_FRAME_STRINGIFY_(x)
+
+const char* kLightsGlsl =
+    "const int kMaxMediaBoxes = " AG_FRAME_STRINGIFY(AG_FRAME_MEDIA_BOXES) R"(;
 uniform int light_count;
 uniform vec3 light_position[kMaxLightSamples];
 uniform vec3 light_intensity[kMaxLightSamples];
@@ -22,12 +30,31 @@ uniform vec3 light_normal[kMaxLightSamples];
 uniform int light_one_sided[kMaxLightSamples];
 uniform int light_directional[kMaxLightSamples];
 uniform vec2 light_cone[kMaxLightSamples];
+uniform int media_count;
+uniform vec3 media_min[kMaxMediaBoxes];
+uniform vec3 media_max[kMaxMediaBoxes];
+uniform float media_sigma_t[kMaxMediaBoxes];  // σ_s + σ_a, the mean density (noise left out)
 const float kPi = 3.14159265358979;
+// Beer–Lambert from p along unit l up to distance t_max through the world's media boxes
+// (disjoint, so the optical depths add): what pt's shadow rays see, in closed form.
+float media_transmittance(vec3 p, vec3 l, float t_max) {
+    float depth = 0.0;
+    for (int m = 0; m < media_count; ++m) {
+        vec3 inv = 1.0 / l;
+        vec3 ta = (media_min[m] - p) * inv, tb = (media_max[m] - p) * inv;
+        vec3 lo = min(ta, tb), hi = max(ta, tb);
+        float t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
+        float t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
+        depth += media_sigma_t[m] * max(t1 - t0, 0.0);
+    }
+    return exp(-depth);
+}
 // Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d²
-// (a spot's I times its falloff; a sun: ρ/π · E cosθ).
+// (a spot's I times its falloff; a sun: ρ/π · E cosθ), attenuated by the media on the way.
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
     if (light_directional[i] != 0)
-        return albedo / kPi * light_intensity[i] * max(dot(n, light_position[i]), 0.0);
+        return albedo / kPi * light_intensity[i] * max(dot(n, light_position[i]), 0.0) *
+               media_transmittance(p, normalize(light_position[i]), 1e30);
     vec3 to_light = light_position[i] - p;
     float d2 = max(dot(to_light, to_light), 1e-12);
     vec3 l = to_light * inversesqrt(d2);
@@ -39,7 +66,8 @@ vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
               : clamp((c - light_cone[i].x) / max(light_cone[i].y - light_cone[i].x, 1e-6),
                       0.0, 1.0);
     }
-    return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2;
+    return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2 *
+           media_transmittance(p, l, sqrt(d2));
 }
 )";
 
@@ -405,6 +433,10 @@ std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter) {
 FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     check_light_samples(scene);
+    if (scene.media.size() > size_t(kMaxFrameMediaBoxes))
+        throw std::invalid_argument(
+            scene.path + ": \"media\" has " + std::to_string(scene.media.size()) +
+            " boxes; the GPU frame shades at most " + std::to_string(kMaxFrameMediaBoxes));
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
     gbuffer_specular_ =
         Program("frame g-buffer, mirrors and glass", kSceneVertex, kGbufferSpecularFragment);
@@ -516,6 +548,14 @@ void FrameRenderer::set_light_uniforms(const Program& p,
         p.set(("light_one_sided" + k).c_str(), lights[i].one_sided ? 1 : 0);
         p.set(("light_directional" + k).c_str(), lights[i].directional ? 1 : 0);
         p.set(("light_cone" + k).c_str(), lights[i].cone);
+    }
+    const size_t media = std::min(scene_.media.size(), size_t(kMaxFrameMediaBoxes));  // see ctor
+    p.set("media_count", int(media));
+    for (size_t m = 0; m < media; ++m) {
+        const std::string k = "[" + std::to_string(m) + "]";
+        p.set(("media_min" + k).c_str(), scene_.media[m].bounds.min);
+        p.set(("media_max" + k).c_str(), scene_.media[m].bounds.max);
+        p.set(("media_sigma_t" + k).c_str(), scene_.media[m].sigma_t());
     }
 }
 

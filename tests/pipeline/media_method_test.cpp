@@ -565,6 +565,42 @@ TEST_F(MediaViewTest, PipelineDimsTheSurfacesBehindTheFog) {
     expect_full_frame("after the camera moved");
 }
 
+// The frame's direct light crosses the fog as pt's shadow rays do: `media_fog_floor` (a white
+// floor at the bottom of a fog box, σ_t 0.5, the light 0.5 above the box) has its floor lit
+// through 0.5 to 1.5 units of fog and seen through more. The frame's direct term (48² box-filtered
+// to 24²) against pt's (256 spp): measured mean +0.7%, relMSE 0.0011; without the light's
+// transmittance +76% and relMSE 0.22.
+TEST_F(MediaViewTest, PipelineLightsTheSurfacesThroughTheFog) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_fog_floor.json");
+    scene.settings.gather.backend = GatherBackend::cpu;
+    scene.camera.width = scene.camera.height = 24;
+    cpu::ReferenceSettings reference;
+    reference.spp = 256;
+    reference.volume_bounces = 1;
+    ThreadPool pool(2);
+    const Image pt =
+        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::direct)];
+    MediaMethodSettings settings;
+    settings.grid = 16;
+    settings.photons = 2000;
+    settings.surface_bounces = 0;
+    PipelineOptions options{2 * pt.width, 2 * pt.height};
+    settings.width = options.width;
+    settings.height = options.height;
+    options.media = settings;
+    Pipeline pipeline(scene, options);
+    pipeline.frame();
+    const Image direct = box_downsample(pipeline.images().aov[size_t(FrameTerm::direct)], 2);
+    double sum = 0.0, sum_pt = 0.0;
+    for (float v : direct.pixels) sum += v;
+    for (float v : pt.pixels) sum_pt += v;
+    const double rel_mse = compare_images(direct, pt).rel_mse;
+    std::printf("direct light through the fog against pt: mean %+.4f, relMSE %.4f\n",
+                sum / sum_pt - 1.0, rel_mse);
+    EXPECT_LT(std::abs(sum / sum_pt - 1.0), 0.03);
+    EXPECT_LT(rel_mse, 0.02);
+}
+
 }  // namespace
 
 }  // namespace ag::gpu
