@@ -536,25 +536,49 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
 
 namespace {
 
-// The light a diffuse surface sends back along `ray` to where the ray started: its emission and
-// its albedo/π × the direct irradiance from the scene's lights (shadowed, attenuated by the
-// media), times the media's transmittance on the way. Black where the ray meets nothing, a back
-// face, or another mirror or glass (not followed).
+// Mirrors and glass followed behind the glass (surface_radiance) up to this many bounces; glass
+// splits into its reflected and refracted rays, so at most 2^kBehindGlassBounces paths a pixel.
+constexpr int kBehindGlassBounces = 4;
+
+// The light a surface sends back along `ray` to where the ray started: a diffuse surface's
+// emission and its albedo/π × the direct irradiance from the scene's lights (shadowed,
+// attenuated by the media); a mirror's or glass's, that of the rays it reflects and refracts
+// (Fresnel-weighted, both followed, kBehindGlassBounces deep); times the media's transmittance
+// on the way (`inside`: the glass object the ray travels in, −1 for none). Black where the ray
+// meets nothing or a diffuse back face. Not the fog's single scattering on these rays, nor the
+// surfaces' indirect light.
 glm::vec3 surface_radiance(const Scene& scene, const cpu::RayTracer& rays,
-                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key) {
+                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key,
+                           int inside = -1, int depth = 0) {
     const cpu::RayHit hit = rays.intersect(ray);
     if (!hit.hit) return glm::vec3(0.0f);
     const Object& object = scene.objects[size_t(hit.object)];
-    if (object.material.type != MaterialType::diffuse) return glm::vec3(0.0f);
-    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
     cpu::HashedStream more(key);
+    const float transmittance = tracker.transmittance(ray, hit.t, inside, more);
+    if (object.material.type != MaterialType::diffuse) {
+        if (depth >= kBehindGlassBounces) return glm::vec3(0.0f);
+        const cpu::SpecularSplit split =
+            cpu::specular_split(object.material, hit, ray.direction, rays.epsilon());
+        const uint64_t next = cpu::mix64(key + 0x9e3779b97f4a7c15ull);
+        glm::vec3 radiance =
+            split.reflectance *
+            surface_radiance(scene, rays, tracker, split.reflected, next ^ 1u, inside, depth + 1);
+        if (object.material.type == MaterialType::glass && split.reflectance < 1.0f) {
+            const bool entering = glm::dot(ray.direction, hit.normal) < 0.0f;
+            radiance += (1.0f - split.reflectance) *
+                        surface_radiance(scene, rays, tracker, split.refracted, next ^ 2u,
+                                         entering ? hit.object : -1, depth + 1);
+        }
+        return radiance * transmittance;
+    }
+    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
     glm::vec3 radiance = object.material.emission;
     const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
     if (glm::any(glm::greaterThan(albedo, glm::vec3(0.0f))))
         radiance += albedo / std::numbers::pi_v<float> *
                     cpu::direct_irradiance(scene, rays, hit.position, hit.normal, 16, 0.5f, 0.5f,
                                            &tracker, &more);
-    return radiance * tracker.transmittance(ray, hit.t, -1, more);
+    return radiance * transmittance;
 }
 
 }  // namespace

@@ -6,7 +6,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
+#include <glm/gtc/quaternion.hpp>
 
 #include "../gpu/gl_fixture.h"
 #include "cpu/media_voxelizer.h"
@@ -599,6 +601,72 @@ TEST_F(MediaViewTest, PipelineLightsTheSurfacesThroughTheFog) {
                 sum / sum_pt - 1.0, rel_mse);
     EXPECT_LT(std::abs(sum / sum_pt - 1.0), 0.03);
     EXPECT_LT(rel_mse, 0.02);
+}
+
+// Mirrors behind the glass are followed: `media_glass_checker` with a mirror behind the sphere,
+// turned 45° about y, which sends what the sphere shows to the +x side, where a second emissive
+// checkerboard faces it out of the camera's view. At the pixels the sphere covers whole (all 4 × 4
+// method pixels glass), the method's specular term (128² box-filtered to 32², 64³) against pt's
+// (256 spp). Measured relMSE 0.019; with the mirror black (before) 0.97.
+TEST_F(MediaViewTest, SeesAMirrorBehindTheGlass) {
+    Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_checker.json");
+    const float s = std::sqrt(0.5f);
+    Object mirror;
+    mirror.name = "mirror";
+    mirror.mesh = make_quad(0.7f, 0.7f);
+    mirror.material.type = MaterialType::mirror;
+    // The quad's normal +y turned onto (1, 0, 1)/√2: 90° about (1, 0, −1)/√2.
+    mirror.transform.rotation = glm::angleAxis(glm::radians(90.0f), glm::vec3(s, 0.0f, -s));
+    mirror.transform.translation = {0.0f, 1.1f, -1.0f};
+    scene.objects.push_back(mirror);
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 7; ++j) {
+            Object tile;
+            tile.name = "side_" + std::to_string(i) + "_" + std::to_string(j);
+            tile.mesh = make_quad(0.3f, 0.3f);
+            tile.material.albedo = glm::vec3(0.0f);
+            tile.material.emits_light = false;  // a lamp, as the board's tiles
+            tile.material.emission =
+                (i + j) % 2 ? glm::vec3(2.0f, 1.2f, 0.6f) : glm::vec3(0.6f, 1.2f, 2.0f);
+            // Facing −x: 90° about z.
+            tile.transform.rotation = glm::angleAxis(glm::radians(90.0f), glm::vec3(0, 0, 1));
+            tile.transform.translation = {1.45f, 0.2f + 0.3f * float(j), -1.25f + 0.3f * float(i)};
+            scene.objects.push_back(tile);
+        }
+    scene.version++;
+    cpu::ReferenceSettings settings;
+    settings.spp = 256;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    const Image pt =
+        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::specular)];
+    MediaMethodSettings method;
+    method.grid = 64;
+    method.photons = 5000;
+    method.surface_bounces = 0;
+    method.width = 4 * scene.camera.width;
+    method.height = 4 * scene.camera.height;
+    const MediaMethodResult media = render_media(scene, method);
+    const Image bent = box_downsample(media.specular, 4);
+    Image whole(pt.width, pt.height);  // 1 where all 16 method pixels are glass
+    int covered = 0;
+    for (int y = 0; y < pt.height; ++y)
+        for (int x = 0; x < pt.width; ++x) {
+            bool all = true;
+            for (int v = 0; v < 4; ++v)
+                for (int u = 0; u < 4; ++u)
+                    all =
+                        all &&
+                        media.glass[size_t(4 * y + v) * size_t(method.width) + size_t(4 * x + u)] !=
+                            0;
+            if (all) whole.set_rgb(x, y, glm::vec3(1.0f)), ++covered;
+        }
+    ASSERT_GT(covered, 50);
+    const double rel_mse = compare_images(bent, pt, &whole).rel_mse;
+    const double black = compare_images(Image(pt.width, pt.height), pt, &whole).rel_mse;
+    std::printf("a mirror behind the glass: relMSE %.4f (%d pixels), black %.4f\n", rel_mse,
+                covered, black);
+    EXPECT_LT(rel_mse, 0.05);
 }
 
 }  // namespace
