@@ -14,7 +14,15 @@ namespace {
 
 constexpr int kLightMapUnit = 6;  // direct.method vpl: the light samples' shadow maps
 
-const char* kLightsGlsl = R"(
+// World media boxes the frame's direct light crosses (set_light_uniforms; scenes with more are
+// refused by the FrameRenderer).
+#define AG_FRAME_MEDIA_BOXES 8
+constexpr int kMaxFrameMediaBoxes = AG_FRAME_MEDIA_BOXES;
+#define AG_FRAME_STRINGIFY_(x) #x
+#define AG_FRAME_STRINGIFY(x) AG_FRAME_STRINGIFY_(x)
+
+const char* kLightsGlsl =
+    "const int kMaxMediaBoxes = " AG_FRAME_STRINGIFY(AG_FRAME_MEDIA_BOXES) R"(;
 uniform int light_count;
 uniform vec3 light_position[kMaxLightSamples];
 uniform vec3 light_intensity[kMaxLightSamples];
@@ -22,12 +30,31 @@ uniform vec3 light_normal[kMaxLightSamples];
 uniform int light_one_sided[kMaxLightSamples];
 uniform int light_directional[kMaxLightSamples];
 uniform vec2 light_cone[kMaxLightSamples];
+uniform int media_count;
+uniform vec3 media_min[kMaxMediaBoxes];
+uniform vec3 media_max[kMaxMediaBoxes];
+uniform float media_sigma_t[kMaxMediaBoxes];  // σ_s + σ_a, the mean density (noise left out)
 const float kPi = 3.14159265358979;
+// Beer–Lambert from p along unit l up to distance t_max through the world's media boxes
+// (disjoint, so the optical depths add): what pt's shadow rays see, in closed form.
+float media_transmittance(vec3 p, vec3 l, float t_max) {
+    float depth = 0.0;
+    for (int m = 0; m < media_count; ++m) {
+        vec3 inv = 1.0 / l;
+        vec3 ta = (media_min[m] - p) * inv, tb = (media_max[m] - p) * inv;
+        vec3 lo = min(ta, tb), hi = max(ta, tb);
+        float t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
+        float t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
+        depth += media_sigma_t[m] * max(t1 - t0, 0.0);
+    }
+    return exp(-depth);
+}
 // Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d²
-// (a spot's I times its falloff; a sun: ρ/π · E cosθ).
+// (a spot's I times its falloff; a sun: ρ/π · E cosθ), attenuated by the media on the way.
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
     if (light_directional[i] != 0)
-        return albedo / kPi * light_intensity[i] * max(dot(n, light_position[i]), 0.0);
+        return albedo / kPi * light_intensity[i] * max(dot(n, light_position[i]), 0.0) *
+               media_transmittance(p, normalize(light_position[i]), 1e30);
     vec3 to_light = light_position[i] - p;
     float d2 = max(dot(to_light, to_light), 1e-12);
     vec3 l = to_light * inversesqrt(d2);
@@ -39,7 +66,8 @@ vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {
               : clamp((c - light_cone[i].x) / max(light_cone[i].y - light_cone[i].x, 1e-6),
                       0.0, 1.0);
     }
-    return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2;
+    return albedo / kPi * light_intensity[i] * cos_s * cos_l / d2 *
+           media_transmittance(p, l, sqrt(d2));
 }
 )";
 
@@ -365,6 +393,23 @@ void main() {
 }
 )";
 
+// The camera ray's transmittance through the media up to the surface, multiplied into the
+// surface's terms by blending (dst × src; set_volume): pt's components are attenuated so.
+const char* kAttenuateFragment = R"(
+uniform sampler2D transmittance;
+layout(location = kFrameTermDirect) out vec4 out_direct;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+layout(location = kFrameTermCaustics) out vec4 out_caustics;
+layout(location = kFrameTermSpecular) out vec4 out_specular;
+void main() {
+    vec4 t = vec4(texelFetch(transmittance, ivec2(gl_FragCoord.xy), 0).rgb, 1.0);
+    out_direct = t;
+    out_indirect = t;
+    out_caustics = t;
+    out_specular = t;
+}
+)";
+
 // The running mean of the terms: mix(mean, current, weight) per term, weight = 1/frames (the
 // draw buffers choose which terms are written).
 const char* kMeanFragment = R"(
@@ -457,6 +502,10 @@ std::vector<LightSample> light_samples(const Scene& scene, glm::vec2 jitter) {
 FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int width, int height)
     : scene_(scene), meshes_(meshes), width_(width), height_(height) {
     check_light_samples(scene);
+    if (scene.media.size() > size_t(kMaxFrameMediaBoxes))
+        throw std::invalid_argument(
+            scene.path + ": \"media\" has " + std::to_string(scene.media.size()) +
+            " boxes; the GPU frame shades at most " + std::to_string(kMaxFrameMediaBoxes));
     gbuffer_ = Program("frame g-buffer", kSceneVertex, kGbufferFragment);
     gbuffer_surface_ = Program("frame g-buffer with the surface", kSceneVertex,
                                "#define WRITE_SURFACE\n" + kGbufferFragment);
@@ -509,6 +558,9 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     glass_specular_ =
         Program("frame specular through glass", kFullScreenTriangleVertex, kGlassSpecularFragment);
     glass_specular_texture_ = make_float_texture(width, height);
+    attenuate_ =
+        Program("frame media transmittance", kFullScreenTriangleVertex, kAttenuateFragment);
+    transmittance_texture_ = make_float_texture(width, height);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
@@ -590,6 +642,14 @@ void FrameRenderer::set_light_uniforms(const Program& p,
         p.set(("light_one_sided" + k).c_str(), lights[i].one_sided ? 1 : 0);
         p.set(("light_directional" + k).c_str(), lights[i].directional ? 1 : 0);
         p.set(("light_cone" + k).c_str(), lights[i].cone);
+    }
+    const size_t media = std::min(scene_.media.size(), size_t(kMaxFrameMediaBoxes));  // see ctor
+    p.set("media_count", int(media));
+    for (size_t m = 0; m < media; ++m) {
+        const std::string k = "[" + std::to_string(m) + "]";
+        p.set(("media_min" + k).c_str(), scene_.media[m].bounds.min);
+        p.set(("media_max" + k).c_str(), scene_.media[m].bounds.max);
+        p.set(("media_sigma_t" + k).c_str(), scene_.media[m].sigma_t());
     }
 }
 
@@ -1092,11 +1152,27 @@ void FrameRenderer::accumulate(bool fresh, bool all_terms) {
     gl::Enable(GL_DEPTH_TEST);
 }
 
-void FrameRenderer::set_volume(const Image& volume) {
+void FrameRenderer::set_volume(const Image& volume, const Image& transmittance) {
     volume_rgba_.clear();
+    transmittance_rgba_.clear();
+    const auto frame_sized = [&](const Image& image) {
+        if (image.width != width_ || image.height != height_)
+            throw std::invalid_argument("FrameRenderer::set_volume: the image is not frame-sized");
+    };
+    if (!transmittance.pixels.empty()) {
+        frame_sized(transmittance);
+        transmittance_rgba_.resize(size_t(width_) * size_t(height_));
+        for (int y = 0; y < height_; ++y)
+            for (int x = 0; x < width_; ++x)
+                transmittance_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
+                    glm::vec4(transmittance.rgb(x, y), 1.0f);
+        gl::BindTexture(GL_TEXTURE_2D, transmittance_texture_.get());
+        gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
+                          transmittance_rgba_.data());
+        gl::BindTexture(GL_TEXTURE_2D, 0);
+    }
     if (volume.pixels.empty()) return;
-    if (volume.width != width_ || volume.height != height_)
-        throw std::invalid_argument("FrameRenderer::set_volume: the image is not frame-sized");
+    frame_sized(volume);
     volume_rgba_.resize(size_t(width_) * size_t(height_));
     for (int y = 0; y < height_; ++y)
         for (int x = 0; x < width_; ++x)
@@ -1129,6 +1205,33 @@ void FrameRenderer::compose() {
         gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
         gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
                           volume_rgba_.data());
+    }
+    // The surface's terms dimmed by the media in front of it, after the running mean (which
+    // keeps them undimmed; the transmittance is the same every frame until the method runs
+    // again); the volume term is not (it is what the media add on the way).
+    if (!transmittance_rgba_.empty()) {
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+        GLenum buffers[kFrameTermCount];
+        for (size_t t = 0; t < kFrameTermCount; ++t)
+            buffers[t] =
+                t == size_t(FrameTerm::volume) ? GLenum(GL_NONE) : GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
+        gl::Viewport(0, 0, width_, height_);
+        gl::Disable(GL_DEPTH_TEST);
+        gl::Disable(GL_STENCIL_TEST);
+        gl::Enable(GL_BLEND);
+        gl::BlendEquation(GL_FUNC_ADD);
+        gl::BlendFuncSeparate(GL_ZERO, GL_SRC_COLOR, GL_ZERO, GL_ONE);  // dst × transmittance
+        attenuate_.use();
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, transmittance_texture_.get());
+        attenuate_.set("transmittance", 0);
+        gl::BindVertexArray(empty_vao_.get());
+        gl::DrawArrays(GL_TRIANGLES, 0, 3);
+        gl::Disable(GL_BLEND);
+        gl::Enable(GL_DEPTH_TEST);
+        for (size_t t = 0; t < kFrameTermCount; ++t) buffers[t] = GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
     }
     // Where a media method traced what the camera sees through glass, its term replaces the
     // cube maps' (straight through both interfaces, no media), after the running mean: it is

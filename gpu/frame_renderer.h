@@ -79,7 +79,10 @@ public:
     FrameImages read_back() const;  // rows top-first, linear radiance
     // The `volume` term from a media method (rows top-first, width × height), composed into
     // every later frame; an empty image sets it back to zero (the frame has no media of its own).
-    void set_volume(const Image& volume);
+    // `transmittance` (the same size, or empty for none): each pixel's camera-ray transmittance
+    // up to the surface it meets, which attenuates the other four terms, as in pt's components
+    // (the term through glass, set_specular_through_glass, carries its own).
+    void set_volume(const Image& volume, const Image& transmittance = Image());
     // A media method's `specular` term (rows top-first, width × height) at the pixels where
     // `covered` (row-major, top-first) is set — those whose camera ray meets glass first, traced
     // through the smoothed index and the fog — in place of the cube maps' term there, in every
@@ -163,6 +166,11 @@ private:
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
     std::vector<glm::vec4> volume_rgba_;        // set_volume's term, rows bottom-first
+    // set_volume's transmittance (rows bottom-first; empty: none), its texture and the pass that
+    // multiplies the terms by it.
+    std::vector<glm::vec4> transmittance_rgba_;
+    Texture transmittance_texture_;
+    Program attenuate_;
     // set_specular_through_glass's term (alpha: covered), rows bottom-first, and its texture.
     std::vector<glm::vec4> glass_specular_rgba_;
     Texture glass_specular_texture_;

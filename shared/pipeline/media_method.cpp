@@ -484,24 +484,43 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         camera.height = settings.height;
     }
     start = Clock::now();
-    result.volume = view_media(scene, result, camera, settings);
+    result.volume = view_media(scene, result, camera, settings, &result.transmittance);
     if (settings.through_glass)
         result.specular = view_through_glass(scene, result, camera, settings, &result.glass);
     result.timing.viewing = since(start);
     return result;
 }
 
+// Ratio-tracking estimates averaged per pixel for the camera ray's transmittance in perturbed
+// media (homogeneous ones are exact with one).
+constexpr int kTransmittanceEstimates = 8;
+
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
-                 const MediaMethodSettings& settings) {
+                 const MediaMethodSettings& settings, Image* transmittance) {
     // The view march stops at the first surface the camera ray meets (the volume term's
     // definition; the straight ray, as the frame's other terms see it).
     const cpu::RayTracer rays(scene);
+    const cpu::MediaTracker tracker(scene);
     std::vector<float> max_distance(size_t(camera.width) * size_t(camera.height));
+    if (transmittance) *transmittance = Image(camera.width, camera.height);
     for (int y = 0; y < camera.height; ++y)
         for (int x = 0; x < camera.width; ++x) {
-            const cpu::RayHit hit = rays.intersect(
-                {camera.eye, camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f)});
-            max_distance[size_t(y) * size_t(camera.width) + size_t(x)] = hit.hit ? hit.t : 1e30f;
+            const cpu::Ray ray{camera.eye,
+                               camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f)};
+            const cpu::RayHit hit = rays.intersect(ray);
+            const size_t i = size_t(y) * size_t(camera.width) + size_t(x);
+            max_distance[i] = hit.hit ? hit.t : 1e30f;
+            if (!transmittance) continue;
+            // What dims the surface the straight camera ray meets, as pt's delta tracking does:
+            // exact in homogeneous media; the mean of kTransmittanceEstimates ratio-tracking
+            // estimates in perturbed ones. Along the straight ray, not the view march's bent one:
+            // near glass the smoothed index bends the march into the glass's absorbing interior.
+            float sum = 0.0f;
+            for (int k = 0; k < kTransmittanceEstimates; ++k) {
+                cpu::HashedStream more(cpu::mix64(i * kTransmittanceEstimates + size_t(k)));
+                sum += tracker.transmittance(ray, max_distance[i], -1, more);
+            }
+            transmittance->set_rgb(x, y, glm::vec3(sum / float(kTransmittanceEstimates)));
         }
     gpu::MediaViewSettings view;
     view.step = settings.view_step;
@@ -517,25 +536,49 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
 
 namespace {
 
-// The light a diffuse surface sends back along `ray` to where the ray started: its emission and
-// its albedo/π × the direct irradiance from the scene's lights (shadowed, attenuated by the
-// media), times the media's transmittance on the way. Black where the ray meets nothing, a back
-// face, or another mirror or glass (not followed).
+// Mirrors and glass followed behind the glass (surface_radiance) up to this many bounces; glass
+// splits into its reflected and refracted rays, so at most 2^kBehindGlassBounces paths a pixel.
+constexpr int kBehindGlassBounces = 4;
+
+// The light a surface sends back along `ray` to where the ray started: a diffuse surface's
+// emission and its albedo/π × the direct irradiance from the scene's lights (shadowed,
+// attenuated by the media); a mirror's or glass's, that of the rays it reflects and refracts
+// (Fresnel-weighted, both followed, kBehindGlassBounces deep); times the media's transmittance
+// on the way (`inside`: the glass object the ray travels in, −1 for none). Black where the ray
+// meets nothing or a diffuse back face. Not the fog's single scattering on these rays, nor the
+// surfaces' indirect light.
 glm::vec3 surface_radiance(const Scene& scene, const cpu::RayTracer& rays,
-                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key) {
+                           const cpu::MediaTracker& tracker, const cpu::Ray& ray, uint64_t key,
+                           int inside = -1, int depth = 0) {
     const cpu::RayHit hit = rays.intersect(ray);
     if (!hit.hit) return glm::vec3(0.0f);
     const Object& object = scene.objects[size_t(hit.object)];
-    if (object.material.type != MaterialType::diffuse) return glm::vec3(0.0f);
-    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
     cpu::HashedStream more(key);
+    const float transmittance = tracker.transmittance(ray, hit.t, inside, more);
+    if (object.material.type != MaterialType::diffuse) {
+        if (depth >= kBehindGlassBounces) return glm::vec3(0.0f);
+        const cpu::SpecularSplit split =
+            cpu::specular_split(object.material, hit, ray.direction, rays.epsilon());
+        const uint64_t next = cpu::mix64(key + 0x9e3779b97f4a7c15ull);
+        glm::vec3 radiance =
+            split.reflectance *
+            surface_radiance(scene, rays, tracker, split.reflected, next ^ 1u, inside, depth + 1);
+        if (object.material.type == MaterialType::glass && split.reflectance < 1.0f) {
+            const bool entering = glm::dot(ray.direction, hit.normal) < 0.0f;
+            radiance += (1.0f - split.reflectance) *
+                        surface_radiance(scene, rays, tracker, split.refracted, next ^ 2u,
+                                         entering ? hit.object : -1, depth + 1);
+        }
+        return radiance * transmittance;
+    }
+    if (glm::dot(ray.direction, hit.normal) >= 0.0f) return glm::vec3(0.0f);
     glm::vec3 radiance = object.material.emission;
     const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
     if (glm::any(glm::greaterThan(albedo, glm::vec3(0.0f))))
         radiance += albedo / std::numbers::pi_v<float> *
                     cpu::direct_irradiance(scene, rays, hit.position, hit.normal, 16, 0.5f, 0.5f,
                                            &tracker, &more);
-    return radiance * tracker.transmittance(ray, hit.t, -1, more);
+    return radiance * transmittance;
 }
 
 }  // namespace
@@ -630,8 +673,9 @@ Image view_through_glass(const Scene& scene, const MediaMethodResult& media, con
             const uint64_t key = cpu::mix64(uint64_t(p.y) * uint64_t(camera.width) + uint64_t(p.x));
             const glm::vec3 surface = surface_radiance(
                 scene, rays, tracker, {behind[i].origin, behind[i].direction}, key ^ 2u);
-            seen += leaving[i] * inside[i].transmittance *
-                    (after[i].radiance * media.tint + after[i].transmittance * surface);
+            // `surface` carries the fog's transmittance from the exit to the surface already.
+            seen +=
+                leaving[i] * inside[i].transmittance * (after[i].radiance * media.tint + surface);
         }
         out.set_rgb(p.x, p.y,
                     p.reflected + p.reflectance * reflected[i].radiance * media.tint +

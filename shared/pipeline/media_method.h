@@ -85,6 +85,9 @@ struct MediaMethodTiming {
 
 struct MediaMethodResult {
     Image volume;  // the `volume` frame term: single scattering before the first surface
+    // Per pixel of `volume`, the camera ray's transmittance up to that surface (the view
+    // march's): what the frame's other terms are attenuated by, as pt's are.
+    Image transmittance;
     // The `specular` frame term at the pixels whose camera ray meets glass first (black
     // elsewhere; view_through_glass), where settings.through_glass.
     Image specular;
@@ -123,8 +126,9 @@ Image media_slice_view(const MediaMethodResult& media, MediaField field, int axi
 
 // The view march alone (ch. 3.1.6) through `grids` lit as `media` holds them, for `camera` at
 // its resolution: what a camera move needs (the photons stay as they are). Needs a GL context.
+// `transmittance`, where given, gets each pixel's transmittance up to the first surface.
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
-                 const MediaMethodSettings& settings);
+                 const MediaMethodSettings& settings, Image* transmittance = nullptr);
 
 // What the camera sees through the glass (his viewing pass behind the refractive object,
 // ch. 3.1.6): at each pixel whose camera ray meets glass first, the Fresnel reflection there, and

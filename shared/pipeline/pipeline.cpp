@@ -88,13 +88,14 @@ void Pipeline::update_media() {
         if (scene_changed) {
             media_ = std::make_unique<MediaMethodResult>(render_media(scene_, media_settings_));
         } else {
-            media_->volume = view_media(scene_, *media_, camera, media_settings_);
+            media_->volume =
+                view_media(scene_, *media_, camera, media_settings_, &media_->transmittance);
             if (media_settings_.through_glass)
                 media_->specular =
                     view_through_glass(scene_, *media_, camera, media_settings_, &media_->glass);
         }
         media_failed_ = false;
-        renderer_->set_volume(media_->volume);
+        renderer_->set_volume(media_->volume, media_->transmittance);
         renderer_->set_specular_through_glass(media_->specular, media_->glass);
     } catch (const std::invalid_argument& e) {
         // Media without a light the method can use (a light switched off in the viewer): no

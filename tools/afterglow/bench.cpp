@@ -146,6 +146,11 @@ const Command kBenchCommand{
              "'gpu_pm': time the method alone (no direct light or compose; no frame metrics)"),
         integer("grid", "N", "'media': voxels along the grid's longest side (default 64)", 4, 512),
         flag("full", "'media': a 128^3 grid (his), one more photon count each, Tables 4.3/4.4"),
+        integer("seeds", "N",
+                "'media': each adaptive row of the equal-RMSE curve at seeds 0..N-1 (pilot jitter, "
+                "Hammersley rotation), its RMSE the root mean square over them (default 1)",
+                1, 256),
+        flag("curve-only", "'media': the equal-RMSE curve alone (no Tables 4.1-4.5, no octree)"),
         flag("versus-cpu",
              "'irradiance_cache': Gautron's Table 4.2 without Radiance: one frame by a CPU "
              "irradiance cache in Radiance's manner (eye rays, octree lookups, records on a miss) "
