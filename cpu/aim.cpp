@@ -357,8 +357,23 @@ Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
     const Chart& chart = atlas.charts[size_t(t.chart)];
     DiscPart part;
     // Past the chart's edge a surface of several charts may go on in another chart (elsewhere in
-    // the atlas): there the disc is taken to lie on the surface.
-    if (scene_.surfaces[size_t(t.surface)].charts.size() != 1) return part;
+    // the atlas): there the disc is taken to lie on the surface. The parts of one tiled chart
+    // (lightmap.refine_tile) share its plane, so the disc is tested on each of them.
+    const std::vector<int>& surface_charts = scene_.surfaces[size_t(t.surface)].charts;
+    const bool tiled = chart.tile_group >= 0 &&
+                       std::all_of(surface_charts.begin(), surface_charts.end(), [&](int c) {
+                           return atlas.charts[size_t(c)].tile_group == chart.tile_group;
+                       });
+    if (surface_charts.size() != 1 && !tiled) return part;
+    const auto on_surface = [&](const glm::vec3& p) {
+        if (on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) return true;
+        if (!tiled) return false;
+        for (int c : surface_charts)
+            if (c != t.chart &&
+                on_chart(atlas, coverage_, c, chart_atlas_position(atlas.charts[size_t(c)], p)))
+                return true;
+        return false;
+    };
     const glm::vec3 n = t.normal;
     const glm::vec3 a = std::abs(n.x) > 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1, 0, 0);
     part.b1 = glm::normalize(a - n * glm::dot(n, a));
@@ -368,7 +383,7 @@ Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
     glm::dmat2 second(0.0);
     for (const glm::vec2& s : disc_pattern()) {
         const glm::vec3 p = t.position + float(radius) * (s.x * part.b1 + s.y * part.b2);
-        if (!on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) continue;
+        if (!on_surface(p)) continue;
         ++on;
         const glm::dvec2 u(s);
         first += u;

@@ -10,10 +10,12 @@
 #include <cstdint>
 #include <cstdio>
 #include <limits>
+#include <map>
 #include <numbers>
 #include <numeric>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -30,6 +32,9 @@ constexpr double kDegree = std::numbers::pi / 180.0;
 // A texel belongs to a chart if its square overlaps chart triangles by more than this (texel²);
 // anything smaller is a rounding sliver along a texel line.
 constexpr double kMinCoverage = 1e-9;
+// The same for the parts of a tiled chart (cut_contact_tiles): their seam lies on a texel edge up
+// to the rounding of the split vertices (~1e-6 texel), which must not make a texel of its own.
+constexpr double kMinTileCoverage = 1e-4;
 // Snapped texel centres move this fraction of the way to the triangle's centroid, so they sit
 // strictly inside a chart triangle rather than on an edge shared with a crease (ch. 8, 11).
 constexpr double kSnapNudge = 1e-3;
@@ -682,7 +687,8 @@ void make_chart_texels(const Mesh& mesh, const TriangleInfo& info, const Chart& 
     for (int y = 0; y < h; ++y)
         for (int x = 0; x < w; ++x) {
             const size_t i = size_t(y) * size_t(w) + size_t(x);
-            if (!(coverage[i] > kMinCoverage)) continue;
+            if (!(coverage[i] > (chart.tile_group >= 0 ? kMinTileCoverage : kMinCoverage)))
+                continue;
             const int t = best_triangle[i];
             glm::dvec3 weights = best_weights[i];
             // Centres outside the chart, or exactly on an edge (a half-covered texel along a
@@ -733,6 +739,371 @@ int pack_shelves(const std::vector<glm::ivec2>& sizes, const std::vector<int>& o
 
 int round_up(int value, int multiple) { return (value + multiple - 1) / multiple * multiple; }
 
+// ---- Density within a chart (lightmap.refine_tile) ----
+
+// What a vertex of a triangle piece lies on: an edge of the original mesh (its two vertex
+// indices, ascending) or a cut line (axis 0 = u, 1 = v, and its index along the axis).
+struct Carrier {
+    enum Kind : int { kEdge, kLine } kind = kEdge;
+    int a = -1, b = -1;
+    bool operator==(const Carrier&) const = default;
+};
+
+struct PieceVertex {
+    uint32_t index = 0;       // into the mesh's positions
+    glm::dvec2 uv{0.0};       // chart-plane coordinates, object units
+    glm::dvec3 weights{0.0};  // barycentric weights in the original triangle (texcoords)
+    std::array<Carrier, 2> on{};
+    int on_count = 0;
+
+    bool lies_on(const Carrier& c) const {
+        for (int i = 0; i < on_count; ++i)
+            if (on[size_t(i)] == c) return true;
+        return false;
+    }
+};
+
+// Splits one object's chart triangles along cut lines, sharing every new vertex between the
+// pieces on both sides of a cut (the point where a line crosses a mesh edge is made once, from
+// the edge's end points in a fixed order), so the split mesh is as watertight as the original.
+class TriangleSplitter {
+public:
+    TriangleSplitter(Mesh& mesh, const Frame& frame, glm::dvec2 origin, double cell)
+        : mesh_(mesh), frame_(frame), origin_(origin), cell_(cell) {}
+
+    // The convex pieces of triangle `t` cut by the lines u = origin.x + k·cell and v =
+    // origin.y + k·cell that cross it.
+    std::vector<std::vector<PieceVertex>> split(int t) {
+        const glm::uvec3 f = mesh_.triangles[size_t(t)];
+        std::vector<PieceVertex> corners(3);
+        glm::dvec2 lo(1e300), hi(-1e300);
+        for (int k = 0; k < 3; ++k) {
+            PieceVertex& v = corners[size_t(k)];
+            v.index = f[k];
+            v.uv = uv_of(f[k]);
+            v.weights[k] = 1.0;
+            v.on = {edge(f[k], f[(k + 1) % 3]), edge(f[(k + 2) % 3], f[k])};
+            v.on_count = 2;
+            lo = glm::min(lo, v.uv);
+            hi = glm::max(hi, v.uv);
+        }
+        std::vector<std::vector<PieceVertex>> pieces{corners}, next;
+        for (int axis = 0; axis < 2; ++axis) {
+            const int k0 = int(std::floor((lo[axis] - origin_[axis]) / cell_)) + 1;
+            const int k1 = int(std::ceil((hi[axis] - origin_[axis]) / cell_)) - 1;
+            for (int k = k0; k <= k1; ++k) {
+                next.clear();
+                for (const std::vector<PieceVertex>& piece : pieces) cut(t, piece, axis, k, next);
+                pieces.swap(next);
+            }
+        }
+        return pieces;
+    }
+
+private:
+    static Carrier edge(uint32_t a, uint32_t b) {
+        return {Carrier::kEdge, int(std::min(a, b)), int(std::max(a, b))};
+    }
+    glm::dvec2 uv_of(uint32_t index) const { return frame_.project(mesh_.positions[index]); }
+    double line_value(int axis, int k) const { return origin_[axis] + double(k) * cell_; }
+
+    // Adds the parts of `piece` on either side of line (axis, k) to `out`.
+    void cut(int t, const std::vector<PieceVertex>& piece, int axis, int k,
+             std::vector<std::vector<PieceVertex>>& out) {
+        const Carrier line{Carrier::kLine, axis, k};
+        const double c = line_value(axis, k);
+        const size_t n = piece.size();
+        std::vector<double> side(n);
+        bool below = false, above = false;
+        for (size_t i = 0; i < n; ++i) {
+            side[i] = piece[i].lies_on(line) ? 0.0 : piece[i].uv[axis] - c;
+            below = below || side[i] < 0.0;
+            above = above || side[i] > 0.0;
+        }
+        if (!(below && above)) {
+            out.push_back(piece);
+            return;
+        }
+        std::vector<PieceVertex> left, right;
+        for (size_t i = 0; i < n; ++i) {
+            const PieceVertex &p = piece[i], &q = piece[(i + 1) % n];
+            const double sp = side[i], sq = side[(i + 1) % n];
+            if (sp <= 0.0) left.push_back(p);
+            if (sp >= 0.0) right.push_back(p);
+            if ((sp < 0.0 && sq > 0.0) || (sp > 0.0 && sq < 0.0)) {
+                const PieceVertex x = crossing(t, p, q, line);
+                left.push_back(x);
+                right.push_back(x);
+            }
+        }
+        for (std::vector<PieceVertex>* part : {&left, &right})
+            if (part->size() >= 3) out.push_back(std::move(*part));
+    }
+
+    // Where segment p–q of a piece crosses `line`. The segment lies on a mesh edge or on an
+    // earlier cut line; either names the new vertex, so both sides of the cut get the same one.
+    PieceVertex crossing(int t, const PieceVertex& p, const PieceVertex& q, const Carrier& line) {
+        const int axis = line.a;
+        const double c = line_value(axis, line.b);
+        std::optional<Carrier> common;
+        for (int i = 0; i < p.on_count && !common; ++i)
+            if (q.lies_on(p.on[size_t(i)])) common = p.on[size_t(i)];
+        PieceVertex x;
+        x.on[0] = line;
+        x.on_count = 1;
+        const glm::uvec3 f = mesh_.triangles[size_t(t)];
+        const auto weights_of = [&](uint32_t index) {
+            glm::dvec3 w(0.0);
+            for (int k = 0; k < 3; ++k)
+                if (f[k] == index) w[k] = 1.0;
+            return w;
+        };
+        if (common && common->kind == Carrier::kEdge) {
+            const std::array<int64_t, 5> key{0, common->a, common->b, axis, line.b};
+            // The edge's end points in a fixed order (by position, then index), so a triangle
+            // on the other side of the edge computes the same point bit for bit.
+            uint32_t a = uint32_t(common->a), b = uint32_t(common->b);
+            const glm::vec3 pa = mesh_.positions[a], pb = mesh_.positions[b];
+            if (std::tie(pb.x, pb.y, pb.z) < std::tie(pa.x, pa.y, pa.z)) std::swap(a, b);
+            const double ua = uv_of(a)[axis], ub = uv_of(b)[axis];
+            const double s = std::clamp((c - ua) / (ub - ua), 0.0, 1.0);
+            const glm::dvec3 pos =
+                glm::mix(glm::dvec3(mesh_.positions[a]), glm::dvec3(mesh_.positions[b]), s);
+            x.index = vertex(key, pos);
+            x.uv = frame_.project(mesh_.positions[x.index]);
+            x.weights = glm::mix(weights_of(a), weights_of(b), s);
+            x.on[1] = *common;
+            x.on_count = 2;
+            return x;
+        }
+        // Inside the triangle: the corner of two cut lines (or, failing a common carrier, the
+        // point on p–q), made from the original triangle so its pieces share it.
+        const double s = std::clamp((c - p.uv[axis]) / (q.uv[axis] - p.uv[axis]), 0.0, 1.0);
+        glm::dvec3 w = glm::mix(p.weights, q.weights, s);
+        std::array<int64_t, 5> key{2, t, int64_t(p.index), int64_t(q.index), line.b};
+        if (common && common->kind == Carrier::kLine && common->a != axis) {
+            const glm::dvec2 target = axis == 0 ? glm::dvec2(c, line_value(1, common->b))
+                                                : glm::dvec2(line_value(0, common->b), c);
+            const glm::dvec2 a = uv_of(f.x), b = uv_of(f.y), d = uv_of(f.z);
+            const double det = cross2(b - a, d - a);
+            if (std::abs(det) > 0.0) {
+                const double wb = cross2(target - a, d - a) / det;
+                const double wd = cross2(b - a, target - a) / det;
+                w = {1.0 - wb - wd, wb, wd};
+            }
+            key = {1, t, axis == 0 ? line.b : common->b, axis == 0 ? common->b : line.b, 0};
+            x.on[1] = *common;
+            x.on_count = 2;
+        }
+        const glm::dvec3 pos = w.x * glm::dvec3(mesh_.positions[f.x]) +
+                               w.y * glm::dvec3(mesh_.positions[f.y]) +
+                               w.z * glm::dvec3(mesh_.positions[f.z]);
+        x.index = vertex(key, pos);
+        x.uv = frame_.project(mesh_.positions[x.index]);
+        x.weights = w;
+        return x;
+    }
+
+    uint32_t vertex(const std::array<int64_t, 5>& key, const glm::dvec3& pos) {
+        const auto [it, inserted] = made_.try_emplace(key, uint32_t(mesh_.positions.size()));
+        if (inserted) mesh_.positions.push_back(glm::vec3(pos));
+        return it->second;
+    }
+
+    Mesh& mesh_;
+    const Frame& frame_;
+    glm::dvec2 origin_;
+    double cell_;
+    std::map<std::array<int64_t, 5>, uint32_t> made_;
+};
+
+// Cuts every chart that touches a partner (texel_density.h) along its base texel grid into
+// tiles of `refine_tile` base texels, where at most half of its tiles are near the partner and it
+// is at least 4 tiles across; the
+// tiles with a sample point near the partner (and not under it: the floor beneath a box needs no
+// finer texels), grouped
+// into 4-connected patches, become charts of their own laid out exactly on that grid (so the
+// subdivision can refine them), the rest stays the original chart at the base size. The
+// chart's triangles are split along the patches' tile edges (new triangles are appended to the
+// object's mesh; the first piece keeps the original's index). Objects whose material emits are
+// left whole (their mesh lights were made from their triangles).
+void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
+                       std::vector<ChartLayout>& layouts, double texel_size) {
+    const LightmapSettings& ls = scene.settings.lightmap;
+    LightmapAtlas& atlas = scene.atlas;
+    const int tile = ls.refine_tile;
+    const double cell = double(tile) * texel_size;
+    std::vector<uint8_t> touched(scene.objects.size(), 0);
+    const int original_count = int(atlas.charts.size());
+    for (int c = 0; c < original_count; ++c) {
+        const int oi = atlas.charts[size_t(c)].object;
+        Object& object = scene.objects[size_t(oi)];
+        const glm::vec3& e = object.material.emission;
+        if (std::max({e.x, e.y, e.z}) > 0.0f) continue;
+        const glm::dvec2 origin = chart_layout_origin(layouts[size_t(c)], texel_size);
+        const glm::ivec2 texels = chart_layout_texels(layouts[size_t(c)], texel_size);
+        const int nx = (texels.x + tile - 1) / tile, ny = (texels.y + tile - 1) / tile;
+        // The chart's own (float) axes, as its layout was measured with.
+        Frame frame{glm::dvec3(atlas.charts[size_t(c)].axis)};
+        frame.u = glm::dvec3(atlas.charts[size_t(c)].u_axis);
+        frame.v = glm::dvec3(atlas.charts[size_t(c)].v_axis);
+        const auto cell_of = [&](glm::dvec2 uv) {
+            const glm::ivec2 i(glm::floor((uv - origin) / cell));
+            return glm::clamp(i, glm::ivec2(0), glm::ivec2(nx - 1, ny - 1));
+        };
+        // 0 = no chart here, 1 = chart, 2 = near a partner.
+        std::vector<uint8_t> state(size_t(nx) * size_t(ny), 0);
+        bool covered_only = true;
+        for_each_contact_sample(scene, atlas.charts[size_t(c)],
+                                double(ls.refine_distance) * texel_size, 0.25 * texel_size,
+                                [&](const glm::dvec3& p, double, bool near, bool covered) {
+                                    covered_only = covered_only && covered;
+                                    const glm::ivec2 i = cell_of(frame.project(glm::vec3(p)));
+                                    uint8_t& s = state[size_t(i.y) * size_t(nx) + size_t(i.x)];
+                                    s = std::max(s, uint8_t(near && !covered ? 2 : 1));
+                                });
+        const auto near_cells = std::count(state.begin(), state.end(), uint8_t(2));
+        if (near_cells == 0 && covered_only) {
+            layouts[size_t(c)].keep_base = true;  // wholly under a partner (a box's bottom)
+            continue;
+        }
+        // No contact, most of the chart near it, or a chart under 4 tiles across: the whole-chart
+        // rule decides. (Cutting a small chart, a box's side, would save a few texels for a
+        // seam across a face in plain view.)
+        const auto occupied =
+            std::count_if(state.begin(), state.end(), [](uint8_t s) { return s > 0; });
+        if (near_cells == 0 || 2 * near_cells > occupied || std::max(nx, ny) < 4) continue;
+
+        // Patches: 4-connected near cells, numbered in scan order.
+        std::vector<int> patch(state.size(), -1);
+        std::vector<glm::ivec4> bounds;  // per patch: x0, y0, x1, y1 in cells
+        for (int start = 0; start < int(state.size()); ++start) {
+            if (state[size_t(start)] != 2 || patch[size_t(start)] >= 0) continue;
+            const int id = int(bounds.size());
+            bounds.emplace_back(nx, ny, -1, -1);
+            std::vector<int> stack{start};
+            patch[size_t(start)] = id;
+            while (!stack.empty()) {
+                const int i = stack.back();
+                stack.pop_back();
+                const int x = i % nx, y = i / nx;
+                bounds[size_t(id)] = {
+                    std::min(bounds[size_t(id)].x, x), std::min(bounds[size_t(id)].y, y),
+                    std::max(bounds[size_t(id)].z, x), std::max(bounds[size_t(id)].w, y)};
+                const int around[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+                for (const auto& d : around) {
+                    const int ax = x + d[0], ay = y + d[1];
+                    if (ax < 0 || ay < 0 || ax >= nx || ay >= ny) continue;
+                    const int j = ay * nx + ax;
+                    if (state[size_t(j)] != 2 || patch[size_t(j)] >= 0) continue;
+                    patch[size_t(j)] = id;
+                    stack.push_back(j);
+                }
+            }
+        }
+
+        // Split the chart's triangles and sort the pieces into the rest and the patches.
+        if (scene.unsplit_meshes[size_t(oi)].triangles.empty())
+            scene.unsplit_meshes[size_t(oi)] = object.mesh;
+        touched[size_t(oi)] = 1;
+        Mesh& mesh = object.mesh;
+        const int surface_id = atlas.charts[size_t(c)].surface;
+        TriangleSplitter splitter(mesh, frame, origin, cell);
+        std::vector<int> rest;
+        std::vector<std::vector<int>> parts(bounds.size());
+        const std::vector<int> members = atlas.charts[size_t(c)].triangles;
+        for (int t : members) {
+            const std::vector<std::vector<PieceVertex>> pieces = splitter.split(t);
+            std::vector<glm::vec2> original_uv;
+            if (mesh.has_texcoords())
+                original_uv.assign(mesh.texcoords.begin() + std::ptrdiff_t(3 * size_t(t)),
+                                   mesh.texcoords.begin() + std::ptrdiff_t(3 * size_t(t) + 3));
+            bool first = true;
+            for (const std::vector<PieceVertex>& piece : pieces) {
+                // Pieces with more than three corners are fanned around their centroid (a
+                // corner fan would make slivers where corners lie on one cut line).
+                std::vector<PieceVertex> ring = piece;
+                glm::dvec2 centre_uv(0.0);
+                for (const PieceVertex& v : ring) centre_uv += v.uv;
+                centre_uv /= double(ring.size());
+                std::vector<std::array<PieceVertex, 3>> triangles;
+                if (ring.size() == 3) {
+                    triangles.push_back({ring[0], ring[1], ring[2]});
+                } else {
+                    PieceVertex centre;
+                    glm::dvec3 pos(0.0);
+                    for (const PieceVertex& v : ring) {
+                        pos += glm::dvec3(mesh.positions[v.index]);
+                        centre.weights += v.weights;
+                    }
+                    centre.index = uint32_t(mesh.positions.size());
+                    mesh.positions.push_back(glm::vec3(pos / double(ring.size())));
+                    centre.weights /= double(ring.size());
+                    for (size_t i = 0; i < ring.size(); ++i)
+                        triangles.push_back({centre, ring[i], ring[(i + 1) % ring.size()]});
+                }
+                const glm::ivec2 at = cell_of(centre_uv);
+                const int p = patch[size_t(at.y) * size_t(nx) + size_t(at.x)];
+                for (const auto& tri : triangles) {
+                    int index = t;
+                    if (first) {
+                        mesh.triangles[size_t(t)] = {tri[0].index, tri[1].index, tri[2].index};
+                        first = false;
+                    } else {
+                        index = int(mesh.triangles.size());
+                        mesh.triangles.push_back({tri[0].index, tri[1].index, tri[2].index});
+                        if (mesh.has_texcoords()) mesh.texcoords.resize(mesh.texcoords.size() + 3);
+                        scene.surfaces[size_t(surface_id)].triangles.push_back(index);
+                        scene.triangle_surface[size_t(oi)].push_back(surface_id);
+                    }
+                    if (mesh.has_texcoords())
+                        for (int k = 0; k < 3; ++k) {
+                            const glm::dvec3 w = tri[size_t(k)].weights;
+                            mesh.texcoords[3 * size_t(index) + size_t(k)] =
+                                glm::vec2(w.x * glm::dvec2(original_uv[0]) +
+                                          w.y * glm::dvec2(original_uv[1]) +
+                                          w.z * glm::dvec2(original_uv[2]));
+                        }
+                    (p < 0 ? rest : parts[size_t(p)]).push_back(index);
+                }
+            }
+        }
+
+        // The rest keeps the chart's grid at the base size; each patch is laid out on the same
+        // grid over its cells' bounds.
+        Chart& chart = atlas.charts[size_t(c)];
+        std::sort(rest.begin(), rest.end());
+        chart.triangles = rest;
+        chart.tile_group = c;
+        layouts[size_t(c)] = {origin, glm::dvec2(texels) * texel_size, true, true};
+        for (size_t p = 0; p < parts.size(); ++p) {
+            if (parts[p].empty()) continue;
+            Chart part;
+            part.object = oi;
+            part.surface = surface_id;
+            part.axis = atlas.charts[size_t(c)].axis;
+            part.u_axis = atlas.charts[size_t(c)].u_axis;
+            part.v_axis = atlas.charts[size_t(c)].v_axis;
+            part.tile_group = c;
+            std::sort(parts[p].begin(), parts[p].end());
+            part.triangles = std::move(parts[p]);
+            // One fine texel of margin each side keeps every corner strictly inside the
+            // rectangle (as kChartMargin does for other charts) and the grid where it was.
+            const glm::ivec4 b = bounds[p];
+            const double margin = texel_size / double(ls.refine_factor);
+            const glm::dvec2 lo = origin + glm::dvec2(b.x, b.y) * cell - margin;
+            const glm::dvec2 hi = glm::min(origin + glm::dvec2(b.z + 1, b.w + 1) * cell,
+                                           origin + glm::dvec2(texels) * texel_size) +
+                                  margin;
+            scene.surfaces[size_t(surface_id)].charts.push_back(int(atlas.charts.size()));
+            atlas.charts.push_back(std::move(part));
+            layouts.push_back({lo, hi - lo, true, false});
+        }
+    }
+    for (size_t oi = 0; oi < scene.objects.size(); ++oi)
+        if (touched[oi]) infos[oi] = triangle_info(scene.objects[oi].mesh);
+}
+
 }  // namespace
 
 std::vector<int> segment_surfaces(const Mesh& mesh, float crease_angle_deg, int* surface_count) {
@@ -750,6 +1121,11 @@ void make_surfaces_and_atlas(Scene& scene) {
     };
     const LightmapSettings& ls = scene.settings.lightmap;
     const std::string where = scene.path.empty() ? "scene" : scene.path;
+    // A layout starts from the meshes as loaded: undo an earlier tile cut (cut_contact_tiles).
+    for (size_t oi = 0; oi < scene.unsplit_meshes.size() && oi < scene.objects.size(); ++oi)
+        if (!scene.unsplit_meshes[oi].triangles.empty())
+            scene.objects[oi].mesh = std::move(scene.unsplit_meshes[oi]);
+    scene.unsplit_meshes.assign(scene.objects.size(), Mesh{});
     scene.surfaces.clear();
     scene.triangle_surface.assign(scene.objects.size(), {});
     LightmapAtlas& atlas = scene.atlas;
@@ -773,7 +1149,7 @@ void make_surfaces_and_atlas(Scene& scene) {
     const double cos_cone = std::cos(double(ls.chart_cone) * kDegree);
 
     std::vector<TriangleInfo> infos(scene.objects.size());
-    std::vector<glm::dvec2> chart_lo, extents;  // per chart, object units
+    std::vector<ChartLayout> layouts;  // per chart, object units
     OverlapGrid grid;
     for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
         const Mesh& mesh = scene.objects[size_t(oi)].mesh;
@@ -833,33 +1209,35 @@ void make_surfaces_and_atlas(Scene& scene) {
                         lo = glm::min(lo, uv);
                         hi = glm::max(hi, uv);
                     }
-                chart_lo.push_back(lo);
-                extents.push_back(hi - lo);
+                layouts.push_back({lo, hi - lo, false, false});
                 surface.charts.push_back(int(atlas.charts.size()));
                 atlas.charts.push_back(std::move(chart));
             }
         }
     }
 
+    if (ls.refine_tile > 0 && ls.refine_factor > 1)
+        cut_contact_tiles(scene, infos, layouts, texel_size);
+
     // Rectangles: the projected bounds plus a margin, centred, in whole texels of the chart's
-    // own size (texel_density.h: finer where the chart touches a dynamic object).
+    // own size (texel_density.h: finer where the chart touches a dynamic object); the parts of
+    // a tiled chart exactly on its grid.
     const std::vector<int> subdivision =
-        choose_chart_subdivision(scene, atlas.charts, extents, texel_size, atlas.gutter);
+        choose_chart_subdivision(scene, atlas.charts, layouts, texel_size, atlas.gutter);
     for (size_t c = 0; c < atlas.charts.size(); ++c) {
         Chart& chart = atlas.charts[c];
         const double size = texel_size / double(subdivision[c]);
         chart.texel_size = float(size);
-        const glm::dvec2 texels = extents[c] / size + 2.0 * kChartMargin;
+        const glm::dvec2 texels = layouts[c].extent / size + 2.0 * kChartMargin;
         if (!(texels.x < 65536.0 && texels.y < 65536.0))
             throw_input_error(where, "settings.lightmap.texel_size",
                               "a chart of object '" + scene.objects[size_t(chart.object)].name +
                                   "' would be over 65536 texels wide; expected a texel "
                                   "size closer to the scene's scale");
-        const glm::ivec2 e = chart_texel_extent(extents[c], size);
+        const glm::ivec2 e = chart_layout_texels(layouts[c], size);
         chart.width = e.x;
         chart.height = e.y;
-        const glm::dvec2 slack = glm::dvec2(chart.width, chart.height) * size - extents[c];
-        chart.origin = glm::vec2(chart_lo[c] - 0.5 * slack);
+        chart.origin = glm::vec2(chart_layout_origin(layouts[c], size));
     }
 
     scene.load_timing.surfaces = lap();

@@ -21,6 +21,10 @@ struct Chart {
     int x = 0, y = 0;           // atlas position of the first texel
     int width = 0, height = 0;  // in texels
     float texel_size = 0.0f;    // world units per texel edge in this chart (adaptive density)
+    // Charts cut from one chart by lightmap.refine_tile (its fine part near a contact and its
+    // coarse rest) share this id, the index of the coarse part, and their frame; −1 otherwise.
+    // Together they cover one flat layout, so the AIM's disc may reach from one into the other.
+    int tile_group = -1;
 };
 
 // What one atlas texel stands for. Position and normal are in the object's space, so rigid

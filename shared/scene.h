@@ -208,6 +208,9 @@ struct Scene {
     std::vector<Surface> surfaces;
     std::vector<std::vector<int>> triangle_surface;  // [object][triangle] -> surface id
     LightmapAtlas atlas;
+    // Per object, its mesh as loaded where make_surfaces_and_atlas split triangles along a tile
+    // cut (lightmap.refine_tile; empty otherwise): the next layout starts again from it.
+    std::vector<Mesh> unsplit_meshes;
     LoadTiming load_timing;
 
     // Versioning: every edit bumps `version` and the touched item's counter and appends a change.

@@ -88,6 +88,11 @@ struct LightmapSettings {
     int refine_factor = 1;         // 1 = one texel size everywhere
     float refine_distance = 1.0f;  // contact: within this many base texels of a partner
     float refine_budget = 2.0f;    // at most this × the uniform layout's texels
+    // Density within a chart: with refine_tile > 0 a chart that touches a partner is cut along
+    // its base texel grid into tiles of refine_tile × refine_tile base texels; the tiles near the
+    // contact become one chart of finer texels, the rest stays one chart at the base size (its
+    // triangles split along the cut). 0 = whole charts only.
+    int refine_tile = 0;
 };
 
 struct AimSettings {
@@ -305,6 +310,9 @@ void visit_settings(Settings& s, Visitor& v) {
                          "contact distance, in texels of texel_size"});
     v.field(Field<float>{"refine_budget", s.lightmap.refine_budget, 1, 1e6,
                          "atlas texels at most this times the uniform layout's"});
+    v.field(Field<int>{"refine_tile", s.lightmap.refine_tile, 0, 1024,
+                       "refine only the tiles of this many texels near a contact; 0 = whole "
+                       "charts"});
     v.end_section();
     v.section("aim", "approximated illumination maps, Larsen ch. 10");
     v.field(Field<int>{"knn", s.aim.knn, 1, 10000, "nearest photon hits per texel"});

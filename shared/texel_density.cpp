@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <numeric>
 
 namespace ag {
@@ -41,8 +42,16 @@ glm::ivec2 chart_texel_extent(glm::dvec2 extent, double texel_size) {
     return {std::max(1, int(std::ceil(texels.x))), std::max(1, int(std::ceil(texels.y)))};
 }
 
-double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
-                              double spacing) {
+glm::ivec2 chart_layout_texels(const ChartLayout& layout, double texel_size) {
+    if (!layout.exact) return chart_texel_extent(layout.extent, texel_size);
+    const glm::dvec2 texels = glm::round(layout.extent / texel_size);
+    return {std::max(1, int(texels.x)), std::max(1, int(texels.y))};
+}
+
+void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,
+                             double spacing,
+                             const std::function<void(const glm::dvec3& object_point, double area,
+                                                      bool near, bool covered)>& visit) {
     const Object& own = scene.objects[size_t(chart.object)];
     // The partners' triangles in world space, with bounds grown by `distance` for a quick reject.
     std::vector<WorldTriangle> partners;
@@ -59,13 +68,14 @@ double chart_contact_fraction(const Scene& scene, const Chart& chart, double dis
             partners.push_back(t);
         }
     }
-    if (partners.empty()) return 0.0;
+    if (partners.empty()) return;
 
     // Sample each chart triangle at the centroids of an n×n split into equal sub-triangles.
-    double near_area = 0.0, total_area = 0.0;
     const double d2 = distance * distance;
     for (int tri : chart.triangles) {
         const glm::uvec3 f = own.mesh.triangles[size_t(tri)];
+        const glm::dvec3 oa(own.mesh.positions[f.x]), ob(own.mesh.positions[f.y]),
+            oc(own.mesh.positions[f.z]);
         const glm::dvec3 a(own.transform.apply_point(own.mesh.positions[f.x]));
         const glm::dvec3 b(own.transform.apply_point(own.mesh.positions[f.y]));
         const glm::dvec3 c(own.transform.apply_point(own.mesh.positions[f.z]));
@@ -77,16 +87,18 @@ double chart_contact_fraction(const Scene& scene, const Chart& chart, double dis
         const double piece = area / double(n * n);
         const auto sample = [&](double u, double v) {
             const glm::dvec3 p = a + (b - a) * (u / n) + (c - a) * (v / n);
-            total_area += piece;
+            const glm::dvec3 q_object = oa + (ob - oa) * (u / n) + (oc - oa) * (v / n);
+            bool near = false, covered = false;
             for (const WorldTriangle& t : partners) {
                 if (glm::any(glm::lessThan(p, t.lo)) || glm::any(glm::greaterThan(p, t.hi)))
                     continue;
                 const glm::dvec3 q = closest_on_triangle(p, t.a, t.b, t.c);
-                if (glm::dot(q - p, q - p) <= d2) {
-                    near_area += piece;
-                    return;
-                }
+                const double e2 = glm::dot(q - p, q - p);
+                near = near || e2 <= d2;
+                covered = covered || e2 <= 1e-12 * d2;
+                if (covered) break;
             }
+            visit(q_object, piece, near, covered);
         };
         for (int i = 0; i < n; ++i)
             for (int j = 0; i + j < n; ++j) {
@@ -94,11 +106,28 @@ double chart_contact_fraction(const Scene& scene, const Chart& chart, double dis
                 if (i + j < n - 1) sample(i + 2.0 / 3.0, j + 2.0 / 3.0);
             }
     }
+}
+
+glm::dvec2 chart_layout_origin(const ChartLayout& layout, double texel_size) {
+    if (layout.exact) return layout.lo;
+    const glm::dvec2 slack =
+        glm::dvec2(chart_layout_texels(layout, texel_size)) * texel_size - layout.extent;
+    return layout.lo - 0.5 * slack;
+}
+
+double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
+                              double spacing) {
+    double near_area = 0.0, total_area = 0.0;
+    for_each_contact_sample(scene, chart, distance, spacing,
+                            [&](const glm::dvec3&, double area, bool near, bool) {
+                                total_area += area;
+                                if (near) near_area += area;
+                            });
     return total_area > 0.0 ? near_area / total_area : 0.0;
 }
 
 std::vector<int> choose_chart_subdivision(const Scene& scene, const std::vector<Chart>& charts,
-                                          const std::vector<glm::dvec2>& extents,
+                                          const std::vector<ChartLayout>& layouts,
                                           double base_texel_size, int gutter) {
     const LightmapSettings& ls = scene.settings.lightmap;
     const int count = int(charts.size());
@@ -106,17 +135,18 @@ std::vector<int> choose_chart_subdivision(const Scene& scene, const std::vector<
     if (ls.refine_factor <= 1 || count == 0) return subdivision;
     // In doubles: an atlas too large for ints is refused after this, naming the texel size.
     const auto texels = [&](int c, int factor) {
-        const glm::dvec2 e = glm::max(
-            glm::ceil(extents[size_t(c)] * double(factor) / base_texel_size + 2.0 * kChartMargin),
-            glm::dvec2(1.0));
+        const glm::dvec2 e(chart_layout_texels(layouts[size_t(c)], base_texel_size / factor));
         return (e.x + 2.0 * gutter) * (e.y + 2.0 * gutter);
     };
     std::vector<double> fraction(static_cast<size_t>(count));
     double total = 0.0;
     for (int c = 0; c < count; ++c) {
-        fraction[size_t(c)] = chart_contact_fraction(scene, charts[size_t(c)],
-                                                     double(ls.refine_distance) * base_texel_size,
-                                                     0.25 * base_texel_size);
+        fraction[size_t(c)] =
+            layouts[size_t(c)].keep_base
+                ? 0.0
+                : chart_contact_fraction(scene, charts[size_t(c)],
+                                         double(ls.refine_distance) * base_texel_size,
+                                         0.25 * base_texel_size);
         total += texels(c, 1);
     }
     const double budget = double(ls.refine_budget) * total;

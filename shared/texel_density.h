@@ -3,6 +3,7 @@
 // every chart out at one texel size; this picks a subdivision of it per chart.
 #pragma once
 
+#include <functional>
 #include <glm/glm.hpp>
 #include <vector>
 
@@ -17,6 +18,14 @@ namespace ag {
 // placed now, measured at sample points no further apart than `spacing`.
 double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
                               double spacing);
+// The samples behind chart_contact_fraction: `visit` gets each sample point in the chart's
+// object space, the area it stands for, whether it lies within `distance` of a partner, and
+// whether it touches one (within 10⁻⁶ × distance: the floor under a box standing on it, which
+// no camera or gather sees). Nothing is visited when the chart has no partners.
+void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,
+                             double spacing,
+                             const std::function<void(const glm::dvec3& object_point, double area,
+                                                      bool near, bool covered)>& visit);
 
 // Charts keep this many texels between their triangles and their rectangle's edge, so every
 // corner UV lies strictly inside the rectangle.
@@ -25,12 +34,28 @@ inline constexpr double kChartMargin = 0.01;
 // A chart's texel rectangle (gutters not included) at `texel_size`, from its projected extent.
 glm::ivec2 chart_texel_extent(glm::dvec2 extent, double texel_size);
 
+// Where a chart's rectangle lies: its projected bounds plus a margin, centred (every chart cut
+// by the crease and cone rules), or exactly on the texel grid of the chart it was cut from (the
+// parts of a chart split into tiles, lightmap.refine_tile), so that the coarse part's texels and
+// the fine part's meet along texel edges and neither has partly covered texels at the seam.
+struct ChartLayout {
+    glm::dvec2 lo{0.0};      // projected lower corner, object units
+    glm::dvec2 extent{0.0};  // projected size, object units
+    bool exact = false;      // the rectangle starts at `lo` and spans `extent` in whole texels
+    bool keep_base = false;  // the coarse part of a tiled chart: never subdivided
+};
+// Texels of the layout's rectangle (gutters not included) at `texel_size`.
+glm::ivec2 chart_layout_texels(const ChartLayout& layout, double texel_size);
+// The (u, v) of the rectangle's lower corner at `texel_size`: `lo`, or the bounds centred in it.
+glm::dvec2 chart_layout_origin(const ChartLayout& layout, double texel_size);
+
 // Subdivision per chart (1 = the base texel size): charts are taken by contact fraction, highest
 // first (ties by index), and each is subdivided `factor` times per edge while the atlas's texels,
-// gutters included, stay within `budget` × the uniform layout's. `extents`: each chart's projected
-// size in object units. Deterministic; all ones when factor ≤ 1 or no chart is a contact.
+// gutters included, stay within `budget` × the uniform layout's (every chart, the parts of tiled
+// charts included, at the base size). Deterministic; all ones when factor ≤ 1 or no chart is a
+// contact; `keep_base` charts stay 1.
 std::vector<int> choose_chart_subdivision(const Scene& scene, const std::vector<Chart>& charts,
-                                          const std::vector<glm::dvec2>& extents,
+                                          const std::vector<ChartLayout>& layouts,
                                           double base_texel_size, int gutter);
 
 }  // namespace ag

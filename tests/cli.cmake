@@ -57,6 +57,10 @@ set_tests_properties(cli.fidelity_cornell PROPERTIES LABELS gl SKIP_RETURN_CODE 
 add_test(NAME cli.fidelity_density COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_density_test.sh
          ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.fidelity_density PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+# Density within a chart: only the floor's tiles near the contacts finer (issue #12 item 4).
+add_test(NAME cli.fidelity_tiles COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_tiles_test.sh
+         ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.fidelity_tiles PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 # The AIM's kNN density at chart edges: stage (a) on the rim of the room at 48² (issue #12).
 add_test(NAME cli.fidelity_edges COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_edges_test.sh
          ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})

@@ -192,7 +192,10 @@ TEST_P(GatherBackendTest, ResultsDoNotDependOnTheBatch) {
 
 class GatherAgreementTest : public test::GlTest {};
 
-TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
+// Gathers every Cornell texel on both backends and bounds their difference per texel (`worst`)
+// and in RMS; `tiles` > 0 cuts the floor into tiles whose parts near the cube and the sphere
+// have quarter-size texels.
+void gl_and_cpu_agree_on_cornell(int tiles, double worst_bound, double rms_bound) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/cornell.json");
     scene.settings.gather.plane_resolution = 256;
     scene.settings.gather.plane_half_width = 16.0f;
@@ -205,7 +208,17 @@ TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
     // ceiling into a patch a 256² plane samples with a few pixels, and the floor and wall texels
     // that see it scatter by 5% RMS around the rays' values (ceiling texels 0.8%).
     scene.settings.lightmap.texel_size = 111.0f;
+    if (tiles > 0) {
+        scene.settings.lightmap.refine_factor = 4;
+        scene.settings.lightmap.refine_tile = tiles;
+        scene.settings.lightmap.refine_budget = 10.0f;
+    }
     make_surfaces_and_atlas(scene);
+    if (tiles > 0) {
+        int parts = 0;
+        for (const Chart& c : scene.atlas.charts) parts += c.tile_group >= 0;
+        EXPECT_GE(parts, 2) << "the floor is cut";
+    }
     ThreadPool pool(2);
     cpu::PhotonSimulation sim(scene, pool);
     sim.trace_all();
@@ -236,13 +249,26 @@ TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
         // point sampling of small bright AIM features. With the boundary-corrected AIMs (the
         // rims of the ceiling and walls no longer dark, docs/fidelity.md) the worst texel moved
         // from 1.95% to 5.59% (a floor texel; 12 of 201 over 2%) and the RMS from 0.82% to 1.08%.
-        EXPECT_LT(rel, 0.06) << "texel " << i << " (object " << scene.objects[size_t(t.object)].name
-                             << ") gl " << lg << " cpu " << lc << " area " << t.area;
+        EXPECT_LT(rel, worst_bound)
+            << "texel " << i << " (object " << scene.objects[size_t(t.object)].name << ") gl " << lg
+            << " cpu " << lc << " area " << t.area;
     }
     std::printf("GL vs CPU gather on %d Cornell texels: worst %.2f%%, RMS %.2f%%\n", compared,
                 100.0 * worst, 100.0 * std::sqrt(sum_sq / std::max(1, compared)));
-    EXPECT_LT(std::sqrt(sum_sq / std::max(1, compared)), 0.0125);
+    EXPECT_LT(std::sqrt(sum_sq / std::max(1, compared)), rms_bound);
     EXPECT_GT(compared, int(all.size()) * 3 / 4);
+}
+
+TEST_F(GatherAgreementTest, GlAndCpuAgreeOnEveryCornellTexel) {
+    gl_and_cpu_agree_on_cornell(0, 0.06, 0.0125);
+}
+
+// Tile seams are chart seams to both lookups (chart_lightmap, sample_lightmap). The floor's fine
+// texels beside the cube and the sphere (27.75 mm) scatter more between the plane and the rays
+// than the 111 mm ones, tiles or not: measured worst 10.4%, RMS 1.41% with tiles; refining the
+// floor and cube whole at x4 gives 9.9% and 1.70%, which fails the RMS bound.
+TEST_F(GatherAgreementTest, GlAndCpuAgreeOnATiledCornell) {
+    gl_and_cpu_agree_on_cornell(1, 0.12, 0.015);
 }
 
 // The IIM schedule's screen coverage measured by rays on the CPU (what a CPU-gathering pipeline

@@ -70,7 +70,7 @@ Mesh make_spiral_ramp(float turns, int segments_per_turn, float rise_per_turn) {
 
 // A static floor (object 0) with a dynamic box standing on it and a static wall standing apart;
 // adaptive density subdivides `refine_factor` times the charts that touch the box.
-Scene make_contact_scene(int refine_factor, float budget) {
+Scene make_contact_scene(int refine_factor, float budget, int refine_tile = 0) {
     Scene scene;
     const auto add = [&](const char* name, Mesh mesh, glm::vec3 at, bool dynamic) {
         Object object;
@@ -86,6 +86,7 @@ Scene make_contact_scene(int refine_factor, float budget) {
     scene.settings.lightmap.texel_size = 0.5f;
     scene.settings.lightmap.refine_factor = refine_factor;
     scene.settings.lightmap.refine_budget = budget;
+    scene.settings.lightmap.refine_tile = refine_tile;
     make_surfaces_and_atlas(scene);
     return scene;
 }
@@ -118,6 +119,7 @@ std::vector<std::pair<std::string, Scene>> invariant_scenes() {
                              make_folded_quads(90.0f), make_bumpy_plane(3.0f, 2.0f, 20, 0.2f, 3)},
                             0.0f));
     scenes.emplace_back("adaptive", make_contact_scene(2, 4.0f));
+    scenes.emplace_back("tiled", make_contact_scene(4, 4.0f, 2));
     return scenes;
 }
 
@@ -505,6 +507,84 @@ TEST(Atlas, ChartsTouchingADynamicObjectGetFinerTexels) {
     }
     EXPECT_LE(tight_total, 1.5 * uniform_total);
     EXPECT_GT(tight_total, uniform_total) << "the box's faces still fit";
+}
+
+// Density within a chart (lightmap.refine_tile): the floor is cut along its base texel grid into
+// tiles of 2 × 2 texels; the tiles within a texel of the box (not under it) become a chart of
+// quarter-size texels, the rest stays at the base size on the very grid the uniform layout has;
+// the split mesh is watertight (the only edges used once are the quad's outline); laying out
+// again starts from the mesh as loaded, and refine_tile 0 gives back the uniform layout. Fails
+// if the floor is refined whole, if the rest moves off its grid, or if a cut leaves a crack.
+TEST(Atlas, TilesNearAContactGetFinerTexelsAndTheRestKeepsItsGrid) {
+    const Scene uniform = make_contact_scene(1, 20.0f);
+    const Scene whole = make_contact_scene(4, 20.0f);
+    Scene scene = make_contact_scene(4, 20.0f, 2);
+    const auto floor_charts = [](const Scene& s) {
+        std::vector<const Chart*> out;
+        for (const Chart& c : s.atlas.charts)
+            if (c.object == 0) out.push_back(&c);
+        return out;
+    };
+    const std::vector<const Chart*> parts = floor_charts(scene);
+    ASSERT_EQ(parts.size(), 2u) << "one coarse rest and one fine patch around the box";
+    const Chart& base = *floor_charts(uniform).front();
+    const Chart& rest = *parts[0];
+    const Chart& fine = *parts[1];
+    EXPECT_EQ(rest.tile_group, fine.tile_group);
+    EXPECT_GE(rest.tile_group, 0);
+    EXPECT_EQ(rest.texel_size, 0.5f);
+    EXPECT_EQ(fine.texel_size, 0.125f);
+    EXPECT_EQ(rest.origin, base.origin) << "the rest keeps the uniform grid";
+    EXPECT_EQ(rest.width, base.width);
+    EXPECT_EQ(rest.height, base.height);
+    // The patch lies on a tile corner of that grid less one fine texel of margin and spans whole
+    // tiles (2 texels = 8 fine) plus the margins.
+    const glm::vec2 offset = (fine.origin + 0.125f - rest.origin) / 1.0f;  // tiles are 1.0 wide
+    EXPECT_NEAR(offset.x, std::round(offset.x), 1e-4);
+    EXPECT_NEAR(offset.y, std::round(offset.y), 1e-4);
+    EXPECT_EQ((fine.width - 2) % 8, 0);
+    EXPECT_EQ((fine.height - 2) % 8, 0);
+
+    int fine_texels = 0, whole_fine_texels = 0;
+    for (const TexelRecord& r : scene.atlas.texels) {
+        if (&scene.atlas.charts[size_t(r.chart)] != &fine) continue;
+        ++fine_texels;
+        // Every fine texel lies within a tile (1.0) plus the contact distance (0.5) of the box
+        // (±1 around the origin, in the floor's object space).
+        EXPECT_LE(std::abs(r.position.x), 2.5f + 1e-3f);
+        EXPECT_LE(std::abs(r.position.z), 2.5f + 1e-3f);
+    }
+    for (const TexelRecord& r : whole.atlas.texels) whole_fine_texels += r.object == 0;
+    EXPECT_GT(fine_texels, 0);
+    EXPECT_LT(fine_texels, whole_fine_texels / 2) << "only the tiles near the box are fine";
+
+    // Watertight: every edge of the split floor is shared by two triangles except the outline.
+    const Mesh& mesh = scene.objects[0].mesh;
+    EXPECT_GT(mesh.triangles.size(), 2u);
+    std::map<std::pair<unsigned, unsigned>, int> uses;
+    for (const glm::uvec3& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const unsigned a = t[k], b = t[(k + 1) % 3];
+            ++uses[{std::min(a, b), std::max(a, b)}];
+        }
+    double outline = 0.0;
+    for (const auto& [edge, count] : uses) {
+        EXPECT_LE(count, 2);
+        if (count == 1)
+            outline += glm::length(mesh.positions[edge.first] - mesh.positions[edge.second]);
+    }
+    EXPECT_NEAR(outline, 32.0, 1e-4) << "a crack inside the floor adds to the outline";
+    EXPECT_NEAR(mesh_area(mesh), 64.0, 1e-3);
+
+    // Again from the loaded mesh: the same atlas; without tiles, the whole-chart layout.
+    const size_t triangles = mesh.triangles.size();
+    make_surfaces_and_atlas(scene);
+    EXPECT_EQ(scene.objects[0].mesh.triangles.size(), triangles);
+    EXPECT_TRUE(same_atlas(scene.atlas, make_contact_scene(4, 20.0f, 2).atlas));
+    scene.settings.lightmap.refine_tile = 0;
+    make_surfaces_and_atlas(scene);
+    EXPECT_EQ(scene.objects[0].mesh.triangles.size(), 2u);
+    EXPECT_TRUE(same_atlas(scene.atlas, whole.atlas));
 }
 
 TEST(Atlas, Deterministic) {

@@ -31,7 +31,8 @@ std::string fmt_vec(const glm::vec3& v) {
     std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v.x), double(v.y), double(v.z));
     return buf;
 }
-// ", N finer (object: texel size, ...)" for the charts adaptive density subdivided.
+// ", N finer (object: texel size, ...)" for the charts adaptive density subdivided; "(tile, T
+// texels)" for the fine part of a chart cut into tiles (lightmap.refine_tile).
 std::string refined_charts(const Scene& scene) {
     std::ostringstream out;
     int finer = 0;
@@ -43,6 +44,12 @@ std::string refined_charts(const Scene& scene) {
         if (c.texel_size < scene.atlas.texel_size) {
             out << (first ? "" : ", ") << scene.objects[size_t(c.object)].name << " "
                 << c.texel_size;
+            if (c.tile_group >= 0) {
+                int texels = 0;
+                for (const TexelRecord& t : scene.atlas.texels)
+                    texels += &scene.atlas.charts[size_t(t.chart)] == &c;
+                out << " (tile, " << texels << " texels)";
+            }
             first = false;
         }
     out << ")";
