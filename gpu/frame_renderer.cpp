@@ -721,10 +721,16 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
 
 void FrameRenderer::draw_shadow_volumes(const LightSample& light,
                                         const glm::mat4& view_projection) {
+    std::vector<glm::mat4> models;
+    for (const Object& o : scene_.objects) models.push_back(model_matrix(o));
+    // The weld depends only on where the objects are.
+    if (models != caster_models_) {
+        soup_weld_ = weld_soup_corners(casters_, models);
+        caster_models_ = std::move(models);
+    }
     std::vector<glm::vec4> triangles;
-    for (size_t o = 0; o < scene_.objects.size(); ++o)
-        append_shadow_volume(casters_[o], model_matrix(scene_.objects[o]),
-                             glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles);
+    append_shadow_volumes(casters_, caster_models_, soup_weld_,
+                          glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles);
     if (triangles.empty()) return;
     gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
     gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)),

@@ -129,6 +129,11 @@ void main() {
             }
             continue;
         }
+        // Light reaching the back of a diffuse surface is absorbed, as in the CPU photon tracers
+        // and pt (surfaces are one-sided; a wall lit from both sides needs thickness). Stored
+        // there, a photon inside a closed box lit the box's outside through the cone filter,
+        // whose sphere reaches through the box's zero-thickness walls at its edges.
+        if (dot(n, d) >= 0.0) break;
         if (diffuse >= 1) {
             uint at = atomicAdd(photon_count, 1u);
             vec2 enc = octahedral_encode(-d);
@@ -136,7 +141,6 @@ void main() {
         }
         if (diffuse == bounces) break;
         ++diffuse;
-        if (dot(n, d) > 0.0) n = -n;
         // The albedo where it landed: base × the texel (bilinear) on a textured surface.
         power *= m.rgb * texture_albedo(hit.object, hit.index, hit.barycentric);
         if (kwast != 0) power /= kPhotonPi;  // his Kd / π / p at the bounce

@@ -3,6 +3,7 @@
 // the CPU from edge adjacency each frame (objects and lights move).
 #pragma once
 
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <vector>
 
@@ -25,6 +26,23 @@ struct ShadowCaster {
 ShadowCaster make_shadow_caster(const Mesh& mesh);
 // Only the closed form: `closed` false (and no soup) where the mesh cannot be closed.
 ShadowCaster make_closed_caster(const Mesh& mesh);
+
+// The soup casters' corners in world space, welded across meshes: corners a few float steps apart
+// (a room's two walls at the corner they share, each turned into place by its own rotation) get
+// one id. It does not depend on the light: made again when the geometry changes.
+struct SoupWeld {
+    std::vector<std::vector<uint32_t>> ids;  // per caster, per position; empty unless soup
+};
+SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
+                           const std::vector<glm::mat4>& models);
+
+// Appends every caster's volume (transformed by its model) for one homogeneous light, as
+// append_shadow_volume does for each, except that a side face two soup prisms share (one welded
+// edge, drawn once each way: a quad's two triangles along its diagonal, two walls along their
+// seam) is left out: the pair cancels in the count, and drawn it left cracks along the seams.
+void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
+                           const std::vector<glm::mat4>& models, const SoupWeld& weld,
+                           const glm::vec4& light, std::vector<glm::vec4>& out);
 
 // Appends the volume of `caster` (transformed by `model`) for a point light at `light` as
 // homogeneous world-space triangles (w = 0 at infinity), consistently wound outwards.

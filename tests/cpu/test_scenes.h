@@ -103,4 +103,46 @@ inline std::vector<TestRay> rays_up_through_the_box_top() {
     return rays;
 }
 
+// The robustness sweep's one-unit Cornell room (five quads, each turned into place, so the corners
+// two walls share differ in their last bits), its lamp inside the closed box of side 0.3 turned by
+// −17° whose top lies at `box_top` (1: in the ceiling's plane, light_in_box_coplanar). No light
+// can leave the box: pt renders every term black. Objects: floor, ceiling, back, left and right
+// walls, box. A 16² camera looks in through the open front.
+inline Scene room_with_lamp_in_box(float box_top = 1.0f) {
+    Scene s;
+    s.path = "room_with_lamp_in_box";
+    const auto wall = [&](const char* name, glm::vec3 at, glm::vec3 axis, float degrees) {
+        Object o;
+        o.name = name;
+        o.mesh = make_quad(1.0f, 1.0f);
+        o.transform.translation = at;
+        if (degrees != 0.0f) o.transform.rotation = glm::angleAxis(glm::radians(degrees), axis);
+        s.objects.push_back(o);
+    };
+    wall("floor", {0.5f, 0.0f, 0.5f}, {1, 0, 0}, 0.0f);
+    wall("ceiling", {0.5f, 1.0f, 0.5f}, {1, 0, 0}, 180.0f);
+    wall("back_wall", {0.5f, 0.5f, 1.0f}, {1, 0, 0}, -90.0f);
+    wall("left_wall", {1.0f, 0.5f, 0.5f}, {0, 0, 1}, 90.0f);
+    wall("right_wall", {0.0f, 0.5f, 0.5f}, {0, 0, 1}, -90.0f);
+    Object box;
+    box.name = "box";
+    box.mesh = make_box(glm::vec3(0.3f));
+    box.transform.translation = {0.5f, box_top - 0.15f, 0.5f};
+    box.transform.rotation = glm::angleAxis(glm::radians(-17.0f), glm::vec3(0, 1, 0));
+    s.objects.push_back(box);
+    Light l;
+    l.name = "lamp";
+    l.position = {0.5f, box_top - 0.054f, 0.5f};
+    l.intensity = glm::vec3(1.3f, 1.1f, 0.8f);
+    s.lights.push_back(l);
+    s.camera.eye = {0.5f, 0.5f, -1.44f};
+    s.camera.target = {0.5f, 0.5f, 0.0f};
+    s.camera.fov_y = 39.3f;
+    s.camera.width = s.camera.height = 16;
+    s.settings.lightmap.texel_size = 0.2f;
+    init_versions(s);
+    make_surfaces_and_atlas(s);
+    return s;
+}
+
 }  // namespace ag::test
