@@ -253,30 +253,33 @@ void main() {
 // One light sample shadowed by its hemispherical shadow map (direct.method vpl, Barczak §4.2):
 // layer `map_layer` about the sample's normal, or for a two-sided sample `map_layer` + 1 on the
 // other side; −1: a sun, no map (drawn with the stencil of its shadow volumes).
-const std::string kLightingMappedFragment = std::string(kLightsGlsl) + kAlbedoGlsl + kVplMapGlsl +
-                                            R"(
+const std::string kLightMapGlsl = std::string(kVplMapGlsl) + R"(
+uniform sampler2DArray light_maps;
+uniform int map_layer, map_layers, map_kind;
+uniform float offset_scale, relative_bias;
+// Whether the light sample's map sees the surface point p (normal n); always for a sun.
+bool light_map_sees(vec3 p, vec3 n) {
+    if (map_layer < 0) return true;
+    int layer = map_layer;
+    vec3 d = p - vpl_position(layer);
+    if (map_layers == 2 && dot(d, vpl_normal(layer)) < 0.0) layer += 1;
+    return vpl_map_visible(light_maps, layer, p, n, length(d), map_kind, offset_scale,
+                           relative_bias);
+}
+)";
+const std::string kLightingMappedFragment =
+    std::string(kLightsGlsl) + kAlbedoGlsl + kLightMapGlsl + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
 uniform vec3 albedo;
 uniform int light_index;
-uniform sampler2DArray light_maps;
-uniform int map_layer, map_layers, map_kind;
-uniform float offset_scale, relative_bias;
 layout(location = 0) out vec4 out_direct;
 void main() {
     vec3 n = normalize(v_normal);
-    if (map_layer >= 0) {
-        int layer = map_layer;
-        vec3 d = v_world - vpl_position(layer);
-        if (map_layers == 2 && dot(d, vpl_normal(layer)) < 0.0) layer += 1;
-        if (!vpl_map_visible(light_maps, layer, v_world, n, length(d), map_kind, offset_scale,
-                             relative_bias)) {
-            out_direct = vec4(0.0);
-            return;
-        }
-    }
-    out_direct = vec4(direct_from(light_index, v_world, n, surface_albedo(albedo)), 0.0);
+    out_direct = light_map_sees(v_world, n)
+                     ? vec4(direct_from(light_index, v_world, n, surface_albedo(albedo)), 0.0)
+                     : vec4(0.0);
 }
 )";
 
@@ -306,26 +309,14 @@ void main() {
 }
 )";
 const std::string kDeferredLightingMappedFragment =
-    std::string(kLightsGlsl) + kSurfaceGlsl + kVplMapGlsl + R"(
+    std::string(kLightsGlsl) + kSurfaceGlsl + kLightMapGlsl + R"(
 uniform int light_index;
-uniform sampler2DArray light_maps;
-uniform int map_layer, map_layers, map_kind;
-uniform float offset_scale, relative_bias;
 layout(location = 0) out vec4 out_direct;
 void main() {
     vec3 p, n, albedo;
     if (!surface_at(p, n, albedo)) discard;
-    if (map_layer >= 0) {
-        int layer = map_layer;
-        vec3 d = p - vpl_position(layer);
-        if (map_layers == 2 && dot(d, vpl_normal(layer)) < 0.0) layer += 1;
-        if (!vpl_map_visible(light_maps, layer, p, n, length(d), map_kind, offset_scale,
-                             relative_bias)) {
-            out_direct = vec4(0.0);
-            return;
-        }
-    }
-    out_direct = vec4(direct_from(light_index, p, n, albedo), 0.0);
+    out_direct = light_map_sees(p, n) ? vec4(direct_from(light_index, p, n, albedo), 0.0)
+                                      : vec4(0.0);
 }
 )";
 
