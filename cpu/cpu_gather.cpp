@@ -1,12 +1,15 @@
 #include "cpu/cpu_gather.h"
 
 #include <algorithm>
+#include <atomic>
 #include <cassert>
 #include <cmath>
+#include <limits>
 
 #include "cpu/sampling.h"
 #include "shared/camera.h"
 #include "shared/lightmap_sample.h"
+#include "shared/media.h"  // ray_box
 #include "shared/qmc.h"
 
 namespace ag::cpu {
@@ -41,7 +44,12 @@ CpuGather::~CpuGather() = default;
 
 glm::vec3 CpuGather::radiance_along(const Ray& ray, const std::vector<glm::vec3>& aim_radiance,
                                     int bounces_left, float weight, bool& back_face) const {
-    const RayHit hit = rays_.intersect(ray);
+    return radiance_at(rays_.intersect(ray), ray, aim_radiance, bounces_left, weight, back_face);
+}
+
+glm::vec3 CpuGather::radiance_at(const RayHit& hit, const Ray& ray,
+                                 const std::vector<glm::vec3>& aim_radiance, int bounces_left,
+                                 float weight, bool& back_face) const {
     if (!hit.hit) return glm::vec3(0.0f);
     const Material& m = scene_.objects[size_t(hit.object)].material;
     if (m.type != MaterialType::diffuse) {
@@ -72,16 +80,69 @@ glm::vec3 CpuGather::radiance_along(const Ray& ray, const std::vector<glm::vec3>
     return sample_lightmap(scene_.atlas, aim_radiance, hit.object, hit.triangle, hit.barycentric);
 }
 
-GatherResult CpuGather::gather_texel(int record, const std::vector<glm::vec3>& aim_radiance) const {
+GatherResult CpuGather::gather_texel(int record, const std::vector<glm::vec3>& aim_radiance,
+                                     std::atomic<uint64_t>* reused) {
     const TexelRecord& texel = scene_.atlas.texels[size_t(record)];
     const Transform& transform = scene_.objects[size_t(texel.object)].transform;
-    return gather_point(
-        {transform.apply_point(texel.position), transform.apply_vector(texel.normal)},
-        texel_shift(scene_.settings.seed, record), aim_radiance);
+    TexelRays* cache = nullptr;
+    if (reused) {
+        cache = &cache_[size_t(record)];
+        // The texel's own object moved: every ray starts elsewhere.
+        if (moved_at_[size_t(texel.object)] > cache->epoch) cache->epoch = 0;
+    }
+    uint64_t n = 0;
+    const GatherResult r =
+        gather_point({transform.apply_point(texel.position), transform.apply_vector(texel.normal)},
+                     texel_shift(scene_.settings.seed, record), aim_radiance, cache, &n);
+    if (reused) *reused += n;
+    return r;
+}
+
+bool CpuGather::still_valid(const CachedHit& hit, const Ray& ray, uint64_t epoch) const {
+    if (hit.object >= 0 && moved_at_[size_t(hit.object)] > epoch) return false;
+    const float end = hit.object >= 0 ? hit.t : 1e30f;
+    for (int o : moved_objects_) {
+        if (moved_at_[size_t(o)] <= epoch) continue;
+        float enter = 0.0f, exit = 0.0f;
+        if (ray_box(moved_to_[size_t(o)], ray.origin, ray.direction, 0.0f, end, enter, exit))
+            return false;
+    }
+    return true;
+}
+
+void CpuGather::track_moves() {
+    const size_t n = scene_.objects.size();
+    if (seen_transform_.size() != n) {
+        // Objects came or went: nothing cached can be trusted.
+        seen_transform_.clear();
+        for (const Object& o : scene_.objects) seen_transform_.push_back(o.transform);
+        moved_at_.assign(n, 0);
+        moved_to_.assign(n, Bounds{});
+        moved_objects_.clear();
+        for (TexelRays& t : cache_) t.epoch = 0;
+        return;
+    }
+    for (size_t i = 0; i < n; ++i) {
+        const Transform& now = scene_.objects[i].transform;
+        Transform& seen = seen_transform_[i];
+        if (now.translation == seen.translation && now.rotation == seen.rotation) continue;
+        seen = now;
+        if (moved_at_[i] == 0) moved_objects_.push_back(int(i));
+        moved_at_[i] = ++epoch_;
+        // Padded, so that a ray grazing the object's new place counts as crossing it.
+        Bounds b;
+        for (const glm::vec3& p : scene_.objects[i].mesh.positions) b.add(now.apply_point(p));
+        const glm::vec3 pad =
+            1e-3f * glm::max(b.extent(), glm::vec3(1e-6f)) + glm::vec3(4.0f * rays_.epsilon());
+        b.min -= pad;
+        b.max += pad;
+        moved_to_[i] = b;
+    }
 }
 
 GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
-                                     const std::vector<glm::vec3>& aim_radiance) const {
+                                     const std::vector<glm::vec3>& aim_radiance, TexelRays* cache,
+                                     uint64_t* reused) const {
     const GatherSettings& settings = scene_.settings.gather;
     const glm::vec3 n = glm::normalize(point.normal);
     const glm::vec3 origin = point.position + rays_.epsilon() * n;
@@ -91,9 +152,15 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
     const float a = settings.plane_half_width;
     const int bounces = std::max(0, settings.specular_bounces);
 
+    // The cached hits are this texel's as last traced when the cache holds all of them.
+    const bool have = cache && cache->epoch > 0 && cache->hits.size() == points_.size();
+    if (cache && !have) cache->hits.assign(points_.size(), CachedHit{});
+    uint64_t reused_here = 0;
+
     glm::vec3 sum(0.0f);
     int back_faces = 0, counted = 0;
-    for (const glm::vec2& p : points_) {
+    for (size_t i = 0; i < points_.size(); ++i) {
+        const glm::vec2& p = points_[i];
         // The concentric map keeps the QMC points' strata compact, which matters at a few hundred
         // rays.
         glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
@@ -120,11 +187,37 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
         }
         ++counted;
         const glm::vec3 direction = d.x * t + d.y * b + d.z * n;
+        const Ray ray{origin, direction, 0.0f, 1e30f};
         bool back_face = false;
-        sum += radiance_along({origin, direction, 0.0f, 1e30f}, aim_radiance, bounces, 1.0f,
-                              back_face);
+        glm::vec3 l(0.0f);
+        if (!cache) {
+            l = radiance_along(ray, aim_radiance, bounces, 1.0f, back_face);
+        } else if (CachedHit& c = cache->hits[i]; have && still_valid(c, ray, cache->epoch)) {
+            // What radiance_at gives for the same hit: tracing the ray again finds it.
+            const bool specular = c.object >= 0 && scene_.objects[size_t(c.object)].material.type !=
+                                                       MaterialType::diffuse;
+            if (specular)
+                l = radiance_along(ray, aim_radiance, bounces, 1.0f, back_face);
+            else if (c.object >= 0 && c.back)
+                back_face = true;
+            else if (c.object >= 0)
+                l = sample_lightmap(scene_.atlas, aim_radiance, c.object, c.triangle,
+                                    c.barycentric);
+            reused_here += specular ? 0 : 1;
+        } else {
+            const RayHit hit = rays_.intersect(ray);
+            c.t = hit.hit ? hit.t : std::numeric_limits<float>::infinity();
+            c.object = hit.hit ? hit.object : -1;
+            c.triangle = hit.triangle;
+            c.barycentric = hit.barycentric;
+            c.back = hit.hit && glm::dot(ray.direction, hit.normal) > 0.0f;
+            l = radiance_at(hit, ray, aim_radiance, bounces, 1.0f, back_face);
+        }
+        sum += l;
         back_faces += back_face;
     }
+    if (cache) cache->epoch = epoch_;
+    if (reused) *reused += reused_here;
     // Cosine-weighted directions make E = π · mean(L) (eq. 11.1); the IIM holds E / π.
     GatherResult result;
     const float n_rays = float(std::max(1, counted));
@@ -140,8 +233,16 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels) {
 
 void CpuGather::prepare() {
     if (own_rays_) own_rays_->update(scene_);
+    track_moves();
     // A 2D Hammersley set: (i + ½)/N against the base-2 radical inverse.
     const int count = std::max(1, scene_.settings.gather.cpu_rays);
+    const size_t records = scene_.atlas.texels.size();
+    const size_t cache_bytes = records * size_t(count) * sizeof(CachedHit);
+    const int cache_mb = scene_.settings.gather.ray_cache_mb;
+    if (!ray_cache_allowed_ || cache_mb <= 0 || cache_bytes > (size_t(cache_mb) << 20))
+        cache_.clear();
+    else if (cache_.size() != records || int(points_.size()) != count)
+        cache_.assign(records, TexelRays{});
     if (int(points_.size()) != count) {
         points_.resize(size_t(count));
         for (int i = 0; i < count; ++i)
@@ -178,10 +279,25 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
     prepare();
     const int count = int(points_.size());
 
+    // The cache is written per record: only for a list without repeats.
+    bool cached = !cache_.empty();
+    if (cached) {
+        std::vector<char> seen(cache_.size(), 0);
+        for (int t : texels) {
+            if (seen[size_t(t)]) cached = false;
+            seen[size_t(t)] = 1;
+        }
+    }
+    std::atomic<uint64_t> reused{0};
     std::vector<GatherResult> results(texels.size());
     pool_.parallel_for(
-        texels.size(), [&](size_t i) { results[i] = gather_texel(texels[i], aim_radiance); }, 4);
+        texels.size(),
+        [&](size_t i) {
+            results[i] = gather_texel(texels[i], aim_radiance, cached ? &reused : nullptr);
+        },
+        4);
 
+    stats_.rays_reused = reused.load();
     stats_.texels = int(texels.size());
     stats_.invalid = 0;
     for (const GatherResult& r : results)

@@ -125,6 +125,12 @@ struct GatherSettings {
     int texels_per_frame = 20;  // IIM texels gathered per frame (thesis: ≤ 20)
     int blend_frames = 4;       // frames over which a new IIM fades in
     int cpu_rays = 256;         // rays per texel for the CPU gather backend
+    // The CPU gather keeps each texel's rays' first hits (about 24 bytes a ray) while the
+    // geometry they crossed stays put: after an AIM-only change (a light, an albedo, photons
+    // moved elsewhere) a texel is re-read, not re-traced, and after a move only the rays that
+    // hit the moved object or cross its new bounds are traced again. Same result as tracing
+    // all of them. 0 = off; an atlas whose cache would exceed this many MiB is not cached.
+    int ray_cache_mb = 512;
     GatherHemisphere hemisphere = GatherHemisphere::full;  // CPU gather: whole hemisphere or plane
     // Mirror/glass bounces a gather ray follows to the diffuse surface it reads (Fresnel-weighted
     // reflection and refraction); 0 = specular objects are black to the gather. The GL gather
@@ -342,6 +348,8 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,
                        "frames over which a new IIM fades in"});
     v.field(Field<int>{"cpu_rays", s.gather.cpu_rays, 1, 1e6, "rays per texel, CPU gather"});
+    v.field(Field<int>{"ray_cache_mb", s.gather.ray_cache_mb, 0, 1 << 20,
+                       "CPU gather: MiB for texels' cached first hits; 0 = off"});
     v.field(EnumField<GatherHemisphere, 2>{"hemisphere", s.gather.hemisphere,
                                            kGatherHemisphereNames,
                                            "CPU gather: full hemisphere or the hemi-plane"});

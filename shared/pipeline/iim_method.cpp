@@ -113,6 +113,8 @@ void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
 void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
     mode_ = in.mode;
+    // What the baselines recompute, they recompute: every gather ray traced.
+    cpu_gather_.use_ray_cache(in.mode == PipelineMode::selective);
     if (in.aim_changed) iim_.aim_changed();
     const bool timed = scene_.settings.schedule.frame_ms > 0.0f;
     const std::vector<Bounds> moved = moved_regions();
