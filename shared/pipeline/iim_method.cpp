@@ -90,7 +90,10 @@ void IimMethod::choose_backend() {
         return 1000.0 * ms / double(sample.size());
     };
     gl_us_ = time_us(GatherBackend::gl);
+    // Traced, not re-read: the timed gather would find the warm-up's rays in the ray cache.
+    cpu_gather_.use_ray_cache(false);
     cpu_us_ = time_us(GatherBackend::cpu);
+    cpu_gather_.use_ray_cache(true);
     backend_ = cpu_us_ < gl_us_ ? GatherBackend::cpu : GatherBackend::gl;
 }
 
