@@ -303,6 +303,8 @@ std::vector<GatherResult> CpuGather::gather(const std::vector<int>& texels,
     for (const GatherResult& r : results)
         stats_.invalid += r.back_fraction > kBackFaceInvalidFraction;
     stats_.rays = uint64_t(texels.size()) * uint64_t(count);
+    totals_.rays += stats_.rays;
+    totals_.rays_reused += stats_.rays_reused;
     return results;
 }
 

@@ -50,6 +50,8 @@ public:
     std::vector<GatherResult> gather_points(const std::vector<GatherPoint>& points,
                                             const std::vector<glm::vec3>& aim_radiance);
     const CpuGatherStats& last_stats() const { return stats_; }
+    // Rays and re-read rays of every gather(texels) call so far (texels and invalid unused).
+    const CpuGatherStats& totals() const { return totals_; }
     // The ray cache (settings.gather.ray_cache_mb) on or off: the brute-force baselines trace
     // every ray, as recomputing everything does.
     void use_ray_cache(bool on) { ray_cache_allowed_ = on; }
@@ -108,7 +110,7 @@ private:
     ThreadPool& pool_;
     const std::vector<glm::vec3>* aim_;
     std::vector<glm::vec2> points_;  // unscrambled 2D Hammersley set, settings.gather.cpu_rays
-    CpuGatherStats stats_;
+    CpuGatherStats stats_, totals_;
     // The ray cache: per texel record (empty when off), and the moves it is checked against.
     std::vector<TexelRays> cache_;
     std::vector<Transform> seen_transform_;  // per object, at the last track_moves()

@@ -128,7 +128,10 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());
     // Round robin through every texel, a new cycle when one ends.
     if (in.mode == PipelineMode::full_budget && iim_.pending() == 0) iim_.invalidate_all();
+    const cpu::CpuGatherStats before = cpu_gather_.totals();
     const cpu::IimFrameStats s = gather(in, budget, start);
+    stats.gather_rays = cpu_gather_.totals().rays - before.rays;
+    stats.gather_rays_reused = cpu_gather_.totals().rays_reused - before.rays_reused;
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
     stats.texel_gather_ms = texel_gather_ms_;

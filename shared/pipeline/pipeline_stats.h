@@ -38,6 +38,9 @@ struct PipelineStats {
     // its 42 ms "gathering" 54 texels on bumpy_133k_box, half of it the coverage pass, and the
     // budgets of the frames after it stayed at a quarter of what fits.
     double texel_gather_ms = -1;
+    // CPU gather rays of this frame's IIM texels, and how many of them were re-read from the ray
+    // cache instead of traced (gather.ray_cache_mb).
+    uint64_t gather_rays = 0, gather_rays_reused = 0;
 };
 
 }  // namespace ag

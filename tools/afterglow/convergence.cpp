@@ -205,6 +205,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.aim_texels = uint64_t(st.photons.aim_texels_rebuilt);
         r.iim_texels = st.iim_texels_gathered;
         r.iim_pending = st.iim_texels_pending;
+        r.rays_traced = st.gather_rays - st.gather_rays_reused;
+        r.rays_reused = st.gather_rays_reused;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
         if (on_frame) on_frame(f + 1);
@@ -261,7 +263,7 @@ double converged_error(const Scene& scene, const std::string& script_path, int f
 std::string convergence_csv(const ConvergenceRun& run) {
     std::ostringstream csv;
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
-           "retraced,aim_texels,iim_texels,iim_pending\n";
+           "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused\n";
     // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
     // (and its mode, unless selective) so both join one methods plot.
     std::string method = kPipelineModeNames[size_t(run.mode)];
@@ -272,7 +274,8 @@ std::string convergence_csv(const ConvergenceRun& run) {
         csv << method << ',' << r.frame << ',' << r.wall_s << ',' << r.frame_ms << ','
             << (r.edited ? 1 : 0) << ',' << r.relmse << ',' << r.rmse << ',' << r.ssim << ','
             << r.groups_invalidated << ',' << r.photons_retraced << ',' << r.aim_texels << ','
-            << r.iim_texels << ',' << r.iim_pending << "\n";
+            << r.iim_texels << ',' << r.iim_pending << ',' << r.rays_traced << ',' << r.rays_reused
+            << "\n";
     return csv.str();
 }
 

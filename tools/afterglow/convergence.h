@@ -48,6 +48,8 @@ struct FrameRecord {
     double relmse = 0.0, rmse = 0.0, ssim = 0.0;
     uint64_t groups_invalidated = 0, photons_retraced = 0, aim_texels = 0;
     int iim_texels = 0, iim_pending = 0;
+    // CPU gather rays of the frame's IIM texels: traced, and re-read from the ray cache.
+    uint64_t rays_traced = 0, rays_reused = 0;
 };
 
 struct SettleAnalysis {

@@ -149,6 +149,8 @@ py::dict stats_dict(const PipelineStats& s) {
     d["caustic_ms"] = s.caustic_ms;
     d["gather_ms"] = s.gather_ms;
     d["texel_gather_ms"] = s.texel_gather_ms;
+    d["gather_rays"] = s.gather_rays;
+    d["gather_rays_reused"] = s.gather_rays_reused;
     d["draw_ms"] = s.draw_ms;
     d["wait_ms"] = s.wait_ms;
     d["early_hand_over"] = s.early_hand_over;
@@ -444,6 +446,8 @@ py::dict converge(const SceneRef& holder, std::optional<std::string> script, int
         {"aim_texels", [](const cli::FrameRecord& r) { return double(r.aim_texels); }},
         {"iim_texels", [](const cli::FrameRecord& r) { return double(r.iim_texels); }},
         {"iim_pending", [](const cli::FrameRecord& r) { return double(r.iim_pending); }},
+        {"rays_traced", [](const cli::FrameRecord& r) { return double(r.rays_traced); }},
+        {"rays_reused", [](const cli::FrameRecord& r) { return double(r.rays_reused); }},
     };
     py::dict table;  // insertion-ordered
     for (const auto& [name, get] : columns) {
