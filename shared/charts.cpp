@@ -800,6 +800,13 @@ public:
         return pieces;
     }
 
+    // Every vertex made on an edge of the original mesh, by the edge's end points (ascending).
+    void add_edge_vertices(
+        std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>>& out) const {
+        for (const auto& [key, index] : made_)
+            if (key[0] == 0) out[{uint32_t(key[1]), uint32_t(key[2])}].push_back(index);
+    }
+
 private:
     static Carrier edge(uint32_t a, uint32_t b) {
         return {Carrier::kEdge, int(std::min(a, b)), int(std::max(a, b))};
@@ -917,6 +924,112 @@ private:
     std::map<std::array<int64_t, 5>, uint32_t> made_;
 };
 
+// A cut puts vertices on the edges of the original mesh where its lines cross them. A triangle on
+// the other side of such an edge that the cut did not split (one of another chart: a box's side
+// beside its cut face), or one split by another chart's lines, would then meet them in a
+// T-junction, a crack in the mesh. Every triangle of the object with a made vertex strictly
+// inside one of its edges is split: its corners and those vertices in order, fanned around their
+// centroid; the new triangles join the triangle's chart and surface (texcoords interpolated).
+void close_t_junctions(Scene& scene, int oi,
+                       const std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>>& made) {
+    Object& object = scene.objects[size_t(oi)];
+    Mesh& mesh = object.mesh;
+    // Per vertex: the original edges it lies on, with its parameter along the edge.
+    struct OnEdge {
+        std::pair<uint32_t, uint32_t> edge;
+        double t;
+    };
+    std::unordered_map<uint32_t, std::vector<OnEdge>> on;
+    const auto parameter = [&](const std::pair<uint32_t, uint32_t>& e, uint32_t v) {
+        const glm::dvec3 a(mesh.positions[e.first]), b(mesh.positions[e.second]);
+        const glm::dvec3 x(mesh.positions[v]);
+        return glm::dot(x - a, b - a) / glm::dot(b - a, b - a);
+    };
+    for (const auto& [e, vertices] : made) {
+        on[e.first].push_back({e, 0.0});
+        on[e.second].push_back({e, 1.0});
+        for (uint32_t v : vertices) on[v].push_back({e, parameter(e, v)});
+    }
+    std::vector<int> chart_of(mesh.triangles.size(), -1);
+    for (size_t c = 0; c < scene.atlas.charts.size(); ++c)
+        if (scene.atlas.charts[c].object == oi)
+            for (int t : scene.atlas.charts[c].triangles) chart_of[size_t(t)] = int(c);
+    const size_t count = mesh.triangles.size();
+    for (size_t t = 0; t < count; ++t) {
+        const glm::uvec3 f = mesh.triangles[t];
+        // The triangle's outline: each corner, then the made vertices strictly inside the edge
+        // to the next corner, in order along it.
+        std::vector<uint32_t> ring;
+        std::vector<glm::dvec3> weights;
+        bool split = false;
+        for (int k = 0; k < 3; ++k) {
+            const uint32_t p = f[k], q = f[(k + 1) % 3];
+            ring.push_back(p);
+            weights.push_back(glm::dvec3(k == 0, k == 1, k == 2));
+            const auto ip = on.find(p), iq = on.find(q);
+            if (ip == on.end() || iq == on.end()) continue;
+            for (const OnEdge& ep : ip->second)
+                for (const OnEdge& eq : iq->second) {
+                    if (ep.edge != eq.edge) continue;
+                    std::vector<std::pair<double, uint32_t>> inside;
+                    const double lo = std::min(ep.t, eq.t), hi = std::max(ep.t, eq.t);
+                    for (uint32_t v : made.at(ep.edge)) {
+                        const double tv = parameter(ep.edge, v);
+                        if (v == p || v == q || !(tv > lo && tv < hi)) continue;
+                        // Ordered from p to q.
+                        inside.emplace_back((tv - ep.t) / (eq.t - ep.t), v);
+                    }
+                    std::sort(inside.begin(), inside.end());
+                    for (const auto& [s, v] : inside) {
+                        ring.push_back(v);
+                        weights.push_back(glm::mix(
+                            glm::dvec3(k == 0, k == 1, k == 2),
+                            glm::dvec3((k + 1) % 3 == 0, (k + 1) % 3 == 1, (k + 1) % 3 == 2), s));
+                        split = true;
+                    }
+                }
+        }
+        if (!split) continue;
+        std::vector<glm::vec2> original_uv;
+        if (mesh.has_texcoords())
+            original_uv.assign(mesh.texcoords.begin() + std::ptrdiff_t(3 * t),
+                               mesh.texcoords.begin() + std::ptrdiff_t(3 * t + 3));
+        glm::dvec3 centre(0.0), centre_weights(0.0);
+        for (size_t i = 0; i < ring.size(); ++i) {
+            centre += glm::dvec3(mesh.positions[ring[i]]);
+            centre_weights += weights[i];
+        }
+        const uint32_t centre_index = uint32_t(mesh.positions.size());
+        mesh.positions.push_back(glm::vec3(centre / double(ring.size())));
+        centre_weights /= double(ring.size());
+        const int surface = scene.triangle_surface[size_t(oi)][t];
+        for (size_t i = 0; i < ring.size(); ++i) {
+            const size_t j = (i + 1) % ring.size();
+            size_t index = t;
+            if (i == 0) {
+                mesh.triangles[t] = {centre_index, ring[i], ring[j]};
+            } else {
+                index = mesh.triangles.size();
+                mesh.triangles.push_back({centre_index, ring[i], ring[j]});
+                if (mesh.has_texcoords()) mesh.texcoords.resize(mesh.texcoords.size() + 3);
+                scene.surfaces[size_t(surface)].triangles.push_back(int(index));
+                scene.triangle_surface[size_t(oi)].push_back(surface);
+                if (chart_of[t] >= 0)
+                    scene.atlas.charts[size_t(chart_of[t])].triangles.push_back(int(index));
+            }
+            if (mesh.has_texcoords()) {
+                const glm::dvec3 w[3] = {centre_weights, weights[i], weights[j]};
+                for (int k = 0; k < 3; ++k)
+                    mesh.texcoords[3 * index + size_t(k)] = glm::vec2(
+                        w[k].x * glm::dvec2(original_uv[0]) + w[k].y * glm::dvec2(original_uv[1]) +
+                        w[k].z * glm::dvec2(original_uv[2]));
+            }
+        }
+    }
+    for (Chart& chart : scene.atlas.charts)
+        if (chart.object == oi) std::sort(chart.triangles.begin(), chart.triangles.end());
+}
+
 // Cuts every chart that touches a partner (texel_density.h) along its base texel grid into
 // tiles of `refine_tile` base texels, where at most half of its tiles are near the partner and it
 // is at least 4 tiles across; the
@@ -933,7 +1046,12 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
     LightmapAtlas& atlas = scene.atlas;
     const int tile = ls.refine_tile;
     const double cell = double(tile) * texel_size;
+    // Tiles within reach of a partner (lightmap.refine_reach) are refined with the contact's.
+    const double reach = double(ls.refine_reach);
     std::vector<uint8_t> touched(scene.objects.size(), 0);
+    // Per object: the vertices every cut made on the original mesh's edges.
+    std::vector<std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>>> made(
+        scene.objects.size());
     const int original_count = int(atlas.charts.size());
     for (int c = 0; c < original_count; ++c) {
         const int oi = atlas.charts[size_t(c)].object;
@@ -951,18 +1069,24 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
             const glm::ivec2 i(glm::floor((uv - origin) / cell));
             return glm::clamp(i, glm::ivec2(0), glm::ivec2(nx - 1, ny - 1));
         };
-        // 0 = no chart here, 1 = chart, 2 = near a partner.
+        // 0 = no chart here, 1 = chart, 2 = within reach of a partner, 3 = near one. Both 2 and
+        // 3 get finer texels; whether the chart is cut at all follows the contact (3) alone.
+        constexpr uint8_t kBand = 2, kNear = 3;
         std::vector<uint8_t> state(size_t(nx) * size_t(ny), 0);
         bool covered_only = true;
         for_each_contact_sample(scene, atlas.charts[size_t(c)],
-                                double(ls.refine_distance) * texel_size, 0.25 * texel_size,
-                                [&](const glm::dvec3& p, double, bool near, bool covered) {
-                                    covered_only = covered_only && covered;
+                                double(ls.refine_distance) * texel_size, 0.25 * texel_size, reach,
+                                [&](const glm::dvec3& p, double, const ContactSample& sample) {
+                                    covered_only = covered_only && sample.covered;
                                     const glm::ivec2 i = cell_of(frame.project(glm::vec3(p)));
                                     uint8_t& s = state[size_t(i.y) * size_t(nx) + size_t(i.x)];
-                                    s = std::max(s, uint8_t(near && !covered ? 2 : 1));
+                                    const uint8_t level = sample.covered        ? 1
+                                                          : sample.near         ? kNear
+                                                          : sample.within_reach ? kBand
+                                                                                : 1;
+                                    s = std::max(s, level);
                                 });
-        const auto near_cells = std::count(state.begin(), state.end(), uint8_t(2));
+        const auto near_cells = std::count(state.begin(), state.end(), kNear);
         if (near_cells == 0 && covered_only) {
             layouts[size_t(c)].keep_base = true;  // wholly under a partner (a box's bottom)
             continue;
@@ -974,11 +1098,11 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
             std::count_if(state.begin(), state.end(), [](uint8_t s) { return s > 0; });
         if (near_cells == 0 || 2 * near_cells > occupied || std::max(nx, ny) < 4) continue;
 
-        // Patches: 4-connected near cells, numbered in scan order.
+        // Patches: 4-connected cells near or within reach, numbered in scan order.
         std::vector<int> patch(state.size(), -1);
         std::vector<glm::ivec4> bounds;  // per patch: x0, y0, x1, y1 in cells
         for (int start = 0; start < int(state.size()); ++start) {
-            if (state[size_t(start)] != 2 || patch[size_t(start)] >= 0) continue;
+            if (state[size_t(start)] < kBand || patch[size_t(start)] >= 0) continue;
             const int id = int(bounds.size());
             bounds.emplace_back(nx, ny, -1, -1);
             std::vector<int> stack{start};
@@ -995,7 +1119,7 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
                     const int ax = x + d[0], ay = y + d[1];
                     if (ax < 0 || ay < 0 || ax >= nx || ay >= ny) continue;
                     const int j = ay * nx + ax;
-                    if (state[size_t(j)] != 2 || patch[size_t(j)] >= 0) continue;
+                    if (state[size_t(j)] < kBand || patch[size_t(j)] >= 0) continue;
                     patch[size_t(j)] = id;
                     stack.push_back(j);
                 }
@@ -1069,6 +1193,8 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
             }
         }
 
+        splitter.add_edge_vertices(made[size_t(oi)]);
+
         // The rest keeps the chart's grid at the base size; each patch is laid out on the same
         // grid over its cells' bounds.
         Chart& chart = atlas.charts[size_t(c)];
@@ -1101,7 +1227,10 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
         }
     }
     for (size_t oi = 0; oi < scene.objects.size(); ++oi)
-        if (touched[oi]) infos[oi] = triangle_info(scene.objects[oi].mesh);
+        if (touched[oi]) {
+            close_t_junctions(scene, int(oi), made[oi]);
+            infos[oi] = triangle_info(scene.objects[oi].mesh);
+        }
 }
 
 }  // namespace

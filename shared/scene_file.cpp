@@ -839,7 +839,8 @@ void settings_changed(Scene& scene, const LightmapSettings& before) {
         after.chart_cone != before.chart_cone || after.gutter != before.gutter ||
         after.refine_factor != before.refine_factor ||
         after.refine_distance != before.refine_distance ||
-        after.refine_budget != before.refine_budget || after.refine_tile != before.refine_tile)
+        after.refine_budget != before.refine_budget || after.refine_tile != before.refine_tile ||
+        after.refine_reach != before.refine_reach)
         make_surfaces_and_atlas(scene);
 }
 

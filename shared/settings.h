@@ -93,6 +93,12 @@ struct LightmapSettings {
     // contact become one chart of finer texels, the rest stays one chart at the base size (its
     // triangles split along the cut). 0 = whole charts only.
     int refine_tile = 0;
+    // With refine_tile: the tiles within refine_reach × a partner's height above the chart (how
+    // far it stands out along the chart's normal) get the finer texels too: the band where the
+    // partner's occlusion of the hemisphere, so the indirect light, still changes fast (a box's
+    // shadow reaching past the contact). Whether a chart is cut follows the contact alone.
+    // 0 = the contact only.
+    float refine_reach = 0.0f;
 };
 
 struct AimSettings {
@@ -319,6 +325,9 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(Field<int>{"refine_tile", s.lightmap.refine_tile, 0, 1024,
                        "refine only the tiles of this many texels near a contact; 0 = whole "
                        "charts"});
+    v.field(Field<float>{"refine_reach", s.lightmap.refine_reach, 0, 1e6,
+                         "with refine_tile: tiles within this times a partner's height are "
+                         "refined too; 0 = the contact only"});
     v.end_section();
     v.section("aim", "approximated illumination maps, Larsen ch. 10");
     v.field(Field<int>{"knn", s.aim.knn, 1, 10000, "nearest photon hits per texel"});

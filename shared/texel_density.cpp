@@ -33,6 +33,7 @@ glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const g
 
 struct WorldTriangle {
     glm::dvec3 a, b, c, lo, hi;
+    int partner = 0;  // index into the partners' vertex lists
 };
 
 }  // namespace
@@ -49,29 +50,43 @@ glm::ivec2 chart_layout_texels(const ChartLayout& layout, double texel_size) {
 }
 
 void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,
-                             double spacing,
+                             double spacing, double reach,
                              const std::function<void(const glm::dvec3& object_point, double area,
-                                                      bool near, bool covered)>& visit) {
+                                                      const ContactSample&)>& visit) {
     const Object& own = scene.objects[size_t(chart.object)];
-    // The partners' triangles in world space, with bounds grown by `distance` for a quick reject.
+    // The partners' triangles in world space, with bounds grown by the farthest distance that
+    // can count (`distance`, or `reach` × the partner's size) for a quick reject.
     std::vector<WorldTriangle> partners;
+    std::vector<std::vector<glm::dvec3>> partner_vertices;
     for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
         const Object& o = scene.objects[size_t(oi)];
         if (oi == chart.object || !(own.dynamic || o.dynamic)) continue;
+        std::vector<glm::dvec3> vertices;
+        glm::dvec3 lo(1e300), hi(-1e300);
+        for (const glm::vec3& p : o.mesh.positions) {
+            vertices.emplace_back(o.transform.apply_point(p));
+            lo = glm::min(lo, vertices.back());
+            hi = glm::max(hi, vertices.back());
+        }
+        const double grow = std::max(
+            distance, reach > 0.0 && !vertices.empty() ? reach * glm::length(hi - lo) : 0.0);
         for (const glm::uvec3& f : o.mesh.triangles) {
             WorldTriangle t;
-            t.a = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.x]));
-            t.b = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.y]));
-            t.c = glm::dvec3(o.transform.apply_point(o.mesh.positions[f.z]));
-            t.lo = glm::min(glm::min(t.a, t.b), t.c) - distance;
-            t.hi = glm::max(glm::max(t.a, t.b), t.c) + distance;
+            t.a = vertices[f.x];
+            t.b = vertices[f.y];
+            t.c = vertices[f.z];
+            t.lo = glm::min(glm::min(t.a, t.b), t.c) - grow;
+            t.hi = glm::max(glm::max(t.a, t.b), t.c) + grow;
+            t.partner = int(partner_vertices.size());
             partners.push_back(t);
         }
+        partner_vertices.push_back(std::move(vertices));
     }
     if (partners.empty()) return;
 
     // Sample each chart triangle at the centroids of an n×n split into equal sub-triangles.
     const double d2 = distance * distance;
+    std::vector<double> reach2(partner_vertices.size());
     for (int tri : chart.triangles) {
         const glm::uvec3 f = own.mesh.triangles[size_t(tri)];
         const glm::dvec3 oa(own.mesh.positions[f.x]), ob(own.mesh.positions[f.y]),
@@ -79,8 +94,10 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const glm::dvec3 a(own.transform.apply_point(own.mesh.positions[f.x]));
         const glm::dvec3 b(own.transform.apply_point(own.mesh.positions[f.y]));
         const glm::dvec3 c(own.transform.apply_point(own.mesh.positions[f.z]));
-        const double area = 0.5 * glm::length(glm::cross(b - a, c - a));
+        const glm::dvec3 cross = glm::cross(b - a, c - a);
+        const double area = 0.5 * glm::length(cross);
         if (!(area > 0.0)) continue;
+        const glm::dvec3 normal = cross / (2.0 * area);
         const double longest =
             std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
         const int n = std::clamp(int(std::ceil(longest / spacing)), 1, 64);
@@ -88,17 +105,26 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const auto sample = [&](double u, double v) {
             const glm::dvec3 p = a + (b - a) * (u / n) + (c - a) * (v / n);
             const glm::dvec3 q_object = oa + (ob - oa) * (u / n) + (oc - oa) * (v / n);
-            bool near = false, covered = false;
+            if (reach > 0.0)
+                for (size_t k = 0; k < partner_vertices.size(); ++k) {
+                    // The partner's height above the sample's plane.
+                    double height = 0.0;
+                    for (const glm::dvec3& w : partner_vertices[k])
+                        height = std::max(height, glm::dot(w - p, normal));
+                    reach2[k] = reach * reach * height * height;
+                }
+            ContactSample s;
             for (const WorldTriangle& t : partners) {
                 if (glm::any(glm::lessThan(p, t.lo)) || glm::any(glm::greaterThan(p, t.hi)))
                     continue;
                 const glm::dvec3 q = closest_on_triangle(p, t.a, t.b, t.c);
                 const double e2 = glm::dot(q - p, q - p);
-                near = near || e2 <= d2;
-                covered = covered || e2 <= 1e-12 * d2;
-                if (covered) break;
+                s.near = s.near || e2 <= d2;
+                s.covered = s.covered || e2 <= 1e-12 * d2;
+                s.within_reach = s.within_reach || (reach > 0.0 && e2 <= reach2[size_t(t.partner)]);
+                if (s.covered) break;
             }
-            visit(q_object, piece, near, covered);
+            visit(q_object, piece, s);
         };
         for (int i = 0; i < n; ++i)
             for (int j = 0; i + j < n; ++j) {
@@ -118,10 +144,10 @@ glm::dvec2 chart_layout_origin(const ChartLayout& layout, double texel_size) {
 double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
                               double spacing) {
     double near_area = 0.0, total_area = 0.0;
-    for_each_contact_sample(scene, chart, distance, spacing,
-                            [&](const glm::dvec3&, double area, bool near, bool) {
+    for_each_contact_sample(scene, chart, distance, spacing, 0.0,
+                            [&](const glm::dvec3&, double area, const ContactSample& s) {
                                 total_area += area;
-                                if (near) near_area += area;
+                                if (s.near) near_area += area;
                             });
     return total_area > 0.0 ? near_area / total_area : 0.0;
 }

@@ -22,10 +22,19 @@ double chart_contact_fraction(const Scene& scene, const Chart& chart, double dis
 // object space, the area it stands for, whether it lies within `distance` of a partner, and
 // whether it touches one (within 10⁻⁶ × distance: the floor under a box standing on it, which
 // no camera or gather sees). Nothing is visited when the chart has no partners.
+struct ContactSample {
+    bool near = false;     // within `distance` of a partner
+    bool covered = false;  // touches one
+    // Within `reach` × the partner's height above the sample's plane (how far it stands out
+    // along the chart's normal) of that partner: the scale over which the partner's occlusion
+    // of the sample's hemisphere, so its indirect light, changes (lightmap.refine_reach). Always
+    // false when reach ≤ 0.
+    bool within_reach = false;
+};
 void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,
-                             double spacing,
+                             double spacing, double reach,
                              const std::function<void(const glm::dvec3& object_point, double area,
-                                                      bool near, bool covered)>& visit);
+                                                      const ContactSample&)>& visit);
 
 // Charts keep this many texels between their triangles and their rectangle's edge, so every
 // corner UV lies strictly inside the rectangle.

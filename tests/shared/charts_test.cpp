@@ -70,7 +70,8 @@ Mesh make_spiral_ramp(float turns, int segments_per_turn, float rise_per_turn) {
 
 // A static floor (object 0) with a dynamic box standing on it and a static wall standing apart;
 // adaptive density subdivides `refine_factor` times the charts that touch the box.
-Scene make_contact_scene(int refine_factor, float budget, int refine_tile = 0) {
+Scene make_contact_scene(int refine_factor, float budget, int refine_tile = 0,
+                         float refine_reach = 0.0f) {
     Scene scene;
     const auto add = [&](const char* name, Mesh mesh, glm::vec3 at, bool dynamic) {
         Object object;
@@ -87,8 +88,50 @@ Scene make_contact_scene(int refine_factor, float budget, int refine_tile = 0) {
     scene.settings.lightmap.refine_factor = refine_factor;
     scene.settings.lightmap.refine_budget = budget;
     scene.settings.lightmap.refine_tile = refine_tile;
+    scene.settings.lightmap.refine_reach = refine_reach;
     make_surfaces_and_atlas(scene);
     return scene;
+}
+
+// One static mesh in an L: an 8 × 8 floor (y = 0) and an 8 × 8 wall standing on its far edge
+// (z = 4), sharing that edge's two vertices; a dynamic 2 × 2 × 2 box on the floor 1 from the
+// wall. With refine_tile the floor's chart is cut; the wall is another chart of the same mesh
+// (a crease), beyond the contact distance, so it is not cut.
+Scene make_l_room_scene(int refine_tile) {
+    Scene scene;
+    Object room;
+    room.name = "room";
+    room.mesh.positions = {{-4, 0, -4}, {4, 0, -4}, {4, 0, 4}, {-4, 0, 4}, {-4, 8, 4}, {4, 8, 4}};
+    room.mesh.triangles = {{0, 2, 1}, {0, 3, 2}, {3, 4, 5}, {3, 5, 2}};
+    scene.objects.push_back(std::move(room));
+    Object box;
+    box.name = "box";
+    box.mesh = make_box({2.0f, 2.0f, 2.0f});
+    box.transform.translation = {0, 1, 2};
+    box.dynamic = true;
+    scene.objects.push_back(std::move(box));
+    scene.settings.lightmap.texel_size = 0.5f;
+    scene.settings.lightmap.refine_factor = 4;
+    scene.settings.lightmap.refine_budget = 20.0f;
+    scene.settings.lightmap.refine_tile = refine_tile;
+    make_surfaces_and_atlas(scene);
+    return scene;
+}
+
+// The total length of the edges that only one triangle uses: the outline of an open mesh, plus
+// twice the length of every T-junction's long edge (a crack).
+double open_edge_length(const Mesh& mesh) {
+    std::map<std::pair<unsigned, unsigned>, int> uses;
+    for (const glm::uvec3& t : mesh.triangles)
+        for (int k = 0; k < 3; ++k) {
+            const unsigned a = t[k], b = t[(k + 1) % 3];
+            ++uses[{std::min(a, b), std::max(a, b)}];
+        }
+    double length = 0.0;
+    for (const auto& [edge, count] : uses)
+        if (count == 1)
+            length += glm::length(mesh.positions[edge.first] - mesh.positions[edge.second]);
+    return length;
 }
 
 Scene make_scene(std::vector<Mesh> meshes, float texel_size) {
@@ -120,6 +163,8 @@ std::vector<std::pair<std::string, Scene>> invariant_scenes() {
                             0.0f));
     scenes.emplace_back("adaptive", make_contact_scene(2, 4.0f));
     scenes.emplace_back("tiled", make_contact_scene(4, 4.0f, 2));
+    scenes.emplace_back("tiled_reach", make_contact_scene(4, 20.0f, 2, 1.0f));
+    scenes.emplace_back("tiled_l_room", make_l_room_scene(1));
     return scenes;
 }
 
@@ -585,6 +630,73 @@ TEST(Atlas, TilesNearAContactGetFinerTexelsAndTheRestKeepsItsGrid) {
     make_surfaces_and_atlas(scene);
     EXPECT_EQ(scene.objects[0].mesh.triangles.size(), 2u);
     EXPECT_TRUE(same_atlas(scene.atlas, whole.atlas));
+}
+
+// lightmap.refine_reach: the tiles within reach × the box's height (2) of the box get the fine
+// texels too, while whether the floor is cut still follows the contact (a texel): so the fine
+// patch reaches further than the contact band (a fine texel beyond it), the floor is still cut
+// (fewer fine texels than the whole floor refined) and stays on its grid. Fails if reach is
+// ignored (no fine texel beyond 2.5 of the origin) or if it made the floor refine whole.
+TEST(Atlas, TilesWithinReachOfAPartnerAreRefinedWithTheContact) {
+    const Scene whole = make_contact_scene(4, 20.0f);
+    const Scene contact = make_contact_scene(4, 20.0f, 2);
+    const Scene reach = make_contact_scene(4, 20.0f, 2, 1.0f);
+    const auto fine_reach = [](const Scene& s, int* count) {
+        float far = 0.0f;
+        *count = 0;
+        for (const TexelRecord& r : s.atlas.texels) {
+            if (r.object != 0 || s.atlas.charts[size_t(r.chart)].texel_size != 0.125f) continue;
+            ++*count;
+            far = std::max({far, std::abs(r.position.x), std::abs(r.position.z)});
+        }
+        return far;
+    };
+    int whole_count = 0, contact_count = 0, reach_count = 0;
+    fine_reach(whole, &whole_count);
+    EXPECT_LE(fine_reach(contact, &contact_count), 2.5f + 1e-3f);
+    // The box's sides stand 1 from its centre and 2 high: reach 1 takes tiles within 3 of the
+    // centre, whole tiles of 1.0 (4 of the floor's 8 on each side): up to 4 from the centre.
+    const float far = fine_reach(reach, &reach_count);
+    EXPECT_GT(far, 2.5f) << "no fine texel beyond the contact band";
+    EXPECT_LE(far, 4.0f);
+    EXPECT_GT(reach_count, contact_count);
+    EXPECT_LT(reach_count, whole_count) << "the floor is still cut";
+    for (const Chart& c : reach.atlas.charts)
+        if (c.object == 0 && c.texel_size == 0.5f) {
+            EXPECT_EQ(c.origin, contact.atlas.charts[0].origin) << "the rest keeps its grid";
+        }
+    // Reach 0 is the contact layout.
+    EXPECT_TRUE(same_atlas(make_contact_scene(4, 20.0f, 2, 0.0f).atlas, contact.atlas));
+}
+
+// A cut puts vertices on the floor's edge that the wall (another chart of the same mesh) shares:
+// the wall's triangles are split at them too, so the mesh has no T-junction: the only edges used
+// once are the L's outline (the floor's three free edges and the wall's, 48), the area is kept
+// and the wall is still one chart of base texels. Fails without the neighbour's split (the shared
+// edge then counts three times: 48 + 16).
+TEST(Atlas, ACutSplitsTheNeighbouringChartsTrianglesToo) {
+    const Scene uncut = make_l_room_scene(0);
+    const Scene scene = make_l_room_scene(1);
+    const Mesh& mesh = scene.objects[0].mesh;
+    EXPECT_NEAR(open_edge_length(uncut.objects[0].mesh), 48.0, 1e-4);
+    EXPECT_GT(mesh.triangles.size(), uncut.objects[0].mesh.triangles.size());
+    EXPECT_NEAR(open_edge_length(mesh), 48.0, 1e-4) << "a T-junction on the shared edge";
+    EXPECT_NEAR(mesh_area(mesh), 128.0, 1e-3);
+    int wall_triangles = 0, fine_charts = 0;
+    for (const Chart& c : scene.atlas.charts) {
+        if (c.object != 0) continue;
+        fine_charts += c.texel_size < 0.5f;
+        if (c.axis.z < -0.5f) {
+            EXPECT_EQ(c.texel_size, 0.5f) << "the wall is not refined";
+            wall_triangles += int(c.triangles.size());
+        }
+    }
+    EXPECT_GT(fine_charts, 0) << "the floor was cut";
+    EXPECT_GT(wall_triangles, 2) << "the wall's triangles were split at the cut's vertices";
+    for (const glm::uvec3& t : mesh.triangles) {
+        const glm::vec3 a = mesh.positions[t.x], b = mesh.positions[t.y], c = mesh.positions[t.z];
+        EXPECT_GT(glm::length(glm::cross(b - a, c - a)), 1e-6f) << "no degenerate triangle";
+    }
 }
 
 TEST(Atlas, Deterministic) {
