@@ -163,6 +163,11 @@ private:
     std::array<Texture, 3> surface_;
     Framebuffer lighting_fbo_;
     void compose();
+    // One full-screen pass of `program` over the frame's framebuffer, into the terms `terms`
+    // selects, reading `texture` at unit 0 as `sampler`; blending as the caller set it, depth and
+    // stencil tests off during the pass (depth on after), every term drawn to again after.
+    void draw_full_screen(const Program& program, const char* sampler, GLuint texture,
+                          const std::array<bool, kFrameTermCount>& terms);
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
     std::vector<glm::vec4> volume_rgba_;        // set_volume's term, rows bottom-first
