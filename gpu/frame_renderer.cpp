@@ -714,11 +714,14 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
                                         const glm::mat4& view_projection) {
     std::vector<glm::mat4> models;
     for (const Object& o : scene_.objects) models.push_back(model_matrix(o));
-    // The weld depends only on where the objects are.
-    if (models != caster_models_) {
-        soup_weld_ = weld_soup_corners(casters_, models);
-        caster_models_ = std::move(models);
-    }
+    // The weld depends only on where the open meshes (soup casters) are: a closed mover (Sponza's
+    // block) leaves it as it is. Made again for every move, it cost Sponza's moving frames 2.3×
+    // the draw time of the frames before the weld.
+    bool soup_moved = models.size() != caster_models_.size();
+    for (size_t o = 0; o < models.size() && !soup_moved; ++o)
+        soup_moved = casters_[o].soup && models[o] != caster_models_[o];
+    if (soup_moved) soup_weld_ = weld_soup_corners(casters_, models);
+    caster_models_ = std::move(models);
     std::vector<glm::vec4> triangles;
     append_shadow_volumes(casters_, caster_models_, soup_weld_,
                           glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles);
