@@ -163,6 +163,11 @@ private:
     std::array<Texture, 3> surface_;
     Framebuffer lighting_fbo_;
     void compose();
+    // One full-screen pass of `program` over the frame's framebuffer, into the terms `terms`
+    // selects, reading `texture` at unit 0 as `sampler`; blending as the caller set it, depth and
+    // stencil tests off during the pass (depth on after), every term drawn to again after.
+    void draw_full_screen(const Program& program, const char* sampler, GLuint texture,
+                          const std::array<bool, kFrameTermCount>& terms);
 
     std::array<Texture, kFrameTermCount> aov_;  // indexed by FrameTerm
     std::vector<glm::vec4> volume_rgba_;        // set_volume's term, rows bottom-first
@@ -182,8 +187,8 @@ private:
     Renderbuffer depth_stencil_;
     Framebuffer fbo_;
     std::vector<ShadowCaster> casters_;
-    std::vector<glm::mat4> caster_models_;  // where soup_weld_ was made
-    SoupWeld soup_weld_;
+    std::vector<glm::mat4> caster_models_;  // where the objects were at the last volumes drawn
+    SoupWeld soup_weld_;                    // made where the soup casters are in caster_models_
     // direct.method vpl: the light samples' shadow maps (made on first use) and what they show.
     std::unique_ptr<VplShadowMaps> light_maps_;
     std::vector<LightSample> mapped_lights_;

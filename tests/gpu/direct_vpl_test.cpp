@@ -3,6 +3,10 @@
 // sample), on a quad light (one map per sample) and a point light (two maps back to back).
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cstdio>
+
+#include "../cpu/test_scenes.h"
 #include "gl_fixture.h"
 #include "gpu/frame_renderer.h"
 #include "gpu/lightmap_texture.h"
@@ -99,6 +103,47 @@ TEST_F(DirectVplTest, MapsFollowAMovedObject) {
     const Image volumes = renderer.read_back().aov[size_t(FrameTerm::direct)];
     EXPECT_GT(compare_images(before, volumes).rel_mse, 0.01) << "the cube moved far enough";
     EXPECT_LT(compare_images(after, volumes).rel_mse, 0.005);
+}
+
+// The sweep's lamp in a closed box (light_in_box_coplanar, and the box 5 cm lower: nothing can
+// light the room; pt renders it black) with maps 8 texels across, the sweep's base. The normal
+// offset is a quarter of the distance there: it carried ceiling points 5 cm above the lamp below
+// the map's horizon, out of the map, where they count as seen, and lit the ceiling beyond 20 cm
+// from the lamp (269 and 163 of 2,304 pixels lit at 48² before). The offset is now cut to stay
+// above the horizon. What remains is the maps' resolution: a few ceiling pixels next to the box's
+// top corners, where a texel's centre sees a corner of the box farther than the receiver (1 and 5
+// pixels at 48²; 0 at 16² and 32²). The same box open at the bottom shows the test sees light.
+TEST_F(DirectVplTest, ALampInAClosedBoxLightsNoCeilingThroughMapsEightTexelsAcross) {
+    for (const float top : {1.0f, 0.95f}) {
+        Scene scene = test::room_with_lamp_in_box(top);
+        scene.settings.direct.map_size = 8;
+        scene.camera.width = scene.camera.height = kSize;
+        const Image closed = direct_term(scene, DirectMethod::vpl, true);
+        Mesh& m = scene.objects.back().mesh;
+        m.triangles.erase(std::remove_if(m.triangles.begin(), m.triangles.end(),
+                                         [&](const glm::uvec3& t) {
+                                             return m.positions[t.x].y < -0.1f &&
+                                                    m.positions[t.y].y < -0.1f &&
+                                                    m.positions[t.z].y < -0.1f;
+                                         }),
+                          m.triangles.end());
+        init_versions(scene);
+        const Image open = direct_term(scene, DirectMethod::vpl, true);
+        double sum = 0.0, open_sum = 0.0;
+        int lit = 0;
+        for (int y = 0; y < kSize; ++y)
+            for (int x = 0; x < kSize; ++x) {
+                const glm::vec3 c = closed.rgb(x, y);
+                sum += double(c.r + c.g + c.b);
+                lit += c != glm::vec3(0.0f) ? 1 : 0;
+                const glm::vec3 o = open.rgb(x, y);
+                open_sum += double(o.r + o.g + o.b);
+            }
+        std::printf("box top %.2f: %d of %d pixels lit (sum %.3g; the open box %.3g)\n", top, lit,
+                    kSize * kSize, sum, open_sum);
+        EXPECT_GT(open_sum, 1.0) << "box top " << top;
+        EXPECT_LE(lit, kSize * kSize / 200) << "box top " << top;
+    }
 }
 
 }  // namespace ag::gpu

@@ -112,6 +112,29 @@ TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
     EXPECT_LT(rel_mse, 0.05);
 }
 
+// The specular tests' pair: pt's specular component (256 spp, one volume bounce) and the media
+// method's settings for the same view at 4 × 4 pixel centres per pt pixel (64³, 5,000 photons, no
+// surface bounces), to be box-filtered back (`box_downsample(…, 4)`) as pt's jittered samples
+// integrate the pixel.
+struct SpecularAgainstPt {
+    Image pt;
+    MediaMethodSettings method;
+};
+
+SpecularAgainstPt specular_against_pt(const Scene& scene, ThreadPool& pool) {
+    cpu::ReferenceSettings settings;
+    settings.spp = 256;
+    settings.volume_bounces = 1;
+    SpecularAgainstPt run;
+    run.pt = cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::specular)];
+    run.method.grid = 64;
+    run.method.photons = 5000;
+    run.method.surface_bounces = 0;
+    run.method.width = 4 * scene.camera.width;
+    run.method.height = 4 * scene.camera.height;
+    return run;
+}
+
 // What the camera sees through a glass sphere in fog (scenes/media_glass_checker.json: an emissive
 // checkerboard behind an absorbing glass sphere in a thin fog): the method's specular
 // term — the view march on through the smoothed index, bent, to where the ray is back in air,
@@ -122,26 +145,19 @@ TEST_F(MediaViewTest, GlassSphereInFogMatchesThePathTracer) {
 // the sphere (pt without it) is further off (3.6).
 TEST_F(MediaViewTest, SeesTheSceneBehindTheGlassBent) {
     const Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_checker.json");
-    cpu::ReferenceSettings settings;
-    settings.spp = 256;
-    settings.volume_bounces = 1;
     ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::specular)];
-    MediaMethodSettings method;
-    method.grid = 64;
-    method.photons = 5000;
-    method.surface_bounces = 0;
-    method.width = 4 * scene.camera.width;
-    method.height = 4 * scene.camera.height;
-    const Image bent = box_downsample(render_media(scene, method).specular, 4);
+    const SpecularAgainstPt run = specular_against_pt(scene, pool);
+    const Image& pt = run.pt;
+    const Image bent = box_downsample(render_media(scene, run.method).specular, 4);
     const double bent_rel_mse = compare_images(bent, pt).rel_mse;
 
     // Straight: the scene with the sphere moved far out of view, at the pixels where pt sees it.
     Scene without = scene;
     ASSERT_EQ(without.objects[0].material.type, MaterialType::glass);
     without.objects[0].transform.translation = {0.0f, -100.0f, 0.0f};
+    cpu::ReferenceSettings settings;
     settings.spp = 16;
+    settings.volume_bounces = 1;
     const Image behind = cpu::render_reference(without, settings, pool).full;
     Image straight(pt.width, pt.height);
     for (int y = 0; y < pt.height; ++y)
@@ -634,18 +650,10 @@ TEST_F(MediaViewTest, SeesAMirrorBehindTheGlass) {
             scene.objects.push_back(tile);
         }
     scene.version++;
-    cpu::ReferenceSettings settings;
-    settings.spp = 256;
-    settings.volume_bounces = 1;
     ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::specular)];
-    MediaMethodSettings method;
-    method.grid = 64;
-    method.photons = 5000;
-    method.surface_bounces = 0;
-    method.width = 4 * scene.camera.width;
-    method.height = 4 * scene.camera.height;
+    const SpecularAgainstPt run = specular_against_pt(scene, pool);
+    const Image& pt = run.pt;
+    const MediaMethodSettings& method = run.method;
     const MediaMethodResult media = render_media(scene, method);
     const Image bent = box_downsample(media.specular, 4);
     Image whole(pt.width, pt.height);  // 1 where all 16 method pixels are glass
