@@ -7,6 +7,7 @@
 #include "cpu/sampling.h"
 #include "shared/camera.h"
 #include "shared/lightmap_sample.h"
+#include "shared/media.h"
 #include "shared/qmc.h"
 
 namespace ag::cpu {
@@ -43,6 +44,17 @@ glm::vec3 CpuGather::radiance_along(const Ray& ray, const std::vector<glm::vec3>
                                     int bounces_left, float weight, bool& back_face) const {
     const RayHit hit = rays_.intersect(ray);
     if (!hit.hit) return glm::vec3(0.0f);
+    // The media between the gather point and what it sees dim it (as pt's paths and the GL
+    // gather): Beer–Lambert at the boxes' mean density.
+    if (!scene_.media.empty())
+        return mean_media_transmittance(scene_.media, ray.origin, ray.direction, hit.t) *
+               surface_radiance(ray, hit, aim_radiance, bounces_left, weight, back_face);
+    return surface_radiance(ray, hit, aim_radiance, bounces_left, weight, back_face);
+}
+
+glm::vec3 CpuGather::surface_radiance(const Ray& ray, const RayHit& hit,
+                                      const std::vector<glm::vec3>& aim_radiance, int bounces_left,
+                                      float weight, bool& back_face) const {
     const Material& m = scene_.objects[size_t(hit.object)].material;
     if (m.type != MaterialType::diffuse) {
         // Mirrors and glass have no AIM: follow the bounce to the diffuse surface behind it, both
