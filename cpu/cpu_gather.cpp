@@ -9,7 +9,7 @@
 #include "cpu/sampling.h"
 #include "shared/camera.h"
 #include "shared/lightmap_sample.h"
-#include "shared/media.h"  // ray_box
+#include "shared/media.h"  // ray_box, mean_media_transmittance
 #include "shared/qmc.h"
 
 namespace ag::cpu {
@@ -51,6 +51,17 @@ glm::vec3 CpuGather::radiance_at(const RayHit& hit, const Ray& ray,
                                  const std::vector<glm::vec3>& aim_radiance, int bounces_left,
                                  float weight, bool& back_face) const {
     if (!hit.hit) return glm::vec3(0.0f);
+    // The media between the gather point and what it sees dim it (as pt's paths and the GL
+    // gather): Beer–Lambert at the boxes' mean density.
+    if (!scene_.media.empty())
+        return mean_media_transmittance(scene_.media, ray.origin, ray.direction, hit.t) *
+               surface_radiance(ray, hit, aim_radiance, bounces_left, weight, back_face);
+    return surface_radiance(ray, hit, aim_radiance, bounces_left, weight, back_face);
+}
+
+glm::vec3 CpuGather::surface_radiance(const Ray& ray, const RayHit& hit,
+                                      const std::vector<glm::vec3>& aim_radiance, int bounces_left,
+                                      float weight, bool& back_face) const {
     const Material& m = scene_.objects[size_t(hit.object)].material;
     if (m.type != MaterialType::diffuse) {
         // Mirrors and glass have no AIM: follow the bounce to the diffuse surface behind it, both
@@ -158,7 +169,8 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
     uint64_t reused_here = 0;
     // Nothing moved since the hits were traced (a light or an albedo edit since): a hit on a
     // diffuse surface is read without working out its ray's direction.
-    bool quick = have && !plane;
+    // Media dim each hit by the fog along its ray, which needs the direction too.
+    bool quick = have && !plane && scene_.media.empty();
     for (int o : moved_objects_) quick = quick && moved_at_[size_t(o)] <= cache->epoch;
 
     glm::vec3 sum(0.0f);
@@ -220,8 +232,12 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
                 l = radiance_along(ray, aim_radiance, bounces, 1.0f, back_face);
             else if (c.object >= 0 && c.back)
                 back_face = true;
-            else if (c.object >= 0)
+            else if (c.object >= 0 && scene_.media.empty())
                 l = sample_lightmap(scene_.atlas, aim_radiance, c.object, c.triangle,
+                                    c.barycentric);
+            else if (c.object >= 0)  // as radiance_at: the fog between dims what is seen
+                l = mean_media_transmittance(scene_.media, ray.origin, ray.direction, c.t) *
+                    sample_lightmap(scene_.atlas, aim_radiance, c.object, c.triangle,
                                     c.barycentric);
             reused_here += specular ? 0 : 1;
         } else {

@@ -103,6 +103,10 @@ private:
     // of a diffuse surface.
     glm::vec3 radiance_along(const Ray& ray, const std::vector<glm::vec3>& aim_radiance,
                              int bounces_left, float weight, bool& back_face) const;
+    // The same at `hit`, the first surface along `ray`, before the media on the way.
+    glm::vec3 surface_radiance(const Ray& ray, const RayHit& hit,
+                               const std::vector<glm::vec3>& aim_radiance, int bounces_left,
+                               float weight, bool& back_face) const;
 
     const Scene& scene_;
     std::unique_ptr<RayTracer> own_rays_;

@@ -46,6 +46,7 @@ void PhotonTracer::refresh() {
     groups_ = s.groups;
     per_group_ = s.photons_per_group;
     max_bounces_ = s.max_bounces;
+    media_ = std::make_unique<MediaTracker>(scene_);
     // Halton dimensions for emission and the first bounces; deeper bounces (rare after Russian
     // roulette, and their stratification no longer matters) use hashed numbers.
     dimensions_ = 3 + 3 * std::min(max_bounces_, kQmcBounces);
@@ -113,6 +114,10 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
     const float eps = rays_.epsilon();
     PathEnds ends;
     ends.origin = ray.origin;
+    int inside = -1;  // the glass object the photon is in (its interior medium), or none
+    // Ratio tracking's numbers in perturbed media (closed form in homogeneous ones).
+    HashedStream more(mix64((uint64_t(light) << 32) ^ k ^ (uint64_t(scene_.settings.seed) << 48) ^
+                            0x70686f746f6e73ull));
 
     for (int bounce = 0; bounce < max_bounces_; ++bounce) {
         ray.tmin = 0.0f;
@@ -122,6 +127,9 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
             ends.escape = ray.direction;
             return ends;
         }
+        // Beer–Lambert along the segment through the media it crosses (the glass's interior
+        // medium inside it), as the caustic photons and pt's shadow rays.
+        if (!media_->empty()) power *= media_->transmittance(ray, hit.t, inside, more);
         const Object& object = scene_.objects[size_t(hit.object)];
         const Material& m = object.material;
         const bool front = glm::dot(ray.direction, hit.normal) < 0.0f;
@@ -156,7 +164,12 @@ PathEnds PhotonTracer::trace(int light, int group, int index,
         } else {  // mirror or glass: reflect, or refract by Fresnel, without storing
             out.push_back(v);
             const float u = m.type == MaterialType::glass ? sample(light, k, dim) : 0.0f;
+            const glm::vec3 before = ray.direction;
             ray = specular_bounce(m, hit, ray.direction, u, eps);
+            // Through the surface (the same side of it as before): into or out of the glass.
+            if (m.type == MaterialType::glass && (glm::dot(ray.direction, hit.normal) < 0.0f) ==
+                                                     (glm::dot(before, hit.normal) < 0.0f))
+                inside = front ? hit.object : -1;
         }
     }
     return ends;

@@ -1,13 +1,17 @@
 // Tracing one QMC photon through the scene (Larsen ch. 6.3, 9): emission from a stratum of the
 // light's domain, diffuse bounces with Russian roulette by albedo, mirror and glass without
-// storing. A pure function of (scene, light, group, photon): re-tracing gives the same path, which
-// is what lets selective tracing compare a new path with the stored one.
+// storing; Beer–Lambert through the scene's participating media on every segment (the path
+// itself is not changed by them: media only attenuate these photons). A pure function of (scene,
+// light, group, photon): re-tracing gives the same path, which is what lets selective tracing
+// compare a new path with the stored one.
 #pragma once
 
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
+#include "cpu/media_tracking.h"
 #include "cpu/ray_tracer.h"
 #include "shared/qmc.h"
 #include "shared/scene.h"
@@ -62,6 +66,7 @@ private:
     int groups_, per_group_, max_bounces_, dimensions_;
     std::vector<Halton> halton_;  // per light, scrambled with the scene seed and the light index
     std::vector<std::vector<float>> tables_;  // per light: tabulated numbers of every photon
+    std::unique_ptr<MediaTracker> media_;     // the scene's media as of the last refresh()
 };
 
 }  // namespace ag::cpu

@@ -384,6 +384,16 @@ void main() {
 }
 )";
 
+// A media method's light on the surfaces, added into the indirect term by blending (dst + src;
+// set_media_indirect).
+const char* kAddIndirectFragment = R"(
+uniform sampler2D media_indirect;
+layout(location = kFrameTermIndirect) out vec4 out_indirect;
+void main() {
+    out_indirect = vec4(texelFetch(media_indirect, ivec2(gl_FragCoord.xy), 0).rgb, 0.0);
+}
+)";
+
 // The camera ray's transmittance through the media up to the surface, multiplied into the
 // surface's terms by blending (dst × src; set_volume): pt's components are attenuated so.
 const char* kAttenuateFragment = R"(
@@ -552,6 +562,9 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     attenuate_ =
         Program("frame media transmittance", kFullScreenTriangleVertex, kAttenuateFragment);
     transmittance_texture_ = make_float_texture(width, height);
+    add_indirect_ =
+        Program("frame media indirect", kFullScreenTriangleVertex, kAddIndirectFragment);
+    media_indirect_texture_ = make_float_texture(width, height);
     frame_ = make_float_texture(width, height);
     compose_fbo_ = make_framebuffer();
     gl::BindFramebuffer(GL_FRAMEBUFFER, compose_fbo_.get());
@@ -1180,6 +1193,23 @@ void FrameRenderer::set_volume(const Image& volume, const Image& transmittance) 
                 glm::vec4(volume.rgb(x, y), 1.0f);
 }
 
+void FrameRenderer::set_media_indirect(const Image& indirect) {
+    media_indirect_rgba_.clear();
+    if (indirect.pixels.empty()) return;
+    if (indirect.width != width_ || indirect.height != height_)
+        throw std::invalid_argument(
+            "FrameRenderer::set_media_indirect: the image is not frame-sized");
+    media_indirect_rgba_.resize(size_t(width_) * size_t(height_));
+    for (int y = 0; y < height_; ++y)
+        for (int x = 0; x < width_; ++x)
+            media_indirect_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
+                glm::vec4(indirect.rgb(x, y), 0.0f);
+    gl::BindTexture(GL_TEXTURE_2D, media_indirect_texture_.get());
+    gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
+                      media_indirect_rgba_.data());
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+}
+
 void FrameRenderer::set_specular_through_glass(const Image& specular,
                                                const std::vector<uint8_t>& covered) {
     glass_specular_rgba_.clear();
@@ -1226,6 +1256,32 @@ void FrameRenderer::compose() {
         gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
         gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
                           volume_rgba_.data());
+    }
+    // The light the fog scatters onto the surfaces, into the indirect term after the running
+    // mean (it is the same every frame until the method runs again) and before the dimming.
+    if (!media_indirect_rgba_.empty()) {
+        gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
+        GLenum buffers[kFrameTermCount];
+        for (size_t t = 0; t < kFrameTermCount; ++t)
+            buffers[t] = t == size_t(FrameTerm::indirect) ? GLenum(GL_COLOR_ATTACHMENT0 + t)
+                                                          : GLenum(GL_NONE);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
+        gl::Viewport(0, 0, width_, height_);
+        gl::Disable(GL_DEPTH_TEST);
+        gl::Disable(GL_STENCIL_TEST);
+        gl::Enable(GL_BLEND);
+        gl::BlendEquation(GL_FUNC_ADD);
+        gl::BlendFunc(GL_ONE, GL_ONE);  // dst + the fog's light
+        add_indirect_.use();
+        gl::ActiveTexture(GL_TEXTURE0);
+        gl::BindTexture(GL_TEXTURE_2D, media_indirect_texture_.get());
+        add_indirect_.set("media_indirect", 0);
+        gl::BindVertexArray(empty_vao_.get());
+        gl::DrawArrays(GL_TRIANGLES, 0, 3);
+        gl::Disable(GL_BLEND);
+        gl::Enable(GL_DEPTH_TEST);
+        for (size_t t = 0; t < kFrameTermCount; ++t) buffers[t] = GLenum(GL_COLOR_ATTACHMENT0 + t);
+        gl::DrawBuffers(GLsizei(kFrameTermCount), buffers);
     }
     // The surface's terms dimmed by the media in front of it, after the running mean (which
     // keeps them undimmed; the transmittance is the same every frame until the method runs

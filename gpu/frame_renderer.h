@@ -83,6 +83,10 @@ public:
     // up to the surface it meets, which attenuates the other four terms, as in pt's components
     // (the term through glass, set_specular_through_glass, carries its own).
     void set_volume(const Image& volume, const Image& transmittance = Image());
+    // Light a media method adds to the `indirect` term (rows top-first, width × height): what
+    // the fog scatters onto the surface each pixel shows, added in every later frame after the
+    // running mean and before set_volume's transmittance dims it; an empty image adds nothing.
+    void set_media_indirect(const Image& indirect);
     // A media method's `specular` term (rows top-first, width × height) at the pixels where
     // `covered` (row-major, top-first) is set — those whose camera ray meets glass first, traced
     // through the smoothed index and the fog — in place of the cube maps' term there, in every
@@ -176,6 +180,11 @@ private:
     std::vector<glm::vec4> transmittance_rgba_;
     Texture transmittance_texture_;
     Program attenuate_;
+    // set_media_indirect's term (rows bottom-first; empty: none), its texture and the pass that
+    // adds it.
+    std::vector<glm::vec4> media_indirect_rgba_;
+    Texture media_indirect_texture_;
+    Program add_indirect_;
     // set_specular_through_glass's term (alpha: covered), rows bottom-first, and its texture.
     std::vector<glm::vec4> glass_specular_rgba_;
     Texture glass_specular_texture_;

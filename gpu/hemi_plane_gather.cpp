@@ -5,6 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <limits>
 #include <numbers>
+#include <string>
 
 #include "gpu/lightmap_texture.h"
 
@@ -49,7 +50,25 @@ uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int specular;
 uniform float specular_tag;
+// The world's media boxes (at most 8, as the frame's), their mean σ_t: what the gather point
+// sees is dimmed by Beer–Lambert on the way, as pt's paths are.
+uniform int media_count;
+uniform vec3 media_min[8];
+uniform vec3 media_max[8];
+uniform float media_sigma_t[8];
 layout(location = 0) out vec4 color;
+float media_transmittance(vec3 p, vec3 l, float t_max) {
+    float depth = 0.0;
+    for (int m = 0; m < media_count; ++m) {
+        vec3 inv = 1.0 / l;
+        vec3 ta = (media_min[m] - p) * inv, tb = (media_max[m] - p) * inv;
+        vec3 lo = min(ta, tb), hi = max(ta, tb);
+        float t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
+        float t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
+        depth += media_sigma_t[m] * max(t1 - t0, 0.0);
+    }
+    return exp(-depth);
+}
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
@@ -60,6 +79,10 @@ void main() {
     if (!gl_FrontFacing) { color = vec4(0.0, 0.0, 0.0, w); return; }
     vec3 radiance = specular != 0 ? vec3(0.0) : (use_charts != 0 ? chart_lightmap(aim, charts, v_uv, v_chart)
                                                     : texture(aim, v_uv).rgb);
+    if (media_count > 0) {
+        float d = distance(v_world, eye);
+        radiance *= media_transmittance(eye, (v_world - eye) / max(d, 1e-12), d);
+    }
     color = vec4(w * radiance, 0.0);
 }
 )";
@@ -270,6 +293,14 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
     program_.set("charts", 2);
     program_.set("use_charts", chart_texture ? 1 : 0);
     program_.set("specular_tag", specular_tag_);
+    const size_t media = std::min(scene_.media.size(), size_t(8));  // the frame refuses more
+    program_.set("media_count", int(media));
+    for (size_t m = 0; m < media; ++m) {
+        const std::string k = "[" + std::to_string(m) + "]";
+        program_.set(("media_min" + k).c_str(), scene_.media[m].bounds.min);
+        program_.set(("media_max" + k).c_str(), scene_.media[m].bounds.max);
+        program_.set(("media_sigma_t" + k).c_str(), scene_.media[m].sigma_t());
+    }
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;

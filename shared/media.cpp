@@ -116,4 +116,15 @@ bool ray_box(const Bounds& b, const glm::vec3& o, const glm::vec3& d, float t0, 
     return t1 > t0;
 }
 
+float mean_media_transmittance(const std::vector<Medium>& media, const glm::vec3& o,
+                               const glm::vec3& d, float t_max) {
+    float depth = 0.0f;
+    for (const Medium& m : media) {
+        float enter = 0.0f, exit = 0.0f;
+        if (ray_box(m.bounds, o, d, 0.0f, t_max, enter, exit))
+            depth += m.sigma_t() * std::max(exit - enter, 0.0f);
+    }
+    return std::exp(-depth);
+}
+
 }  // namespace ag

@@ -66,4 +66,10 @@ std::vector<float> schlick_spread_table(float k, int entries);
 bool ray_box(const Bounds& b, const glm::vec3& o, const glm::vec3& d, float t0, float t1,
              float& enter, float& exit);
 
+// Beer–Lambert along o + t·d (unit d), t ∈ [0, t_max], through the media boxes at their mean
+// density (the noise left out): exp(−Σ σ_t · chord), as the frame's lighting shader and the GL
+// gather compute it. 1 without media.
+float mean_media_transmittance(const std::vector<Medium>& media, const glm::vec3& o,
+                               const glm::vec3& d, float t_max);
+
 }  // namespace ag

@@ -485,11 +485,15 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     }
     start = Clock::now();
     result.volume = view_media(scene, result, camera, settings, &result.transmittance);
+    result.indirect = view_fog_on_surfaces(scene, result, camera, settings);
     if (settings.through_glass)
         result.specular = view_through_glass(scene, result, camera, settings, &result.glass);
     result.timing.viewing = since(start);
     return result;
 }
+
+// Mirrors the fog's light on the surfaces is followed through (view_fog_on_surfaces).
+constexpr int kFogMirrorBounces = 2;
 
 // Ratio-tracking estimates averaged per pixel for the camera ray's transmittance in perturbed
 // media (homogeneous ones are exact with one).
@@ -532,6 +536,79 @@ Image view_media(const Scene& scene, const MediaMethodResult& media, const Camer
     for (int y = 0; y < volume.height; ++y)
         for (int x = 0; x < volume.width; ++x) volume.set_rgb(x, y, volume.rgb(x, y) * media.tint);
     return volume;
+}
+
+Image view_fog_on_surfaces(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                           const MediaMethodSettings& settings) {
+    Image out(camera.width, camera.height);
+    const int n = settings.fog_on_surfaces_rays;
+    if (n <= 0 || media.fluence.empty()) return out;
+    const cpu::RayTracer rays(scene);
+    const cpu::MediaTracker tracker(scene);
+    const float eps = rays.epsilon();
+    // Every march ray, the pixel it adds to and its weight: albedo / N × the light's colour,
+    // times the transmittance up to the mirror that reflected it, where one did.
+    std::vector<gpu::MediaViewRay> march;
+    struct Share {
+        int x, y;
+        glm::vec3 weight;
+    };
+    std::vector<Share> shares;
+    for (int y = 0; y < camera.height; ++y)
+        for (int x = 0; x < camera.width; ++x) {
+            const cpu::Ray ray{camera.eye,
+                               camera_ray_direction(camera, float(x) + 0.5f, float(y) + 0.5f)};
+            const cpu::RayHit hit = rays.intersect(ray);
+            if (!hit.hit) continue;
+            const Object& object = scene.objects[size_t(hit.object)];
+            if (object.material.type != MaterialType::diffuse) continue;
+            if (glm::dot(ray.direction, hit.normal) >= 0.0f) continue;  // lightmaps: front only
+            const glm::vec3 albedo = albedo_at(object, hit.triangle, hit.barycentric);
+            if (!glm::any(glm::greaterThan(albedo, glm::vec3(0.0f)))) continue;
+            // A Hammersley set over the hemisphere, rotated per pixel (Cranley-Patterson).
+            const uint32_t pixel = uint32_t(y) * uint32_t(camera.width) + uint32_t(x);
+            const float r1 = hash_unit(settings.seed ^ 0x6f67u, pixel, 0u);
+            const float r2 = hash_unit(settings.seed ^ 0x6f67u, pixel, 1u);
+            for (int k = 0; k < n; ++k) {
+                const float u1 = std::fmod((float(k) + 0.5f) / float(n) + r1, 1.0f);
+                const float u2 = std::fmod(float(radical_inverse(2, uint64_t(k))) + r2, 1.0f);
+                cpu::Ray r{hit.position + eps * hit.normal,
+                           cpu::cosine_direction(hit.normal, u1, u2)};
+                glm::vec3 weight = albedo / float(n) * media.tint;
+                // Up to kFogMirrorBounces mirrors on the way (pt's paths from the surface go on
+                // through them to the fog behind): the march goes on from each, dimmed by the
+                // media up to it.
+                for (int bounce = 0; bounce <= kFogMirrorBounces; ++bounce) {
+                    const cpu::RayHit next = rays.intersect(r);
+                    gpu::MediaViewRay m;
+                    m.origin = r.origin;
+                    m.direction = r.direction;
+                    m.max_distance = next.hit ? next.t : 1e30f;
+                    march.push_back(m);
+                    shares.push_back({x, y, weight});
+                    if (!next.hit ||
+                        scene.objects[size_t(next.hit ? next.object : 0)].material.type !=
+                            MaterialType::mirror ||
+                        glm::dot(r.direction, next.normal) >= 0.0f)
+                        break;
+                    cpu::HashedStream more(cpu::mix64(uint64_t(pixel) * 4096u + uint64_t(k)));
+                    weight *= tracker.transmittance(r, next.t, -1, more);
+                    r = cpu::specular_split(scene.objects[size_t(next.object)].material, next,
+                                            r.direction, eps)
+                            .reflected;
+                }
+            }
+        }
+    gpu::MediaViewSettings view;
+    view.step = settings.fog_on_surfaces_step;
+    view.phase_k = scene.media.empty() ? 0.0f : scene.media[0].phase_k;
+    view.phase_spread = settings.phase_spread;
+    const std::vector<gpu::MediaViewEnd> ends =
+        gpu::MediaView().march(media.grids, media.fluence, media.flow, march, view);
+    for (size_t i = 0; i < shares.size(); ++i)
+        out.set_rgb(shares[i].x, shares[i].y,
+                    out.rgb(shares[i].x, shares[i].y) + ends[i].radiance * shares[i].weight);
+    return out;
 }
 
 namespace {

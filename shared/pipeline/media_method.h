@@ -67,6 +67,11 @@ struct MediaMethodSettings {
     uint32_t seed = 0;  // the bounced photons' directions
     // Also what the camera sees through glass (MediaMethodResult::specular).
     bool through_glass = true;
+    // The light the fog scatters onto the surfaces the camera sees (MediaMethodResult::indirect,
+    // view_fog_on_surfaces): view-march rays per pixel over the surface's hemisphere (cosine-
+    // distributed, a Hammersley set rotated per pixel); 0: none. Their step, in voxels.
+    int fog_on_surfaces_rays = 32;
+    float fog_on_surfaces_step = 1.0f;
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no copy: the grids are SSBOs). The octree
@@ -92,6 +97,10 @@ struct MediaMethodResult {
     // elsewhere; view_through_glass), where settings.through_glass.
     Image specular;
     std::vector<uint8_t> glass;  // per pixel of `specular` (row-major): 1 where it is the term
+    // Per pixel, the light the fog scatters onto the diffuse surface the camera ray meets,
+    // reflected towards the camera (view_fog_on_surfaces): part of the frame's `indirect` term
+    // (pt files it there), not yet dimmed by the camera ray's transmittance.
+    Image indirect;
     MediaMethodTiming timing;
     glm::ivec3 grid{0};
     size_t photons_marched = 0;    // photons of the plane that meet the grid
@@ -129,6 +138,18 @@ Image media_slice_view(const MediaMethodResult& media, MediaField field, int axi
 // `transmittance`, where given, gets each pixel's transmittance up to the first surface.
 Image view_media(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
                  const MediaMethodSettings& settings, Image* transmittance = nullptr);
+
+// The light the media scatter onto the surfaces the camera sees (not his: his view march ends
+// at the first surface): at the diffuse front face each pixel's straight camera ray meets, the
+// single-scattered radiance arriving over its hemisphere, gathered by settings.
+// fog_on_surfaces_rays view-march rays (the volume term's march and phase, from the surface up
+// to the next surface a straight ray meets) in cosine-distributed directions, so that
+// albedo/π · E = albedo / N · Σ L_k; times the light's colour. What pt files under `indirect`
+// for the paths whose first vertex after the visible surface scatters in a medium, with the
+// light the surfaces send into the fog (surface_bounces) included. Black where the ray meets no
+// diffuse front face, or with no rays. Needs a GL context.
+Image view_fog_on_surfaces(const Scene& scene, const MediaMethodResult& media, const Camera& camera,
+                           const MediaMethodSettings& settings);
 
 // What the camera sees through the glass (his viewing pass behind the refractive object,
 // ch. 3.1.6): at each pixel whose camera ray meets glass first, the Fresnel reflection there, and

@@ -90,12 +90,14 @@ void Pipeline::update_media() {
         } else {
             media_->volume =
                 view_media(scene_, *media_, camera, media_settings_, &media_->transmittance);
+            media_->indirect = view_fog_on_surfaces(scene_, *media_, camera, media_settings_);
             if (media_settings_.through_glass)
                 media_->specular =
                     view_through_glass(scene_, *media_, camera, media_settings_, &media_->glass);
         }
         media_failed_ = false;
         renderer_->set_volume(media_->volume, media_->transmittance);
+        renderer_->set_media_indirect(media_->indirect);
         renderer_->set_specular_through_glass(media_->specular, media_->glass);
     } catch (const std::invalid_argument& e) {
         // Media without a light the method can use (a light switched off in the viewer): no
@@ -104,6 +106,7 @@ void Pipeline::update_media() {
         media_.reset();
         media_failed_ = true;
         renderer_->set_volume(Image());
+        renderer_->set_media_indirect(Image());
         renderer_->set_specular_through_glass(Image(), {});
         if (e.what() != media_warning_) {
             media_warning_ = e.what();

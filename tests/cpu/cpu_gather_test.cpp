@@ -16,6 +16,7 @@
 #include "cpu/photon_simulation.h"
 #include "gather_scenes.h"
 #include "shared/lightmap_sample.h"
+#include "shared/media.h"
 #include "shared/shapes.h"
 #include "test_scenes.h"
 
@@ -600,6 +601,15 @@ TEST(CpuGather, TheRayCacheGivesWhatTracingGives) {
     // The cube becomes a mirror: rays that met it follow the bounce now.
     scene.objects[size_t(cube)].material.type = MaterialType::mirror;
     expect_as_traced("the cube a mirror", 0.3, still - 0.01);
+    // Fog in the lower half of the box: a re-read hit is dimmed along its ray as a traced one.
+    Medium fog;
+    fog.bounds.add(glm::vec3(-10.0f, -10.0f, -10.0f));
+    fog.bounds.add(glm::vec3(560.0f, 250.0f, 560.0f));
+    fog.sigma_s = 1e-3f;
+    fog.sigma_a = 1e-3f;
+    scene.media.push_back(fog);
+    traced_scene.media = scene.media;
+    expect_as_traced("fog added", 0.3, still);
 }
 
 }  // namespace ag::cpu

@@ -229,6 +229,9 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
     // His pipelines as he measured them: photons from the light only (the adaptive pipeline
     // does not bounce photons off surfaces, so the reference must not either).
     base.surface_bounces = 0;
+    // His viewing pass is the volume term alone: not the fog's light on the surfaces (the frame's
+    // indirect term, ours), which would add its march rays to the pass's time.
+    base.fog_on_surfaces_rays = 0;
     std::printf(
         "bench media: %s at %dx%d, %d voxels along the longest side (llvmpipe timings: a "
         "software rasteriser on shared CPU cores, not a GPU)\n",

@@ -21,8 +21,10 @@ const Command kMediaCommand{
     "of n, sigma_s and sigma_t through the ray tracer, n smoothed by a 9^3 Gaussian, photons of "
     "the first point light's photon plane marched along curved paths on the GPU, single "
     "scattering by a view march. Writes OUT.exr and OUT.png, and OUT.specular.exr (what the camera "
-    "sees through the glass: the view march on through it, bent, then the surface behind), and "
-    "prints the time of each pass.",
+    "sees through the glass: the view march on through it, bent, then the surface behind), "
+    "OUT.indirect.exr (the light the fog scatters onto the surfaces the camera sees, the frame's "
+    "indirect term's media part, before the camera ray's transmittance), OUT.transmittance.exr "
+    "(the camera ray's transmittance up to the first surface), and prints the time of each pass.",
     {
         text("output,o", "OUT.exr", "the volume term"),
         integer("grid", "N", "voxels along the grid's longest side", 4, 512,
@@ -42,6 +44,10 @@ const Command kMediaCommand{
                 "reflected; else cosine, times the grey albedo) and are marched again, up to N "
                 "times (0: light from the light only, as his)",
                 0, 16, MediaMethodSettings{}.surface_bounces),
+        integer("surface-rays", "N",
+                "view-march rays per pixel over the hemisphere of the surface the camera sees, "
+                "for the light the fog scatters onto it (0: none)",
+                0, 4096, MediaMethodSettings{}.fog_on_surfaces_rays),
         flag("adaptive",
              "his adaptive pipeline (ch. 3.2): pilot photons, importance-sampled photons "
              "(--photons of them), per-voxel mipmap filtering"),
@@ -99,6 +105,7 @@ int run_media(const Args& args) {
     settings.photons = args.get_int("photons");
     settings.march_step = float(args.get_double("step"));
     settings.surface_bounces = args.get_int("surface-bounces");
+    settings.fog_on_surfaces_rays = args.get_int("surface-rays");
     settings.octree = !args.has("no-octree");
     settings.phase_spread = !args.has("his-phase");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
@@ -125,6 +132,12 @@ int run_media(const Args& args) {
     // What the camera sees through the glass (the specular term at glass pixels), where any.
     if (!result.specular.pixels.empty())
         write_image(result.specular, out.substr(0, out.size() - 4) + ".specular.exr");
+    // The light the fog scatters onto the surfaces the camera sees.
+    if (!result.indirect.pixels.empty())
+        write_image(result.indirect, out.substr(0, out.size() - 4) + ".indirect.exr");
+    // The camera ray's transmittance up to the first surface (what dims the frame's other terms).
+    if (!result.transmittance.pixels.empty())
+        write_image(result.transmittance, out.substr(0, out.size() - 4) + ".transmittance.exr");
     if (args.has("slices")) {
         const int layer = result.grids.size.z / 2;
         const std::string stem = out.substr(0, out.size() - 4);
