@@ -135,6 +135,27 @@ SpecularAgainstPt specular_against_pt(const Scene& scene, ThreadPool& pool) {
     return run;
 }
 
+// A pipeline frame term against pt's: the pipeline at twice pt's size with the media method's
+// `settings`, `frames` frames, box-filtered to pt's size. The relative difference of the means,
+// the relMSE, and pt's sum.
+struct TermAgainstPt {
+    double mean = 0.0, rel_mse = 0.0, pt_sum = 0.0;
+};
+TermAgainstPt term_against_pt(Scene& scene, const Image& pt, MediaMethodSettings settings,
+                              FrameTerm term, int frames = 1) {
+    PipelineOptions options{2 * pt.width, 2 * pt.height};
+    settings.width = options.width;
+    settings.height = options.height;
+    options.media = settings;
+    Pipeline pipeline(scene, options);
+    for (int f = 0; f < frames; ++f) pipeline.frame();
+    const Image got = box_downsample(pipeline.images().aov[size_t(term)], 2);
+    double sum = 0.0, sum_pt = 0.0;
+    for (float v : got.pixels) sum += v;
+    for (float v : pt.pixels) sum_pt += v;
+    return {sum / sum_pt - 1.0, compare_images(got, pt).rel_mse, sum_pt};
+}
+
 // What the camera sees through a glass sphere in fog (scenes/media_glass_checker.json: an emissive
 // checkerboard behind an absorbing glass sphere in a thin fog): the method's specular
 // term — the view march on through the smoothed index, bent, to where the ray is back in air,
@@ -602,21 +623,11 @@ TEST_F(MediaViewTest, PipelineLightsTheSurfacesThroughTheFog) {
     settings.grid = 16;
     settings.photons = 2000;
     settings.surface_bounces = 0;
-    PipelineOptions options{2 * pt.width, 2 * pt.height};
-    settings.width = options.width;
-    settings.height = options.height;
-    options.media = settings;
-    Pipeline pipeline(scene, options);
-    pipeline.frame();
-    const Image direct = box_downsample(pipeline.images().aov[size_t(FrameTerm::direct)], 2);
-    double sum = 0.0, sum_pt = 0.0;
-    for (float v : direct.pixels) sum += v;
-    for (float v : pt.pixels) sum_pt += v;
-    const double rel_mse = compare_images(direct, pt).rel_mse;
-    std::printf("direct light through the fog against pt: mean %+.4f, relMSE %.4f\n",
-                sum / sum_pt - 1.0, rel_mse);
-    EXPECT_LT(std::abs(sum / sum_pt - 1.0), 0.03);
-    EXPECT_LT(rel_mse, 0.02);
+    const TermAgainstPt r = term_against_pt(scene, pt, settings, FrameTerm::direct);
+    std::printf("direct light through the fog against pt: mean %+.4f, relMSE %.4f\n", r.mean,
+                r.rel_mse);
+    EXPECT_LT(std::abs(r.mean), 0.03);
+    EXPECT_LT(r.rel_mse, 0.02);
 }
 
 // The frame's indirect term has the light the fog scatters onto the surfaces (pt files it
@@ -642,22 +653,12 @@ TEST_F(MediaViewTest, PipelineIndirectHasTheFogsLightOnTheSurfaces) {
     settings.photons = 20000;
     settings.surface_bounces = 1;
     settings.fog_on_surfaces_rays = 16;
-    PipelineOptions options{2 * pt.width, 2 * pt.height};
-    settings.width = options.width;
-    settings.height = options.height;
-    options.media = settings;
-    Pipeline pipeline(scene, options);
-    pipeline.frame();
-    const Image indirect = box_downsample(pipeline.images().aov[size_t(FrameTerm::indirect)], 2);
-    double sum = 0.0, sum_pt = 0.0;
-    for (float v : indirect.pixels) sum += v;
-    for (float v : pt.pixels) sum_pt += v;
-    const double rel_mse = compare_images(indirect, pt).rel_mse;
+    const TermAgainstPt r = term_against_pt(scene, pt, settings, FrameTerm::indirect);
     std::printf("the fog's light on the floor against pt's indirect: mean %+.4f, relMSE %.4f\n",
-                sum / sum_pt - 1.0, rel_mse);
-    EXPECT_GT(sum_pt, 0.0);
-    EXPECT_LT(std::abs(sum / sum_pt - 1.0), 0.05);
-    EXPECT_LT(rel_mse, 0.01);
+                r.mean, r.rel_mse);
+    EXPECT_GT(r.pt_sum, 0.0);
+    EXPECT_LT(std::abs(r.mean), 0.05);
+    EXPECT_LT(r.rel_mse, 0.01);
 }
 
 // What the IIM gathers is dimmed by the fog on the way, in both gather backends: `media_fog_wall`
@@ -675,8 +676,6 @@ TEST_F(MediaViewTest, PipelineIndirectDimsWhatTheGatherSeesThroughTheFog) {
     ThreadPool pool(2);
     const Image pt =
         cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::indirect)];
-    double sum_pt = 0.0;
-    for (float v : pt.pixels) sum_pt += v;
     for (const GatherBackend backend : {GatherBackend::cpu, GatherBackend::gl}) {
         Scene local = scene;
         local.settings.gather.backend = backend;
@@ -685,22 +684,12 @@ TEST_F(MediaViewTest, PipelineIndirectDimsWhatTheGatherSeesThroughTheFog) {
         settings.photons = 20000;
         settings.surface_bounces = 1;
         settings.fog_on_surfaces_rays = 16;
-        PipelineOptions options{2 * pt.width, 2 * pt.height};
-        settings.width = options.width;
-        settings.height = options.height;
-        options.media = settings;
-        Pipeline pipeline(local, options);
-        for (int f = 0; f < 30; ++f) pipeline.frame();
-        const Image indirect =
-            box_downsample(pipeline.images().aov[size_t(FrameTerm::indirect)], 2);
-        double sum = 0.0;
-        for (float v : indirect.pixels) sum += v;
-        const double rel_mse = compare_images(indirect, pt).rel_mse;
+        const TermAgainstPt r = term_against_pt(local, pt, settings, FrameTerm::indirect, 30);
         const char* name = backend == GatherBackend::cpu ? "cpu" : "gl";
         std::printf("indirect through the fog (%s gather) against pt: mean %+.4f, relMSE %.4f\n",
-                    name, sum / sum_pt - 1.0, rel_mse);
-        EXPECT_LT(std::abs(sum / sum_pt - 1.0), 0.06) << name;
-        EXPECT_LT(rel_mse, 0.01) << name;
+                    name, r.mean, r.rel_mse);
+        EXPECT_LT(std::abs(r.mean), 0.06) << name;
+        EXPECT_LT(r.rel_mse, 0.01) << name;
     }
 }
 
