@@ -5,6 +5,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <stdexcept>
 
+#include "gpu/media_glsl.h"
 #include "shared/camera.h"
 #include "shared/qmc.h"
 
@@ -16,13 +17,9 @@ constexpr int kLightMapUnit = 6;  // direct.method vpl: the light samples' shado
 
 // World media boxes the frame's direct light crosses (set_light_uniforms; scenes with more are
 // refused by the FrameRenderer).
-#define AG_FRAME_MEDIA_BOXES 8
-constexpr int kMaxFrameMediaBoxes = AG_FRAME_MEDIA_BOXES;
-#define AG_FRAME_STRINGIFY_(x) #x
-#define AG_FRAME_STRINGIFY(x) AG_FRAME_STRINGIFY_(x)
+constexpr int kMaxFrameMediaBoxes = kMaxMediaBoxes;
 
-const char* kLightsGlsl =
-    "const int kMaxMediaBoxes = " AG_FRAME_STRINGIFY(AG_FRAME_MEDIA_BOXES) R"(;
+const std::string kLightsGlsl = std::string(kMediaTransmittanceGlsl) + R"(
 uniform int light_count;
 uniform vec3 light_position[kMaxLightSamples];
 uniform vec3 light_intensity[kMaxLightSamples];
@@ -30,25 +27,7 @@ uniform vec3 light_normal[kMaxLightSamples];
 uniform int light_one_sided[kMaxLightSamples];
 uniform int light_directional[kMaxLightSamples];
 uniform vec2 light_cone[kMaxLightSamples];
-uniform int media_count;
-uniform vec3 media_min[kMaxMediaBoxes];
-uniform vec3 media_max[kMaxMediaBoxes];
-uniform float media_sigma_t[kMaxMediaBoxes];  // σ_s + σ_a, the mean density (noise left out)
 const float kPi = 3.14159265358979;
-// Beer–Lambert from p along unit l up to distance t_max through the world's media boxes
-// (disjoint, so the optical depths add): what pt's shadow rays see, in closed form.
-float media_transmittance(vec3 p, vec3 l, float t_max) {
-    float depth = 0.0;
-    for (int m = 0; m < media_count; ++m) {
-        vec3 inv = 1.0 / l;
-        vec3 ta = (media_min[m] - p) * inv, tb = (media_max[m] - p) * inv;
-        vec3 lo = min(ta, tb), hi = max(ta, tb);
-        float t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
-        float t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
-        depth += media_sigma_t[m] * max(t1 - t0, 0.0);
-    }
-    return exp(-depth);
-}
 // Radiance reflected by a Lambertian surface from point light i, unshadowed: ρ/π · I cosθ / d²
 // (a spot's I times its falloff; a sun: ρ/π · E cosθ), attenuated by the media on the way.
 vec3 direct_from(int i, vec3 p, vec3 n, vec3 albedo) {

@@ -8,6 +8,7 @@
 #include <string>
 
 #include "gpu/lightmap_texture.h"
+#include "gpu/media_glsl.h"
 
 namespace ag::gpu {
 
@@ -37,7 +38,7 @@ void main() {
 // inside geometry), so after the reduction alpha is the share of such pixels. With the distance
 // output bound (attachment 1): r = weight / distance of every pixel that shows geometry (any face,
 // any material), so after the reduction r is Σ w/d and the harmonic mean distance Σw / Σ w/d.
-const std::string kFragment = std::string(kChartLightmapGlsl) + R"(
+const std::string kFragment = std::string(kChartLightmapGlsl) + kMediaTransmittanceGlsl + R"(
 in vec2 v_uv;
 in vec3 v_world;
 flat in float v_chart;
@@ -50,25 +51,7 @@ uniform sampler2D weights;
 uniform ivec2 tile_origin;
 uniform int specular;
 uniform float specular_tag;
-// The world's media boxes (at most 8, as the frame's), their mean σ_t: what the gather point
-// sees is dimmed by Beer–Lambert on the way, as pt's paths are.
-uniform int media_count;
-uniform vec3 media_min[8];
-uniform vec3 media_max[8];
-uniform float media_sigma_t[8];
 layout(location = 0) out vec4 color;
-float media_transmittance(vec3 p, vec3 l, float t_max) {
-    float depth = 0.0;
-    for (int m = 0; m < media_count; ++m) {
-        vec3 inv = 1.0 / l;
-        vec3 ta = (media_min[m] - p) * inv, tb = (media_max[m] - p) * inv;
-        vec3 lo = min(ta, tb), hi = max(ta, tb);
-        float t0 = max(max(lo.x, lo.y), max(lo.z, 0.0));
-        float t1 = min(min(hi.x, hi.y), min(hi.z, t_max));
-        depth += media_sigma_t[m] * max(t1 - t0, 0.0);
-    }
-    return exp(-depth);
-}
 void main() {
     ivec2 p = ivec2(gl_FragCoord.xy) - tile_origin;
     float w = texelFetch(weights, p, 0).r;
