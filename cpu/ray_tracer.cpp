@@ -172,7 +172,7 @@ struct RayTracer::Impl {
 RayTracer::RayTracer(const Scene& scene) : impl_(std::make_unique<Impl>()) {
     impl_->device.reset(rtcNewDevice(nullptr));
     if (!impl_->device) throw std::runtime_error("cannot create an Embree device");
-    epsilon_ = 1e-5f * scene.diagonal();
+    epsilon_ = kRayOffsetPerDiagonal * scene.diagonal();
     coincident_ = coincident_tolerance(scene.diagonal(), glm::vec3(0.0f));
 
     impl_->object_scenes.resize(scene.objects.size());

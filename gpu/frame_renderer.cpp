@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "gpu/media_glsl.h"
+#include "gpu/media_uniforms.h"
 #include "shared/camera.h"
 #include "shared/qmc.h"
 
@@ -14,6 +15,23 @@ namespace ag::gpu {
 namespace {
 
 constexpr int kLightMapUnit = 6;  // direct.method vpl: the light samples' shadow maps
+
+// An image's rows run top-first, a GL texture's bottom-first: `rgba` becomes the image's rgb,
+// rows turned over, with alpha(x, y) beside each pixel.
+template <class Alpha>
+void flip_to_rgba(const Image& image, Alpha alpha, std::vector<glm::vec4>& rgba) {
+    rgba.resize(size_t(image.width) * size_t(image.height));
+    for (int y = 0; y < image.height; ++y)
+        for (int x = 0; x < image.width; ++x)
+            rgba[size_t(image.height - 1 - y) * size_t(image.width) + size_t(x)] =
+                glm::vec4(image.rgb(x, y), alpha(x, y));
+}
+
+void upload_rgba(GLuint texture, int width, int height, const std::vector<glm::vec4>& rgba) {
+    gl::BindTexture(GL_TEXTURE_2D, texture);
+    gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width, height, GL_RGBA, GL_FLOAT, rgba.data());
+    gl::BindTexture(GL_TEXTURE_2D, 0);
+}
 
 // World media boxes the frame's direct light crosses (set_light_uniforms; scenes with more are
 // refused by the FrameRenderer).
@@ -626,14 +644,7 @@ void FrameRenderer::set_light_uniforms(const Program& p,
         p.set(("light_directional" + k).c_str(), lights[i].directional ? 1 : 0);
         p.set(("light_cone" + k).c_str(), lights[i].cone);
     }
-    const size_t media = std::min(scene_.media.size(), size_t(kMaxFrameMediaBoxes));  // see ctor
-    p.set("media_count", int(media));
-    for (size_t m = 0; m < media; ++m) {
-        const std::string k = "[" + std::to_string(m) + "]";
-        p.set(("media_min" + k).c_str(), scene_.media[m].bounds.min);
-        p.set(("media_max" + k).c_str(), scene_.media[m].bounds.max);
-        p.set(("media_sigma_t" + k).c_str(), scene_.media[m].sigma_t());
-    }
+    set_media_uniforms(p, scene_);  // at most kMaxFrameMediaBoxes: the constructor refuses more
 }
 
 glm::vec3 FrameRenderer::cube_centre(size_t object) const {
@@ -1153,23 +1164,14 @@ void FrameRenderer::set_volume(const Image& volume, const Image& transmittance) 
     };
     if (!transmittance.pixels.empty()) {
         frame_sized(transmittance);
-        transmittance_rgba_.resize(size_t(width_) * size_t(height_));
-        for (int y = 0; y < height_; ++y)
-            for (int x = 0; x < width_; ++x)
-                transmittance_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
-                    glm::vec4(transmittance.rgb(x, y), 1.0f);
-        gl::BindTexture(GL_TEXTURE_2D, transmittance_texture_.get());
-        gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
-                          transmittance_rgba_.data());
-        gl::BindTexture(GL_TEXTURE_2D, 0);
+        flip_to_rgba(
+            transmittance, [](int, int) { return 1.0f; }, transmittance_rgba_);
+        upload_rgba(transmittance_texture_.get(), width_, height_, transmittance_rgba_);
     }
     if (volume.pixels.empty()) return;
     frame_sized(volume);
-    volume_rgba_.resize(size_t(width_) * size_t(height_));
-    for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x)
-            volume_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
-                glm::vec4(volume.rgb(x, y), 1.0f);
+    flip_to_rgba(
+        volume, [](int, int) { return 1.0f; }, volume_rgba_);
 }
 
 void FrameRenderer::set_media_indirect(const Image& indirect) {
@@ -1178,15 +1180,9 @@ void FrameRenderer::set_media_indirect(const Image& indirect) {
     if (indirect.width != width_ || indirect.height != height_)
         throw std::invalid_argument(
             "FrameRenderer::set_media_indirect: the image is not frame-sized");
-    media_indirect_rgba_.resize(size_t(width_) * size_t(height_));
-    for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x)
-            media_indirect_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] =
-                glm::vec4(indirect.rgb(x, y), 0.0f);
-    gl::BindTexture(GL_TEXTURE_2D, media_indirect_texture_.get());
-    gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
-                      media_indirect_rgba_.data());
-    gl::BindTexture(GL_TEXTURE_2D, 0);
+    flip_to_rgba(
+        indirect, [](int, int) { return 0.0f; }, media_indirect_rgba_);
+    upload_rgba(media_indirect_texture_.get(), width_, height_, media_indirect_rgba_);
 }
 
 void FrameRenderer::set_specular_through_glass(const Image& specular,
@@ -1197,15 +1193,11 @@ void FrameRenderer::set_specular_through_glass(const Image& specular,
         covered.size() != size_t(width_) * size_t(height_))
         throw std::invalid_argument(
             "FrameRenderer::set_specular_through_glass: the image is not frame-sized");
-    glass_specular_rgba_.resize(size_t(width_) * size_t(height_));
-    for (int y = 0; y < height_; ++y)
-        for (int x = 0; x < width_; ++x)
-            glass_specular_rgba_[size_t(height_ - 1 - y) * size_t(width_) + size_t(x)] = glm::vec4(
-                specular.rgb(x, y), covered[size_t(y) * size_t(width_) + size_t(x)] ? 1.0f : 0.0f);
-    gl::BindTexture(GL_TEXTURE_2D, glass_specular_texture_.get());
-    gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
-                      glass_specular_rgba_.data());
-    gl::BindTexture(GL_TEXTURE_2D, 0);
+    flip_to_rgba(
+        specular,
+        [&](int x, int y) { return covered[size_t(y) * size_t(width_) + size_t(x)] ? 1.0f : 0.0f; },
+        glass_specular_rgba_);
+    upload_rgba(glass_specular_texture_.get(), width_, height_, glass_specular_rgba_);
 }
 
 void FrameRenderer::draw_full_screen(const Program& program, const char* sampler, GLuint texture,
@@ -1232,9 +1224,7 @@ void FrameRenderer::draw_full_screen(const Program& program, const char* sampler
 void FrameRenderer::compose() {
     // The G-buffer pass wrote a zero volume term; a media method's replaces it.
     if (!volume_rgba_.empty()) {
-        gl::BindTexture(GL_TEXTURE_2D, aov_[size_t(FrameTerm::volume)].get());
-        gl::TexSubImage2D(GL_TEXTURE_2D, 0, 0, 0, width_, height_, GL_RGBA, GL_FLOAT,
-                          volume_rgba_.data());
+        upload_rgba(aov_[size_t(FrameTerm::volume)].get(), width_, height_, volume_rgba_);
     }
     // The light the fog scatters onto the surfaces, into the indirect term after the running
     // mean (it is the same every frame until the method runs again) and before the dimming.

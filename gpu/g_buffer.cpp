@@ -96,7 +96,7 @@ GBuffer::View GBuffer::view_of(const Scene& scene, int width, int height) {
     v.camera.height = height;
     const Bounds bounds = scene.world_bounds();
     const float diagonal = scene.diagonal();
-    v.near_plane = 1e-3f * diagonal;
+    v.near_plane = kNearPlanePerDiagonal * diagonal;
     v.far_plane = glm::length(v.camera.eye - bounds.center()) + 2.0f * diagonal;
     v.view = view_matrix(v.camera);
     v.projection = projection_matrix(v.camera, v.near_plane, v.far_plane);

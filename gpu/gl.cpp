@@ -18,14 +18,42 @@ void load(GetProc get_proc) {
 
 namespace ag::gpu {
 
+namespace {
+
+const char* gl_error_name(GLenum e) {
+    switch (e) {
+        case GL_INVALID_ENUM:
+            return "GL_INVALID_ENUM";
+        case GL_INVALID_VALUE:
+            return "GL_INVALID_VALUE";
+        case GL_INVALID_OPERATION:
+            return "GL_INVALID_OPERATION";
+        case GL_STACK_OVERFLOW:
+            return "GL_STACK_OVERFLOW";
+        case GL_STACK_UNDERFLOW:
+            return "GL_STACK_UNDERFLOW";
+        case GL_OUT_OF_MEMORY:
+            return "GL_OUT_OF_MEMORY: the GL implementation could not allocate it; a smaller "
+                   "image, atlas or map needs less";
+        case GL_INVALID_FRAMEBUFFER_OPERATION:
+            return "GL_INVALID_FRAMEBUFFER_OPERATION";
+        default:
+            return "unknown";
+    }
+}
+
+}  // namespace
+
 void check_gl(const char* where) {
     const GLenum e = gl::GetError();
     if (e != GL_NO_ERROR)
-        throw GlError(std::string("OpenGL error 0x") + [&] {
-            char buf[16];
-            std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
-            return std::string(buf);
-        }() + " in " + where);
+        throw GlError(std::string("OpenGL error 0x") +
+                      [&] {
+                          char buf[16];
+                          std::snprintf(buf, sizeof buf, "%04x", unsigned(e));
+                          return std::string(buf);
+                      }() +
+                      " (" + gl_error_name(e) + ") in " + where);
 }
 
 std::string take_gl_errors() {

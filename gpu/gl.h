@@ -158,7 +158,8 @@ public:
     using std::runtime_error::runtime_error;
 };
 
-// Throws GlError if glGetError reports an error (`where` names the call site).
+// Throws GlError if glGetError reports an error, named (GL_OUT_OF_MEMORY with a hint), and
+// `where`, the call site.
 void check_gl(const char* where);
 
 // Reads every pending GL error and returns them as "0x0501, 0x0506" ("" when none). Work that

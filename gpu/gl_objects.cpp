@@ -2,6 +2,7 @@
 
 #include <atomic>
 #include <cassert>
+#include <string>
 
 #include "shared/host_device_shared.h"
 
@@ -149,7 +150,11 @@ Texture make_float_texture(int width, int height, bool mip, const float* rgba) {
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
     gl::TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
-    check_gl("make_float_texture");
+    const std::string where = "make_float_texture (" + std::to_string(width) + " x " +
+                              std::to_string(height) + " RGBA32F, " +
+                              std::to_string((int64_t(width) * height * 16 + (1 << 20) - 1) >> 20) +
+                              " MiB)";
+    check_gl(where.c_str());
     return t;
 }
 

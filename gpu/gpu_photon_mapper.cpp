@@ -5,6 +5,8 @@
 #include <numbers>
 #include <string>
 
+#include "gpu/media_glsl.h"
+#include "gpu/media_uniforms.h"
 #include "shared/flat_bvh.h"
 #include "shared/photon_sampling.h"
 
@@ -99,6 +101,10 @@ void main() {
     while (true) {
         BvhHit hit;
         if (!bvh_intersect(o, d, 0.0, 1e30, hit)) break;
+        // Beer–Lambert through the media boxes along the segment, the path unchanged, as the CPU
+        // photon tracer dims its photons (mean σ_t; glass interiors and noise left out, as in the
+        // frame's direct light). Without it a lamp inside dense fog lit the room.
+        power *= media_transmittance(o, d, hit.t);
         vec3 x = o + hit.t * d;
         vec4 m = materials[hit.object];
         BvhTriangle tri = bvh_triangles[hit.index];
@@ -471,7 +477,8 @@ GpuPhotonMapper::GpuPhotonMapper(const Scene& scene, const GBuffer& g_buffer)
     const int f = std::max(1, s.low_res);
     low_w_ = (width_ + f - 1) / f;
     low_h_ = (height_ + f - 1) / f;
-    trace_ = Program::compute("gpu_pm trace", with_common(kTrace, false));
+    trace_ = Program::compute("gpu_pm trace",
+                              std::string(kMediaTransmittanceGlsl) + with_common(kTrace, false));
     tile_bounds_ = Program::compute("gpu_pm tile bounds", with_common(kTileBounds, true));
     count_scatter_ = Program::compute("gpu_pm scatter binning", with_common(kScatter, true));
     count_brute_ = Program::compute("gpu_pm brute-force binning", with_common(kBrute, true));
@@ -558,6 +565,7 @@ void GpuPhotonMapper::trace() {
     trace_.set("kwast", s.estimator == GpuPmEstimator::kwast ? 1 : 0);
     trace_.set("epsilon", 1e-5f * scene_.diagonal());
     trace_.set("capacity", unsigned(capacity_));
+    set_media_uniforms(trace_, scene_);
     bvh_.bind();
     albedo_.bind();
     gl::BindBufferBase(GL_SHADER_STORAGE_BUFFER, kPhotonsBinding, photons_.get());

@@ -9,6 +9,7 @@
 
 #include "gpu/lightmap_texture.h"
 #include "gpu/media_glsl.h"
+#include "gpu/media_uniforms.h"
 
 namespace ag::gpu {
 
@@ -276,14 +277,7 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
     program_.set("charts", 2);
     program_.set("use_charts", chart_texture ? 1 : 0);
     program_.set("specular_tag", specular_tag_);
-    const size_t media = std::min(scene_.media.size(), size_t(8));  // the frame refuses more
-    program_.set("media_count", int(media));
-    for (size_t m = 0; m < media; ++m) {
-        const std::string k = "[" + std::to_string(m) + "]";
-        program_.set(("media_min" + k).c_str(), scene_.media[m].bounds.min);
-        program_.set(("media_max" + k).c_str(), scene_.media[m].bounds.max);
-        program_.set(("media_sigma_t" + k).c_str(), scene_.media[m].sigma_t());
-    }
+    set_media_uniforms(program_, scene_);  // the frame refuses more than kMaxMediaBoxes
     // The plane [-a, a]² at unit distance is the frustum's cross-section: symmetric, aspect 1.
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;

@@ -32,9 +32,13 @@ const std::set<std::string> kSupportedExtensions = {
     "KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
     "KHR_materials_emissive_strength"};
 
+// The node tree's depth bound: visit() recurses once per level.
+constexpr int kMaxNodeDepth = 256;
+
 class GltfReader {
 public:
-    GltfReader(const std::string& path, const tinygltf::Model& gltf) : path_(path), g_(gltf) {}
+    GltfReader(const std::string& path, const tinygltf::Model& gltf, int64_t max_triangles)
+        : path_(path), g_(gltf), max_triangles_(max_triangles) {}
 
     Model read() {
         for (const std::string& e : g_.extensionsUsed)
@@ -57,6 +61,7 @@ public:
             for (size_t i = 0; i < g_.nodes.size(); ++i)
                 if (!child[i]) roots.push_back(int(i));
         }
+        reached_.assign(g_.nodes.size(), 0);
         for (int r : roots) visit(r, glm::dmat4(1.0), 0);
         if (model_.parts.empty())
             throw_input_error(path_, "", "expected at least one triangle mesh, got none");
@@ -94,7 +99,17 @@ private:
         if (index < 0 || size_t(index) >= g_.nodes.size())
             fail("node " + std::to_string(index),
                  "expected a node index below " + std::to_string(g_.nodes.size()));
-        if (depth > 256) fail("node " + std::to_string(index), "expected a node tree, got a cycle");
+        // glTF 2.0 (3.5.3): the nodes form disjoint strict trees, no node has two parents. A
+        // node reached again is a cycle or a shared child; the latter would place its subtree once
+        // per path, 2^40 times for forty nodes each naming the next twice.
+        if (reached_[size_t(index)])
+            fail("node " + std::to_string(index),
+                 "expected a node tree, got a node reached a second time (a cycle, a node with two "
+                 "parents, or a child or root listed twice)");
+        reached_[size_t(index)] = 1;
+        if (depth > kMaxNodeDepth)
+            fail("node " + std::to_string(index),
+                 "expected a node tree at most " + std::to_string(kMaxNodeDepth) + " deep");
         const tinygltf::Node& n = g_.nodes[size_t(index)];
         const glm::dmat4 m = parent * local_matrix(n);
         const std::string name = n.name.empty() ? "node" + std::to_string(index) : n.name;
@@ -318,6 +333,24 @@ private:
                     });
                 }
             }
+            // Bounded before the accessors are read: each placement copies the mesh.
+            const auto count = [&](int accessor) {
+                return accessor >= 0 && size_t(accessor) < g_.accessors.size()
+                           ? int64_t(g_.accessors[size_t(accessor)].count)
+                           : int64_t(0);
+            };
+            placed_vertices_ += count(pos->second);
+            const int64_t corners = prim.indices >= 0 ? count(prim.indices) : count(pos->second);
+            placed_triangles_ +=
+                mode == TINYGLTF_MODE_TRIANGLES ? corners / 3 : std::max<int64_t>(corners - 2, 0);
+            if (placed_triangles_ > max_triangles_ || placed_vertices_ > 3 * max_triangles_)
+                fail("node " + node_name,
+                     "expected at most " + std::to_string(max_triangles_) +
+                         " triangles and three times as many vertices placed by the node tree "
+                         "(kMaxSceneTriangles), got " +
+                         std::to_string(placed_triangles_) + " triangles and " +
+                         std::to_string(placed_vertices_) + " vertices with mesh " +
+                         std::to_string(index));
             read_accessor(pos->second, "POSITION", [&](size_t, const double* c, int n) {
                 if (n != 3) fail("mesh " + std::to_string(index), "expected VEC3 positions");
                 const glm::dvec4 w = m * glm::dvec4(c[0], c[1], c[2], 1.0);
@@ -436,13 +469,16 @@ private:
     const tinygltf::Model& g_;
     Model model_;
     std::set<std::string> warned_, used_names_;
+    std::vector<char> reached_;  // per node: visited (a node tree visits each node once)
+    int64_t max_triangles_;
+    int64_t placed_triangles_ = 0, placed_vertices_ = 0;  // every instance (max_triangles_)
     TextureCache textures_;
     std::map<int, int> texcoord_set_;  // material → the TEXCOORD_n its baseColorTexture reads
 };
 
 }  // namespace
 
-Model load_gltf(const std::string& path) {
+Model load_gltf(const std::string& path, int64_t max_triangles) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
     tinygltf::Model gltf;
@@ -459,7 +495,7 @@ Model load_gltf(const std::string& path) {
         while (!error.empty() && (error.back() == '\n' || error.back() == '\r')) error.pop_back();
         throw_input_error(path, "", "cannot read glTF: " + (error.empty() ? "parse error" : error));
     }
-    return GltfReader(path, gltf).read();
+    return GltfReader(path, gltf, max_triangles).read();
 }
 
 }  // namespace ag

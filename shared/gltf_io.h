@@ -13,7 +13,8 @@ namespace ag {
 // roughness ≤ 0.1 as mirror), KHR_lights_punctual lights and perspective cameras, all in world
 // space. Every feature it does not render (textures, skins, animations, morph targets,
 // non-triangle primitives, orthographic cameras, unknown extensions, ...) gets a warning naming
-// it; errors (unreadable file, bad accessors) are InputErrors naming the file.
-Model load_gltf(const std::string& path);
+// it; errors (unreadable file, bad accessors, a node reached twice, a tree over 256 deep, more
+// than `max_triangles` placed, instances included) are InputErrors naming the file and the node.
+Model load_gltf(const std::string& path, int64_t max_triangles = kMaxSceneTriangles);
 
 }  // namespace ag

@@ -151,11 +151,14 @@ struct MediaReconstruction {
     int max_level = 0;
 };
 // `count` per voxel: photon crossings; `weight`: their mean weight (0 where none).
+// `significance` > 0 (not his): a voxel climbs from a level to the next only while the step
+// between their values is within `significance` standard errors (each level's relative error
+// 1/√(its crossings)).
 MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vector<float>& fluence,
                                          const std::vector<glm::vec3>& flow,
                                          const std::vector<float>& count,
                                          const std::vector<float>& weight, float delta_weight,
-                                         int max_level);
+                                         int max_level, float significance = 0.0f);
 
 // Solid angle (sr) of box `b` seen from a point outside it: the sum over its faces turned to the
 // point of the rectangle formula.

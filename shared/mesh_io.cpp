@@ -460,6 +460,9 @@ void validate_obj(const std::string& path, const std::string& data) {
     std::string_view line;
     int64_t vertices = 0;
     while (lines.line(line)) {
+        // OpenMesh trims each line before reading its keyword: " f x" is a face to it (one whose
+        // vertices it could not read tripped its assertion `!vhandles.empty()`, an abort).
+        line.remove_prefix(std::min(line.find_first_not_of(" \t\r\n\v\f"), line.size()));
         if (line.size() >= 2 && line[0] == 'v' && std::isspace((unsigned char)line[1])) {
             ++vertices;
         } else if (line.size() >= 2 && line[0] == 'f' && std::isspace((unsigned char)line[1])) {

@@ -230,13 +230,13 @@ Model load_obj(const std::string& path) {
 
 }  // namespace
 
-Model load_model(const std::string& path) {
+Model load_model(const std::string& path, int64_t max_triangles) {
     const std::string ext = lower_extension(path);
     Model model;
     if (ext == ".obj") {
         model = load_obj(path);
     } else if (ext == ".gltf" || ext == ".glb") {
-        model = load_gltf(path);
+        model = load_gltf(path, max_triangles);
     } else {
         ModelPart part;
         part.name = part.material.name = "default";

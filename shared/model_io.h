@@ -34,7 +34,8 @@ struct Model {
 // missing MTL file or material is a warning and the default material (diffuse 0.75). Other
 // formats: glTF through load_gltf (shared/gltf_io.h); PLY, OFF, STL give one part "default"
 // through load_mesh. Errors are InputErrors
-// naming the file and line.
-Model load_model(const std::string& path);
+// naming the file and line. A glTF node tree may place at most `max_triangles` (every instance
+// counted); other formats are bounded by their files' sizes.
+Model load_model(const std::string& path, int64_t max_triangles = kMaxSceneTriangles);
 
 }  // namespace ag

@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtx/quaternion.hpp>
+#include <limits>
 #include <numbers>
 #include <string>
 
@@ -162,6 +164,48 @@ Bounds Scene::world_bounds() const {
 float Scene::diagonal() const {
     const Bounds b = world_bounds();
     return b.empty() ? 1.0f : glm::length(b.extent());
+}
+
+void warn_about_scale(const Scene& scene) {
+    const auto num = [](float v) {
+        char buf[32];
+        std::snprintf(buf, sizeof buf, "%.3g", double(v));
+        return std::string(buf);
+    };
+    const float diagonal = scene.diagonal();
+    const float near_plane = kNearPlanePerDiagonal * diagonal;
+    const float offset = kRayOffsetPerDiagonal * diagonal;
+    // The nearest vertex, not the nearest point: no false alarm, and it finds a part of the scene
+    // far smaller than the whole.
+    float nearest = std::numeric_limits<float>::infinity();
+    std::string nearest_object, small;
+    int small_count = 0;
+    for (const Object& o : scene.objects) {
+        Bounds b;
+        for (const glm::vec3& p : o.mesh.positions) {
+            const glm::vec3 w = o.transform.apply_point(p);
+            b.add(w);
+            const float d = glm::length(w - scene.camera.eye);
+            if (d < nearest) {
+                nearest = d;
+                nearest_object = o.name;
+            }
+        }
+        if (!b.empty() && glm::length(b.extent()) < 10.0f * offset && ++small_count <= 3)
+            small +=
+                (small.empty() ? "'" : ", '") + o.name + "' (" + num(glm::length(b.extent())) + ")";
+    }
+    const std::string where =
+        scene.path + ": the scene is " + num(diagonal) + " across (its bounds' diagonal); ";
+    if (nearest < near_plane)
+        warn(where + "object '" + nearest_object + "' has a vertex " + num(nearest) +
+             " from the camera, nearer than the frame's near plane (" + num(near_plane) +
+             ", 1e-3 of the diagonal): geometry that near is clipped from the frame");
+    if (small_count > 0)
+        warn(where + std::to_string(small_count) + " object" + (small_count > 1 ? "s are" : " is") +
+             " smaller than ten ray offsets (" + num(10.0f * offset) +
+             ", the offset 1e-5 of the diagonal), and rays may step over them: " + small +
+             (small_count > 3 ? ", ..." : ""));
 }
 
 size_t Scene::triangle_count() const {

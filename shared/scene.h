@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <memory>
@@ -193,6 +194,24 @@ struct LoadTiming {
     double texels = 0.0;    // texel records
 };
 
+// What every scene_edit.h edit calls before it changes anything. The pipeline sets it to wait for
+// its photon work in flight, which reads the scene while frames go on (docs/architecture.md "One
+// frame": "a frame never waits for photon tracing"). It belongs to the scene object it was set on:
+// a copy of the scene (a script's staging copy, a look-ahead copy, a reference run) starts without
+// it.
+struct EditGuard {
+    std::function<void()> wait;
+    const void* owner =
+        nullptr;  // who set `wait` (a pipeline replaced by another clears only its own)
+
+    EditGuard() = default;
+    EditGuard(const EditGuard&) {}
+    EditGuard& operator=(const EditGuard&) { return *this; }
+    void operator()() const {
+        if (wait) wait();
+    }
+};
+
 struct Scene {
     std::string name;
     std::string path;  // the scene file, for messages and relative paths
@@ -219,6 +238,7 @@ struct Scene {
     std::vector<uint64_t> light_versions;   // per light
     uint64_t camera_version = 0;
     std::vector<SceneChange> changes;
+    EditGuard before_edit;  // set by the Pipeline working on this scene
 
     int find_object(const std::string& object_name) const;  // -1 if absent
     // World-space bounds of every object as placed now, and their diagonal (1 if empty): the
@@ -258,5 +278,22 @@ inline constexpr int64_t kMaxScenePhotons = 100'000'000;
 // Throws InputError, naming scene.path and the setting, where either product exceeds
 // kMaxScenePhotons.
 void check_photon_budget(const Scene& scene);
+
+// Tolerances relative to the scene's extent (Scene::diagonal()): the offset every CPU tracer moves
+// a ray's origin off its surface (RayTracer::epsilon), and the frame's near clipping plane
+// (GBuffer::view_of). A scene whose parts lie far apart (a room and a tile 10^7 away) makes both
+// larger than the room: warn_about_scale says so at load.
+inline constexpr float kRayOffsetPerDiagonal = 1e-5f;
+inline constexpr float kNearPlanePerDiagonal = 1e-3f;
+// Warns (one line each) where the scene's extent swamps its parts: geometry nearer the camera than
+// the near plane (it is clipped from the frame), and objects smaller than ten ray offsets (the
+// tracers step over them). Silent for scenes of one scale.
+void warn_about_scale(const Scene& scene);
+
+// Upper bound on the triangles a scene file places, every object's and every model part's
+// together (a glTF node tree that places one mesh many times counts each placement). Ten times
+// the largest scene here (3 M triangles); beyond it meshes, BVHs, charts and photon records need
+// many GiB, and a small glTF whose nodes place one mesh 2^40 times would run out of memory.
+inline constexpr int64_t kMaxSceneTriangles = int64_t(1) << 26;
 
 }  // namespace ag

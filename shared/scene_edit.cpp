@@ -152,6 +152,7 @@ void set_object_transform(Scene& scene, int object, const Transform& transform) 
     if (std::string problem = placement_problem(o.mesh, placed); !problem.empty())
         throw_input_error(scene.path, "set_object_transform",
                           "object '" + o.name + "': " + problem);
+    scene.before_edit();
     o.transform = placed;
     record(scene, ChangeKind::object_transform, object);
     // A mesh light moves with its object: its photons leave from the new place.
@@ -186,6 +187,7 @@ void set_albedo(Scene& scene, int object, const glm::vec3& albedo) {
     if (glm::any(glm::lessThan(albedo, glm::vec3(0.0f))) ||
         glm::any(glm::greaterThan(albedo, glm::vec3(1.0f))))
         throw_input_error(scene.path, "set_albedo", "expected albedo components in [0, 1]");
+    scene.before_edit();
     scene.objects[size_t(object)].material.albedo = albedo;
     record(scene, ChangeKind::object_material, object);
 }
@@ -214,6 +216,7 @@ void set_light_position(Scene& scene, int light, const glm::vec3& position) {
                 throw_input_error(scene.path, "set_light_position", "corner: " + problem);
         }
     }
+    scene.before_edit();
     l = moved;
     record(scene, ChangeKind::light_position, light);
 }
@@ -225,6 +228,7 @@ void set_light_color(Scene& scene, int light, const glm::vec3& value) {
         throw_input_error(scene.path, "set_light_color", "expected non-negative intensity");
     if (std::string problem = light_value_problem(value); !problem.empty())
         throw_input_error(scene.path, "set_light_color", problem);
+    scene.before_edit();
     Light& l = scene.lights[size_t(light)];
     l.value() = value;
     // A mesh light's radiance is its object's emission: both are seen and lit by the same value.
@@ -234,6 +238,7 @@ void set_light_color(Scene& scene, int light, const glm::vec3& value) {
 
 void set_light_enabled(Scene& scene, int light, bool enabled) {
     check_light(scene, light, "set_light_enabled");
+    scene.before_edit();
     scene.lights[size_t(light)].enabled = enabled;
     record(scene, ChangeKind::light_enabled, light);
 }
@@ -245,6 +250,8 @@ void set_camera(Scene& scene, const Camera& camera) {
     std::string key;
     if (std::string problem = camera_problem(camera, key); !problem.empty())
         throw_input_error(scene.path, "set_camera", key + ": " + problem);
+    // The workers never read the camera, but the change log they read grows here.
+    scene.before_edit();
     scene.camera = camera;
     record(scene, ChangeKind::camera, -1);
 }

@@ -124,7 +124,8 @@ Json parse_json(const std::string& text, const std::string& file) {
 
 class SceneParser {
 public:
-    SceneParser(const std::string& path) : in_(path), base_(fs::path(path).parent_path()) {}
+    SceneParser(const std::string& path, int64_t max_triangles)
+        : in_(path), base_(fs::path(path).parent_path()), max_triangles_(max_triangles) {}
 
     Scene parse(const Json& root) {
         const auto start = std::chrono::steady_clock::now();
@@ -166,6 +167,7 @@ public:
         const double files =
             std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         make_surfaces_and_atlas(scene_);
+        warn_about_scale(scene_);
         scene_.load_timing.files = files;
         return std::move(scene_);
     }
@@ -479,6 +481,11 @@ private:
                 if (scene_.find_object(part.name) >= 0)
                     in_.fail(opath + "/name", "expected a unique object name, got \"" + part.name +
                                                   "\" a second time");
+                triangles_ += int64_t(part.mesh.triangles.size());
+                if (triangles_ > max_triangles_)
+                    in_.fail(opath, "expected at most " + std::to_string(max_triangles_) +
+                                        " triangles in the scene (kMaxSceneTriangles), got " +
+                                        std::to_string(triangles_) + " with this object");
                 scene_.objects.push_back(std::move(part));
             }
         }
@@ -508,7 +515,7 @@ private:
             in_.require(o, opath, "material", "the name of a material");
         Model model;
         try {
-            model = load_model(file);
+            model = load_model(file, max_triangles_ - triangles_);
         } catch (const InputError& e) {
             in_.fail(opath + "/mesh", std::string("expected a usable mesh; ") + e.what());
         }
@@ -821,14 +828,16 @@ private:
     fs::path base_;
     Scene scene_;
     std::map<std::string, Material> materials_;
+    int64_t max_triangles_;                   // kMaxSceneTriangles unless a caller asks for fewer
+    int64_t triangles_ = 0;                   // placed so far, every object together
     TextureCache textures_;                   // albedo maps, each file read once
     std::vector<ModelCamera> model_cameras_;  // cameras of glTF files, placed
 };
 
 }  // namespace
 
-Scene parse_scene(const std::string& json_text, const std::string& path) {
-    return SceneParser(path).parse(parse_json(json_text, path));
+Scene parse_scene(const std::string& json_text, const std::string& path, int64_t max_triangles) {
+    return SceneParser(path, max_triangles).parse(parse_json(json_text, path));
 }
 
 void settings_changed(Scene& scene, const LightmapSettings& before) {

@@ -12,7 +12,9 @@ namespace ag {
 Scene load_scene(const std::string& path);
 
 // Same from text; `path` is used for messages and to resolve relative mesh/script paths.
-Scene parse_scene(const std::string& json_text, const std::string& path);
+// `max_triangles` bounds the triangles every object places together.
+Scene parse_scene(const std::string& json_text, const std::string& path,
+                  int64_t max_triangles = kMaxSceneTriangles);
 
 // After scene.settings changed on a loaded scene (--set, the Python bindings): the checks loading
 // makes where settings meet the scene (light samples, photon budget), then the surfaces and atlas

@@ -225,6 +225,51 @@ int message_handler(lua_State* L) {
     return 1;
 }
 
+// Lua's pattern matcher runs in C, where the instruction hook never fires: ("a"):rep(40):match(
+// ("a*"):rep(40) .. "b") backtracks for longer than the universe lasts. string.find, match, gmatch
+// and gsub therefore check a bound on their work first: a subject of n bytes and a pattern of m
+// bytes with k repetition items (*, +, -, ?, counted wherever they stand, so sets overcount) take
+// at most (n + 1) starts (1 if anchored by ^) × m × (n + 1)^k steps; a plain find (n + 1) × m. Up
+// to kPatternStepsPerInstruction × the instruction budget (10^9 steps by default, about a second)
+// runs as Lua's own; more is an error naming the function.
+constexpr double kPatternStepsPerInstruction = 100.0;
+
+int bounded_pattern(lua_State* L) {
+    const char* name = lua_tostring(L, lua_upvalueindex(2));
+    size_t n = 0, m = 0;
+    luaL_checklstring(L, 1, &n);
+    const char* p = luaL_checklstring(L, 2, &m);
+    const bool plain = std::strcmp(name, "find") == 0 && lua_toboolean(L, 4);
+    int k = 0;
+    double log_steps = std::log(double(n) + 1.0) + std::log(double(m) + 1.0);
+    if (!plain) {
+        for (size_t i = 0; i < m; ++i) {
+            if (p[i] == '%')
+                ++i;  // an escaped character or a class: not a repetition item
+            else if (p[i] == '*' || p[i] == '+' || p[i] == '-' || p[i] == '?')
+                ++k;
+        }
+        if (m > 0 && p[0] == '^') log_steps -= std::log(double(n) + 1.0);
+        log_steps += double(k) * std::log(double(n) + 1.0);
+    }
+    const double budget =
+        kPatternStepsPerInstruction * double(std::max<int64_t>(state_of(L).limits.instructions, 1));
+    if (log_steps > std::log(budget)) {
+        char message[320];  // lua_pushfstring has no precision for %f
+        std::snprintf(message, sizeof message,
+                      "string.%s: a pattern of %d repetition items over a subject of %zu bytes may "
+                      "take up to 10^%.0f steps, over the budget of 10^%.0f (matching runs in C, "
+                      "outside the instruction budget); expected a simpler pattern or a shorter "
+                      "string",
+                      name, k, n, log_steps / std::log(10.0), std::log10(budget));
+        return luaL_error(L, "%s", message);
+    }
+    lua_pushvalue(L, lua_upvalueindex(1));
+    lua_insert(L, 1);
+    lua_call(L, lua_gettop(L) - 1, LUA_MULTRET);
+    return lua_gettop(L);
+}
+
 int blocked_global(lua_State* L) {
     if (lua_type(L, 2) == LUA_TSTRING) {
         const char* key = lua_tostring(L, 2);
@@ -747,6 +792,13 @@ int open_sandbox(lua_State* L) {
     lua_getfield(L, -1, LUA_STRLIBNAME);  // bytecode is useless without binary load, which is gone
     lua_pushnil(L);
     lua_setfield(L, -2, "dump");
+    // Strings' methods are this table's (their metatable's __index), so s:match is bounded too.
+    for (const char* name : {"find", "match", "gmatch", "gsub"}) {
+        lua_getfield(L, -1, name);
+        lua_pushstring(L, name);
+        lua_pushcclosure(L, bounded_pattern, 2);
+        lua_setfield(L, -2, name);
+    }
     lua_pop(L, 1);
     lua_pushcfunction(L, print_to_stderr);
     lua_setfield(L, -2, "print");

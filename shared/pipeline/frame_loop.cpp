@@ -52,7 +52,8 @@ bool FrameLoop::run_script() {
 }
 
 PipelineStats FrameLoop::step(bool play) {
-    begin_edits();
+    // No begin_edits(): the photon work of the last frame may run on (a frame-time target); the
+    // script's edits wait for it through the scene (Scene::before_edit) only when it edits.
     if (play) run_script();
     if (lookahead_script_) {
         // The copy runs the frame after the one just run: the scene as the next frame sees it.

@@ -1,5 +1,7 @@
-// The one frame loop: scene edits (scripts, the viewer, callers) happen between frames, after the
-// photon work in flight has finished; a script's clock is its own frame count at 30 frames/s.
+// The one frame loop: scene edits (scripts, the viewer, callers) happen between frames through
+// scene_edit.h, each after the photon work in flight has finished (with a frame-time target that
+// work may run on past a frame: Pipeline); a script's clock is its own frame count at 30
+// frames/s.
 // Every command that runs frames (render, converge, view, bench, Python) goes through it.
 #pragma once
 
@@ -21,12 +23,13 @@ public:
 
     // Replaces the script (null: none) and starts it; its clock starts again at frame 0.
     void start_script(Script* script);
-    // Finishes the photon work in flight: the scene may be edited until the next step().
+    // Finishes the photon work in flight: the scene may be written directly (settings, not
+    // only through scene_edit.h) until the next step().
     void begin_edits() { pipeline_.sync(); }
-    // Runs the script's callback for its next frame (after begin_edits()); false if it failed
+    // Runs the script's callback for its next frame; false if it failed
     // (its edits are rolled back, the error is reported and rendering goes on).
     bool run_script();
-    // One frame: begin_edits(), the script's next frame when `play`, then the pipeline frame.
+    // One frame: the script's next frame when `play`, then the pipeline frame.
     PipelineStats step(bool play = true);
 
     Pipeline& pipeline() { return pipeline_; }

@@ -79,6 +79,69 @@ std::vector<MediaPhoton> surface_photons(const Scene& scene, const cpu::RayTrace
     return out;
 }
 
+// Photons of the scene's emissive surfaces (not his: his photons leave the one light), whether a
+// mesh light or a lamp that is no light ("light": false), none of which the method's light covers
+// but whose radiance pt meets on its paths from the fog: `count` Hammersley photons over the front
+// faces of every emissive object, a triangle picked in proportion to its power π L̄ A (L̄ the
+// emission's grey mean, as the method is grey), a uniform point on it, a cosine direction about
+// its front normal; each carries Φ/count, Φ the total, and starts where its path enters the grid's
+// box (photons missing the box are dropped: their light never reaches the media). `power` gets Φ.
+std::vector<MediaPhoton> emissive_photons(const Scene& scene, const Bounds& bounds, int count,
+                                          double& power) {
+    struct Emitter {
+        glm::vec3 p0, e1, e2, normal;
+        double cumulative;  // power up to and including this triangle
+    };
+    std::vector<Emitter> emitters;
+    power = 0.0;
+    for (const Object& o : scene.objects) {
+        const float l = glm::dot(o.material.emission, glm::vec3(1.0f / 3.0f));
+        if (!(l > 0.0f)) continue;
+        for (const glm::uvec3& t : o.mesh.triangles) {
+            const glm::vec3 p0 = o.transform.apply_point(o.mesh.positions[t.x]);
+            const glm::vec3 e1 = o.transform.apply_point(o.mesh.positions[t.y]) - p0;
+            const glm::vec3 e2 = o.transform.apply_point(o.mesh.positions[t.z]) - p0;
+            const glm::vec3 cross = glm::cross(e1, e2);
+            const float twice_area = glm::length(cross);
+            if (!(twice_area > 0.0f)) continue;
+            power += std::numbers::pi * double(l) * 0.5 * double(twice_area);
+            emitters.push_back({p0, e1, e2, cross / twice_area, power});
+        }
+    }
+    std::vector<MediaPhoton> photons;
+    if (emitters.empty() || count <= 0) return photons;
+    const float each = float(power / double(count));
+    for (int i = 0; i < count; ++i) {
+        // The first dimension picks the triangle by its power and, rescaled, places the point.
+        const double u = (double(i) + 0.5) / double(count) * power;
+        const size_t k = std::min(size_t(std::lower_bound(emitters.begin(), emitters.end(), u,
+                                                          [](const Emitter& x, double value) {
+                                                              return x.cumulative < value;
+                                                          }) -
+                                         emitters.begin()),
+                                  emitters.size() - 1);
+        const Emitter& tri = emitters[k];
+        const double below = k > 0 ? emitters[k - 1].cumulative : 0.0;
+        const float a = float(std::clamp((u - below) / (tri.cumulative - below), 0.0, 1.0));
+        const float b = float(radical_inverse(2, uint64_t(i)));
+        // Uniform on the triangle: √a folds the square onto it.
+        const float sa = std::sqrt(a);
+        const glm::vec3 origin = tri.p0 + sa * (1.0f - b) * tri.e1 + sa * b * tri.e2;
+        const float r2 = float(radical_inverse(3, uint64_t(i)));
+        const float phi = float(2.0 * std::numbers::pi * radical_inverse(5, uint64_t(i)));
+        const glm::vec3 t = std::abs(tri.normal.x) > 0.5f
+                                ? glm::normalize(glm::cross(tri.normal, glm::vec3(0, 1, 0)))
+                                : glm::normalize(glm::cross(tri.normal, glm::vec3(1, 0, 0)));
+        const glm::vec3 bt = glm::cross(tri.normal, t);
+        const float s = std::sqrt(r2), c = std::sqrt(std::max(0.0f, 1.0f - r2));
+        const glm::vec3 dir = s * std::cos(phi) * t + s * std::sin(phi) * bt + c * tri.normal;
+        float enter = 0.0f, exit = 0.0f;
+        if (!ray_box(bounds, origin, dir, 0.0f, 1e30f, enter, exit) || !(exit > enter)) continue;
+        photons.push_back({origin + enter * dir, dir, each});
+    }
+    return photons;
+}
+
 // Phase 1 (ch. 3.2.2): the density over the photon plane from the pilots' statistics, summed
 // over blocks of the grid into a coarse grid. For a light inside the grid (free_space) the
 // thresholds see the fluence times the squared distance to the light (not his): the free-space
@@ -346,8 +409,9 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     // unfiltered at 100,000 photons (RMSE 0.00091; scaled 0.00070, uniform 200k 0.00075).
     const int longest = std::max({grid.size.x, grid.size.y, grid.size.z});
     const float delta_weight = a.delta_weight * 64.0f / float(longest);
-    MediaReconstruction filtered = reconstruct_adaptive(
-        grid.size, marched.fluence, marched.flow, crossings, weight, delta_weight, a.max_level);
+    MediaReconstruction filtered =
+        reconstruct_adaptive(grid.size, marched.fluence, marched.flow, crossings, weight,
+                             delta_weight, a.max_level, a.significance);
     result.timing.reconstruction = since(start);
     result.levels = std::move(filtered.level);
     marched.fluence = std::move(filtered.fluence);
@@ -412,6 +476,46 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
     march.octree = settings.octree;
     const gpu::MediaMarcher marcher;
     gpu::MediaMarchResult marched;
+    // Marches `photons` on the grid and adds their fluence and flow into `into` and the power they
+    // deposit into `power`; returns the march (its photons left for the next bounce).
+    const auto march_into = [&](const std::vector<MediaPhoton>& photons,
+                                gpu::MediaMarchResult& into, double& power) {
+        gpu::MediaMarchResult lit = marcher.march(grid, photons, march);
+        result.timing.photon_marching += lit.seconds;
+        result.timing.octree += lit.octree_seconds;
+        for (size_t i = 0; i < into.fluence.size(); ++i) {
+            into.fluence[i] += lit.fluence[i];
+            into.flow[i] += lit.flow[i];
+            power += double(lit.fluence[i]) * double(voxel) * voxel * voxel;
+        }
+        return lit;
+    };
+    // The emissive surfaces' photons (emissive_photons), marched into `into` (their photons left
+    // after the march appended to `left` for the surface bounces, where there are any). As many as
+    // give each about the power of one of the light's photons, but at least
+    // settings.emissive_photons.
+    const auto march_emissive = [&](gpu::MediaMarchResult& into, std::vector<MediaPhoton>* left) {
+        if (settings.emissive_photons <= 0) return;
+        double emitted = 0.0;
+        emissive_photons(scene, bounds, 0, emitted);
+        if (!(emitted > 0.0)) return;
+        const double light_power =
+            light->type == LightType::quad
+                ? std::numbers::pi * double(intensity) * double(light->quad_area())
+                : double(intensity) *
+                      (inside ? 4.0 * std::numbers::pi : box_solid_angle(bounds, light->position));
+        const double share = light_power > 0.0 ? emitted / light_power : 1.0;
+        const int count =
+            int(std::clamp(double(settings.photons) * share, double(settings.emissive_photons),
+                           4.0 * settings.photons));
+        Clock::time_point begin = Clock::now();
+        const std::vector<MediaPhoton> photons = emissive_photons(scene, bounds, count, emitted);
+        result.timing.photon_generation += since(begin);
+        if (photons.empty()) return;
+        const gpu::MediaMarchResult lit = march_into(photons, into, result.power_emissive);
+        result.photons_emissive += photons.size();
+        if (left) left->insert(left->end(), lit.photons.begin(), lit.photons.end());
+    };
     if (!settings.adaptive.enabled) {
         std::vector<MediaPhoton> photons;
         if (light->type == LightType::quad) {
@@ -442,21 +546,15 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
         for (float f : marched.fluence)
             result.power_deposited += double(f) * double(voxel) * voxel * voxel;
         std::vector<MediaPhoton> left = std::move(marched.photons);
+        march_emissive(marched, &left);
         for (int bounce = 0; bounce < settings.surface_bounces; ++bounce) {
             start = Clock::now();
             std::vector<MediaPhoton> from_surfaces =
                 surface_photons(scene, rays, bounds, voxel, left, settings.seed, bounce);
             result.timing.photon_generation += since(start);
             if (from_surfaces.empty()) break;
-            gpu::MediaMarchResult again = marcher.march(grid, from_surfaces, march);
-            result.timing.photon_marching += again.seconds;
-            result.timing.octree += again.octree_seconds;
+            gpu::MediaMarchResult again = march_into(from_surfaces, marched, result.power_bounced);
             result.photons_bounced += from_surfaces.size();
-            for (size_t i = 0; i < marched.fluence.size(); ++i) {
-                marched.fluence[i] += again.fluence[i];
-                marched.flow[i] += again.flow[i];
-                result.power_bounced += double(again.fluence[i]) * double(voxel) * voxel * voxel;
-            }
             left = std::move(again.photons);
         }
     } else {
@@ -466,6 +564,8 @@ MediaMethodResult render_media(const Scene& scene, const MediaMethodSettings& se
                 ": the adaptive media pipeline needs a point or spot light (a photon plane)");
         marched = march_adaptive(grid, photon_source(light->position, intensity, bounds), settings,
                                  march, marcher, result);
+        // Unfiltered: the adaptive reconstruction is of the light's photons.
+        march_emissive(marched, nullptr);
     }
     if (!with_view) {
         result.grids = std::move(grid);

@@ -42,7 +42,11 @@ struct MediaAdaptiveSettings {
     // 1/(k Δweight) uniform ones or sparser (2e-5: level 1 below 50,000-photon density).
     // For a 64-voxel grid; scaled by 64 / (voxels along the longest side).
     float delta_weight = 2e-5f;
-    int max_level = 4;        // highest mipmap level read
+    int max_level = 4;  // highest mipmap level read
+    // Significance stop (not his; docs/media.md "The filter beside a caustic's focus"): a voxel
+    // climbs from mipmap level l to l + 1 only while |c(l+1) − c(l)| is within this many standard
+    // errors, each level's relative error 1/√(photons crossing its voxel); 0: off (his filter).
+    float significance = 3.0f;
     bool reconstruct = true;  // false: the raw importance-sampled deposits (for the bias tests)
     uint32_t seed = 0;        // pilot jitter and the rotation of the Hammersley points
 };
@@ -72,6 +76,10 @@ struct MediaMethodSettings {
     // distributed, a Hammersley set rotated per pixel); 0: none. Their step, in voxels.
     int fog_on_surfaces_rays = 32;
     float fog_on_surfaces_step = 1.0f;
+    // Photons from the scene's emissive surfaces (mesh lights and lamps that are no light; not
+    // his): at least this many, more where their power over the light's asks for more to keep
+    // the photons' powers alike; 0: none.
+    int emissive_photons = 4096;
 };
 
 // Seconds per pass, as his Tables 4.2–4.4 list them (no copy: the grids are SSBOs). The octree
@@ -109,6 +117,8 @@ struct MediaMethodResult {
     double power_deposited = 0.0;  // Σ over voxels of fluence × voxel volume (before filtering),
                                    // the light's photons only
     double power_bounced = 0.0;    // the same for the photons from surfaces (surface_bounces)
+    size_t photons_emissive = 0;   // photons of emissive surfaces that meet the grid
+    double power_emissive = 0.0;   // the same sum for them (emissive_photons)
     std::vector<double> density;   // adaptive: the photon density over the plane (side², mean 1)
     std::vector<uint8_t> levels;   // adaptive: the mipmap level each voxel read
     MediaGrid grids;               // n (smoothed), σ_s, σ_t, for slice views

@@ -18,6 +18,35 @@ double ms_between(Clock::time_point a, Clock::time_point b) {
 double ms_since(Clock::time_point t) { return ms_between(t, Clock::now()); }
 const std::vector<char> kNoPending;
 const std::vector<int> kNoneGathered;
+
+void add(cpu::PhotonFrameStats& a, const cpu::PhotonFrameStats& b) {
+    a.frame = b.frame;
+    a.photons_verified += b.photons_verified;
+    a.groups_invalidated += b.groups_invalidated;
+    a.groups_invalidated_by_query += b.groups_invalidated_by_query;
+    a.objects_moved += b.objects_moved;
+    a.query_segments_tested += b.query_segments_tested;
+    a.query_ms += b.query_ms;
+    a.photons_retraced += b.photons_retraced;
+    a.groups_retraced += b.groups_retraced;
+    a.groups_queued = b.groups_queued;
+    a.aim_texels_rebuilt += b.aim_texels_rebuilt;
+    a.aim_surfaces_rebuilt += b.aim_surfaces_rebuilt;
+}
+
+// The workers' part of `from` (photon frames handed over) added to `into`.
+void add_worker_results(PipelineStats& into, const PipelineStats& from) {
+    if (from.hand_overs == 0) return;
+    add(into.photons, from.photons);
+    into.caustics.traced += from.caustics.traced;
+    into.caustics.hit_specular += from.caustics.hit_specular;
+    into.caustics.stored += from.caustics.stored;
+    into.photon_ms += from.photon_ms;
+    into.aim_ms += from.aim_ms;
+    into.caustic_ms += from.caustic_ms;
+    into.iim_texels_pending = from.iim_texels_pending;
+    into.hand_overs += from.hand_overs;
+}
 }  // namespace
 
 std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
@@ -67,9 +96,27 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
         photons_->set_verification(false);
         photons_->set_query_invalidation(false);
     }
+    scene_.before_edit.owner = this;
+    scene_.before_edit.wait = [this] {
+        if (!cpu_work_.valid()) return;
+        const Clock::time_point t = Clock::now();
+        cpu_work_.wait();
+        edit_wait_ms_ += ms_since(t);
+    };
 }
 
-Pipeline::~Pipeline() { sync(); }
+Pipeline::~Pipeline() {
+    if (cpu_work_.valid()) cpu_work_.wait();
+    // A viewer makes the next pipeline on the scene before this one goes: its wait stays.
+    if (scene_.before_edit.owner == this) {
+        scene_.before_edit.wait = nullptr;
+        scene_.before_edit.owner = nullptr;
+    }
+}
+
+bool Pipeline::waits_for_workers() const {
+    return mode_ == PipelineMode::full || !(scene_.settings.schedule.frame_ms > 0.0f);
+}
 
 void Pipeline::update_media() {
     const bool scene_changed = !media_ || scene_.version != media_version_;
@@ -116,7 +163,7 @@ void Pipeline::update_media() {
 }
 
 void Pipeline::sync() {
-    if (cpu_work_.valid()) cpu_work_.wait();
+    if (cpu_work_.valid()) hand_over(carried_);
 }
 
 void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
@@ -170,7 +217,19 @@ PipelineStats Pipeline::frame() {
     const Clock::time_point start = Clock::now();
     PipelineStats stats;
     stats.frame = ++frame_;
-    sync();
+    add_worker_results(stats, carried_);
+    const double carried_wait_ms = edit_wait_ms_;
+    carried_ = PipelineStats{};
+    edit_wait_ms_ = 0.0;
+    // Photon work that ran on past the last frame: taken over if it is done (its AIM texels are
+    // uploaded below); otherwise it goes on, and this frame starts none.
+    bool workers_busy = false;
+    if (cpu_work_.valid()) {
+        if (cpu_work_.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
+            hand_over(stats);
+        else
+            workers_busy = true;
+    }
     const bool edited = scene_.version != seen_version_ && frame_ > 1;
     // The first edit after frames without one brings costs the running estimates do not hold
     // yet; in a run of edits they are part of every frame, and measured.
@@ -186,7 +245,7 @@ PipelineStats Pipeline::frame() {
     }
     const FrameBudgets budgets =
         scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit);
-    start_cpu_work(budgets);
+    if (!workers_busy) start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.
     Clock::time_point t = Clock::now();
@@ -213,10 +272,14 @@ PipelineStats Pipeline::frame() {
     if (on_gl_drawn_) on_gl_drawn_();
 
     t = Clock::now();
-    if (cpu_work_.valid()) hand_over(stats);
+    if (cpu_work_.valid() && (waits_for_workers() || cpu_work_.wait_for(std::chrono::seconds(0)) ==
+                                                         std::future_status::ready))
+        hand_over(stats);
+    stats.workers_behind = cpu_work_.valid();
     stats.photons.groups_invalidated += invalidated;
-    stats.wait_ms = ms_since(t);
-    stats.frame_ms = ms_since(start);
+    // An edit's wait for the workers came before this frame, on its behalf.
+    stats.wait_ms = ms_since(t) + carried_wait_ms;
+    stats.frame_ms = ms_since(start) + carried_wait_ms;
     stats.budget_iim_texels = budgets.iim_texels;
     stats.budget_photons = budgets.retrace_photons;
     scheduler_.measure(stats);
@@ -226,11 +289,14 @@ PipelineStats Pipeline::frame() {
 void Pipeline::hand_over(PipelineStats& stats) {
     // Wait for the CPU side, then stage its results for the next frame's GL work.
     const CpuWork w = cpu_work_.get();
-    stats.photons = w.photons;
-    stats.caustics = w.caustics;
-    stats.photon_ms = w.photon_ms;
-    stats.aim_ms = w.aim_ms;
-    stats.caustic_ms = w.caustic_ms;
+    PipelineStats work;
+    work.photons = w.photons;
+    work.caustics = w.caustics;
+    work.photon_ms = w.photon_ms;
+    work.aim_ms = w.aim_ms;
+    work.caustic_ms = w.caustic_ms;
+    work.hand_overs = 1;
+    add_worker_results(stats, work);
     caustic_positions_.clear();
     caustic_powers_.clear();
     for (const cpu::CausticPhoton& p : caustic_tracer_->photons())
@@ -296,6 +362,8 @@ int Pipeline::prime(int max_frames) {
         ++frames;
     }
     sync();
+    carried_ = PipelineStats{};  // untimed: nothing of it belongs to the next frame
+    edit_wait_ms_ = 0.0;
     return frames;
 }
 
@@ -305,6 +373,7 @@ GLuint Pipeline::iim_texture() const {
 }
 
 bool Pipeline::converged() const {
+    if (cpu_work_.valid()) return false;  // the workers are still at it
     return (photons_->settled() || !uses_photon_maps_) && aim_dirty_.empty() &&
            indirect_->settled() && renderer_->cube_maps_current() &&
            caustic_frames_since_edit_ > scene_.settings.caustics.frames;  // +1: drawn next frame

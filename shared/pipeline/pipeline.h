@@ -2,8 +2,11 @@
 // edits → selective photon tracing and AIM rebuilds on worker threads, concurrently with the GL
 // thread, which uploads the AIMs handed over by the last frame, brings the indirect term up to
 // date (an IndirectMethod: IIM texels gathered by Δi under a budget, blended in), renders caustics
-// and composes the frame (Larsen eq. 13.2). The hand-over at the end of a frame is the only place
-// the two sides meet; the GL thread never waits on photon work it did not start this frame.
+// and composes the frame (Larsen eq. 13.2). The two sides meet at the hand-over: between gather
+// chunks or at the end of the frame once the workers are done. With a frame-time target a frame
+// does not wait for them (the picture lags, not the frame rate): the work runs on into the next
+// frame, which starts none of its own and takes it over when it is done. A scene edit waits for
+// it (Scene::before_edit), since the workers read the scene.
 #pragma once
 
 #include <array>
@@ -56,8 +59,9 @@ std::unique_ptr<IndirectMethod> make_indirect_method(const Scene& scene,
 
 class Pipeline {
 public:
-    // A GL context must be current. Edit the scene only between frames (after sync(); FrameLoop
-    // does this).
+    // A GL context must be current. Edit the scene between frames through scene_edit.h (each edit
+    // waits for the photon work in flight); anything else that writes the scene (settings)
+    // calls sync() first.
     Pipeline(Scene& scene, const PipelineOptions& options);
     ~Pipeline();
     Pipeline(const Pipeline&) = delete;
@@ -65,8 +69,11 @@ public:
 
     // One progressive frame; the scene may have been edited since the last call.
     PipelineStats frame();
-    // Waits for the photon work in flight (call before editing the scene).
+    // Waits for the photon work in flight and takes it over (its counts go to the next frame's
+    // stats).
     void sync();
+    // Photon work is running on past the last frame (with a frame-time target).
+    bool workers_busy() const { return cpu_work_.valid(); }
     // Untimed: brings everything to the converged state of the current scene at once (all
     // photons traced, every AIM and indirect texel computed and shown, caustics complete), so
     // that a benchmark measures an edit from where an interactive user would make it. Returns
@@ -97,7 +104,10 @@ public:
     double cpu_gather_us() const;
 
     // For the viewer's diagnostic views; read them between frames.
-    const cpu::PhotonSimulation& photons() const { return *photons_; }
+    const cpu::PhotonSimulation& photons() {
+        sync();
+        return *photons_;
+    }
     const gpu::SceneMeshes& meshes() const { return *meshes_; }
     const std::vector<char>& texel_pending() const;  // per texel record; empty without IIM
     const std::vector<int>& last_gathered() const;   // texel records gathered last frame
@@ -107,7 +117,11 @@ public:
 
 private:
     void start_cpu_work(const FrameBudgets& budgets);
+    // Waits for the CPU side, stages its results for the GL side and adds its counts to `stats`.
     void hand_over(PipelineStats& stats);
+    // A frame waits for its photon work at the end: without a frame-time target (offline runs,
+    // frame by frame deterministic) and in `full` mode (everything every frame).
+    bool waits_for_workers() const;
     // Between gather chunks: hand_over() if the workers have finished (never waits) and upload
     // the new AIM texels at once; true when AIMs changed.
     bool hand_over_if_done(PipelineStats& stats);
@@ -144,6 +158,10 @@ private:
     std::vector<glm::vec3> staged_aim_;  // atlas-sized AIM radiance as the GL side sees it
     std::vector<glm::vec3> caustic_positions_, caustic_powers_;
     uint64_t frame_ = 0;
+    // Handed over outside a frame (sync()): reported with the next frame. Edits' waits for the
+    // workers, counted into the next frame's time.
+    PipelineStats carried_;
+    double edit_wait_ms_ = 0.0;
     // Caustic photons are re-traced a slice a frame (ch. 12): they hold the current scene once
     // settings.caustics.frames frames have passed since it last changed, and are drawn a frame
     // after they are traced.

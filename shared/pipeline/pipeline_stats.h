@@ -20,12 +20,18 @@ struct PipelineStats {
     int vpl_updated = 0, vpl_count = 0, vpl_stale = 0;
     double vpl_clamp_bias = 0.0;
     // photon_ms and aim_ms run on the workers, overlapped with gather_ms and draw_ms on the GL
-    // thread; wait_ms is what the GL thread then waited for them.
+    // thread; wait_ms is what the GL thread then waited for them (at the end of the frame, or in a
+    // scene edit before it: Scene::before_edit), also counted in frame_ms.
     // The scheduler's budgets for this frame (fixed counts without a frame-time target).
     int budget_iim_texels = 0, budget_photons = 0;
     // The photon work was handed over between gather chunks, not at the end of the frame: the
     // rest of this frame's gathers read its AIMs.
     bool early_hand_over = false;
+    // Photon frames handed over during this frame (at its start, between gather chunks or at
+    // its end; 0 when the workers ran on through it), and whether they were still running when
+    // it ended (a frame-time target: the frame did not wait).
+    int hand_overs = 0;
+    bool workers_behind = false;
     // The frame's passes were drawn (false: the accumulated mean was complete and kept).
     bool drawn = true;
     // It drew the direct light anew (every light's shadows), as the frame of an edit does.

@@ -106,7 +106,8 @@ void FrameScheduler::measure(const PipelineStats& s) {
     if (s.photons.photons_retraced > 0)
         sample(photon_ms_, s.photon_ms, photons, s.photons.photons_retraced >= 500 ? 1 : 1 << 30);
     sample(aim_ms_per_texel_, s.aim_ms, s.photons.aim_texels_rebuilt, 4);
-    caustic_ms_.add(s.caustic_ms);
+    // A frame the workers ran on through hands nothing over: no sample of what a frame costs.
+    if (s.hand_overs > 0) caustic_ms_.add(s.caustic_ms / s.hand_overs);
 }
 
 }  // namespace ag

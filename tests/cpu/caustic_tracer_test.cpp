@@ -205,6 +205,27 @@ TEST(CausticTracer, IndependentOfThreadCount) {
 
 namespace ag::cpu {
 
+namespace {
+
+// The fog tests' lamp of intensity 100 at `lamp` and, with `fog`, a box of fog 20 units across
+// around the origin (σ_s 0.1, σ_a 0.05: σ_t 0.15).
+void add_lamp_and_fog(Scene& s, glm::vec3 lamp, bool fog) {
+    Light l;
+    l.name = "lamp";
+    l.position = lamp;
+    l.intensity = glm::vec3(100.0f);
+    s.lights.push_back(l);
+    if (!fog) return;
+    Medium m;
+    m.bounds.min = glm::vec3(-10.0f);
+    m.bounds.max = glm::vec3(10.0f);
+    m.sigma_s = 0.1f;
+    m.sigma_a = 0.05f;
+    s.media.push_back(m);
+}
+
+}  // namespace
+
 // Caustic photons through fog (Pfeuti's surface caustic seen through the medium): a light beside
 // a vertical mirror, the caustic on the floor, all in a fog box. Each photon's path light →
 // mirror → floor is as long as the straight line from the light's mirror image to where it lands,
@@ -228,19 +249,7 @@ TEST(CausticTracer, PhotonsThroughFogLoseBeerLambert) {
         floor.name = "floor";
         floor.mesh = make_quad(20.0f, 20.0f);
         s.objects.push_back(floor);
-        Light l;
-        l.name = "lamp";
-        l.position = lamp;
-        l.intensity = glm::vec3(100.0f);
-        s.lights.push_back(l);
-        if (fog) {
-            Medium m;
-            m.bounds.min = glm::vec3(-10.0f);
-            m.bounds.max = glm::vec3(10.0f);
-            m.sigma_s = 0.1f;
-            m.sigma_a = 0.05f;
-            s.media.push_back(m);
-        }
+        add_lamp_and_fog(s, lamp, fog);
         s.settings.caustics.photons = 8000;
         s.settings.lightmap.texel_size = 2.0f;
         init_versions(s);
@@ -291,19 +300,7 @@ TEST(PhotonTracerMedia, PhotonsThroughFogLoseBeerLambertAlongTheirPaths) {
         wall.transform.rotation = glm::angleAxis(glm::radians(-90.0f), glm::vec3(0, 0, 1));
         wall.transform.translation = {-3.0f, 3.0f, 0.0f};
         s.objects.push_back(wall);
-        Light l;
-        l.name = "lamp";
-        l.position = lamp;
-        l.intensity = glm::vec3(100.0f);
-        s.lights.push_back(l);
-        if (fog) {
-            Medium m;
-            m.bounds.min = glm::vec3(-10.0f);
-            m.bounds.max = glm::vec3(10.0f);
-            m.sigma_s = 0.1f;
-            m.sigma_a = 0.05f;
-            s.media.push_back(m);
-        }
+        add_lamp_and_fog(s, lamp, fog);
         s.settings.photons.groups = 64;
         s.settings.photons.photons_per_group = 64;
         s.settings.lightmap.texel_size = 1.0f;

@@ -145,4 +145,15 @@ inline Scene room_with_lamp_in_box(float box_top = 1.0f) {
     return s;
 }
 
+// The same box opened at the bottom (its faces below y = -0.1 in its own frame removed): the
+// lamp then lights the room, so a test that expects black can show that it would see light.
+inline void open_lamp_box_at_the_bottom(Scene& s) {
+    Mesh& m = s.objects.back().mesh;
+    std::erase_if(m.triangles, [&](const glm::uvec3& t) {
+        return m.positions[t.x].y < -0.1f && m.positions[t.y].y < -0.1f &&
+               m.positions[t.z].y < -0.1f;
+    });
+    init_versions(s);
+}
+
 }  // namespace ag::test

@@ -119,15 +119,7 @@ TEST_F(DirectVplTest, ALampInAClosedBoxLightsNoCeilingThroughMapsEightTexelsAcro
         scene.settings.direct.map_size = 8;
         scene.camera.width = scene.camera.height = kSize;
         const Image closed = direct_term(scene, DirectMethod::vpl, true);
-        Mesh& m = scene.objects.back().mesh;
-        m.triangles.erase(std::remove_if(m.triangles.begin(), m.triangles.end(),
-                                         [&](const glm::uvec3& t) {
-                                             return m.positions[t.x].y < -0.1f &&
-                                                    m.positions[t.y].y < -0.1f &&
-                                                    m.positions[t.z].y < -0.1f;
-                                         }),
-                          m.triangles.end());
-        init_versions(scene);
+        test::open_lamp_box_at_the_bottom(scene);
         const Image open = direct_term(scene, DirectMethod::vpl, true);
         double sum = 0.0, open_sum = 0.0;
         int lit = 0;

@@ -407,15 +407,7 @@ TEST_F(FrameTest, ALampInAClosedBoxLightsNoPixelAlongTheRoomsSeams) {
     EXPECT_EQ(lit, 0) << "values in lit pixels up to " << brightest;
     // The same room with the box open at the bottom is lit: the test would see light.
     Scene open = scene;
-    Mesh& m = open.objects.back().mesh;
-    m.triangles.erase(std::remove_if(m.triangles.begin(), m.triangles.end(),
-                                     [&](const glm::uvec3& t) {
-                                         return m.positions[t.x].y < -0.1f &&
-                                                m.positions[t.y].y < -0.1f &&
-                                                m.positions[t.z].y < -0.1f;
-                                     }),
-                      m.triangles.end());
-    init_versions(open);
+    test::open_lamp_box_at_the_bottom(open);
     SceneMeshes open_meshes(open);
     FrameRenderer open_renderer(open, open_meshes, open.camera.width, open.camera.height);
     open_renderer.render(iim.id());

@@ -5,6 +5,7 @@
 
 #include "gl_fixture.h"
 #include "gpu/gl.h"
+#include "gpu/gl_objects.h"
 
 namespace ag::gpu {
 namespace {
@@ -23,6 +24,23 @@ TEST_F(GlErrors, AnErrorLeftPendingFailsTheNextCheckUntilTaken) {
     gl::Enable(kNotACapability);
     EXPECT_EQ(take_gl_errors(), "0x0500");  // GL_INVALID_ENUM, named
     EXPECT_NO_THROW(check_gl("the next variant"));
+    EXPECT_EQ(take_gl_errors(), "");
+}
+
+// check_gl names the error, and a texture the implementation refuses is named with its size: a
+// render at --size 16384x16384 on llvmpipe said only "OpenGL error 0x0505 in make_float_texture".
+TEST_F(GlErrors, ARefusedTextureIsNamedWithItsErrorAndSize) {
+    ASSERT_EQ(take_gl_errors(), "");
+    try {
+        make_float_texture(-1, 2);  // a negative width: GL_INVALID_VALUE
+        FAIL() << "expected a GlError";
+    } catch (const GlError& e) {
+        EXPECT_NE(
+            std::string(e.what()).find(
+                "OpenGL error 0x0501 (GL_INVALID_VALUE) in make_float_texture (-1 x 2 RGBA32F"),
+            std::string::npos)
+            << e.what();
+    }
     EXPECT_EQ(take_gl_errors(), "");
 }
 

@@ -230,6 +230,116 @@ TEST_F(PipelineTest, TheGlThreadDrawsWhileThePhotonWorkRuns) {
     EXPECT_EQ(timed_out, 0);
 }
 
+// With a frame-time target a frame does not wait for photon work that outlasts it (#11: "a frame
+// never waits for photon tracing; when the CPU falls behind, the picture lags, not the frame
+// rate"): the work runs on, the frames after it start none of their own and take it over once it is
+// done. An edit waits for it (the workers read the scene) and that wait is counted in the next
+// frame. Without a target a frame waits, as offline runs need. The worker is held on a gate that
+// the test opens only after frames have returned: a frame that waited would hang until the gate's
+// 60 s timeout and fail the checks.
+TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
+    Scene scene = cornell();
+    scene.settings.schedule.frame_ms = 33.0f;
+    std::mutex m;
+    std::condition_variable cv;
+    bool hold = false;
+    int started = 0;
+    PipelineOptions options{32, 32};
+    options.on_cpu_work_start = [&] {
+        std::unique_lock lock(m);
+        ++started;
+        cv.wait_for(lock, std::chrono::seconds(60), [&] { return !hold; });
+    };
+    auto set_hold = [&](bool h) {
+        {
+            std::lock_guard lock(m);
+            hold = h;
+        }
+        cv.notify_all();
+    };
+    auto started_now = [&] {
+        std::lock_guard lock(m);
+        return started;
+    };
+    using Clock = std::chrono::steady_clock;
+    Pipeline pipeline(scene, options);
+    pipeline.prime();
+    FrameLoop loop(pipeline);
+
+    set_hold(true);
+    const int before = started_now();
+    const Clock::time_point t0 = Clock::now();
+    for (int f = 0; f < 3; ++f) {
+        const PipelineStats s = loop.step();
+        EXPECT_TRUE(s.workers_behind) << f;
+        EXPECT_EQ(s.hand_overs, 0) << f;
+        EXPECT_TRUE(pipeline.workers_busy());
+        EXPECT_FALSE(pipeline.converged());
+    }
+    EXPECT_LT(std::chrono::duration<double>(Clock::now() - t0).count(), 30.0);
+    EXPECT_EQ(started_now(), before + 1);  // one frame of photon work at a time
+    set_hold(false);
+    int taken_over_at = -1;
+    for (int f = 0; f < 100 && taken_over_at < 0; ++f)
+        if (loop.step().hand_overs > 0) taken_over_at = f;
+    EXPECT_GE(taken_over_at, 0);
+
+    // An edit waits for the work in flight, and the next frame counts the wait. Nothing of the
+    // unheld frames may still run (it could end within the next frame and be handed over).
+    pipeline.sync();
+    set_hold(true);
+    EXPECT_TRUE(loop.step().workers_behind);
+    std::thread opener([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));
+        set_hold(false);
+    });
+    set_albedo(scene, scene.find_object("cube"), glm::vec3(0.2f, 0.6f, 0.2f));
+    {
+        std::lock_guard lock(m);
+        EXPECT_FALSE(hold);  // the edit returned only once the gate had opened
+    }
+    opener.join();
+    const PipelineStats edit = loop.step();
+    EXPECT_GE(edit.hand_overs, 1);
+    EXPECT_GE(edit.wait_ms, 100.0);
+    EXPECT_GE(edit.frame_ms, edit.wait_ms);
+    pipeline.sync();  // the edit's own photon work, reported with the next frame if not yet
+    const PipelineStats next = loop.step();
+    EXPECT_GT(edit.photons.groups_invalidated + next.photons.groups_invalidated, 0);
+
+    // Without a target the frame waits for its work. The first such frame also takes over what
+    // the last one left running (begin_edits hands it over, counted with the frame), so the
+    // frame measured is the one after: exactly its own work, waited for.
+    loop.begin_edits();
+    scene.settings.schedule.frame_ms = 0.0f;
+    EXPECT_FALSE(loop.step().workers_behind);
+    set_hold(true);
+    std::thread late([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));
+        set_hold(false);
+    });
+    const PipelineStats waited = loop.step();
+    late.join();
+    EXPECT_FALSE(waited.workers_behind);
+    EXPECT_EQ(waited.hand_overs, 1);
+    EXPECT_GE(waited.wait_ms, 100.0);
+}
+
+// The viewer makes a new pipeline on the same scene before the old one goes (another indirect
+// method): the old one's destructor must leave the new one's wait in place, or edits would no
+// longer wait for the new workers.
+TEST_F(PipelineTest, AReplacedPipelineLeavesItsSuccessorsEditWait) {
+    Scene scene = cornell();
+    auto first = std::make_unique<Pipeline>(scene, PipelineOptions{16, 16});
+    EXPECT_EQ(scene.before_edit.owner, first.get());
+    auto second = std::make_unique<Pipeline>(scene, PipelineOptions{16, 16});
+    first = std::move(second);  // the old pipeline is destroyed after the new one was made
+    EXPECT_EQ(scene.before_edit.owner, first.get());
+    EXPECT_TRUE(bool(scene.before_edit.wait));
+    first.reset();
+    EXPECT_FALSE(bool(scene.before_edit.wait));
+}
+
 TEST_F(PipelineTest, BruteForceRedoesEverythingEveryFrame) {
     Scene scene = cornell();
     Pipeline pipeline(scene, PipelineOptions{32, 32, -1, PipelineMode::full});

@@ -23,6 +23,7 @@ PipelineStats measured(double draw_ms, int texels, double gather_ms, int photons
     s.photons.aim_texels_rebuilt = aim_texels;
     s.aim_ms = aim_ms;
     s.caustic_ms = 1.0;
+    s.hand_overs = 1;  // the frame took its photon work over
     return s;
 }
 
@@ -65,6 +66,13 @@ TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     EXPECT_EQ(b.retrace_photons, int((0.8 * 33 - 1) / 0.005));  // workers: 80% of the frame
     EXPECT_EQ(b.aim_surfaces, FrameBudgets::kUnlimited);
     EXPECT_EQ(scheduler.aim_texels_left(settings, 10.0), int((0.8 * 33 - 1 - 10) / 0.01));
+    // A frame the workers ran on through (no hand-over) measures no caustic work: without the
+    // guard its 0 ms would lower the caustics' estimate and raise the photon budget.
+    PipelineStats ran_on = measured(10.0, 20, 2.0, 0, 0.0, 0, 0.0);
+    ran_on.caustic_ms = 0.0;
+    ran_on.hand_overs = 0;
+    for (int f = 0; f < 20; ++f) scheduler.measure(ran_on);
+    EXPECT_EQ(scheduler.budgets(settings, 100000).retrace_photons, int((0.8 * 33 - 1) / 0.005));
     // The frame of an edit draws the direct light anew, and moved geometry besides. Until a
     // frame that drew the direct light anew is measured, it leaves twice the usual drawing time:
     // (33 − 20) / 0.1.

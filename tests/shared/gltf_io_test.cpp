@@ -15,6 +15,7 @@
 #include "shared/input_error.h"
 #include "shared/scene.h"
 #include "shared/scene_file.h"
+#include "tests/shared/deadline.h"
 #include "tests/shared/external_scenes.h"
 #include "tests/shared/temp_dir.h"
 
@@ -156,6 +157,78 @@ TEST_F(GltfTest, NodeHierarchyIsFlattenedIntoWorldPositions) {
     EXPECT_EQ(m.parts[0].material.name, "default");
     // The quad faced +y; the rotation turns that to -x.
     EXPECT_NEAR(triangle_normal(m.parts[0].mesh, 0).x, -1.0f, 1e-5f);
+}
+
+// glTF's nodes form trees (no node has two parents). Forty nodes each naming the next as its
+// child twice place the quad 2^40 times along distinct paths: the reader recursed down every path
+// (a hang, then memory). A node reached a second time is now an error naming it, as is a cycle and
+// a chain deeper than 256; a mesh placed by two nodes (instancing) still loads as two parts.
+TEST_F(GltfTest, ANodeReachedTwiceIsAnErrorNotTwoToTheFortyPlacements) {
+    const auto error = [&](const GltfDoc& doc) -> std::string {
+        std::string message;
+        test::within_deadline(std::chrono::seconds(20), [&] {
+            try {
+                load(doc);
+            } catch (const InputError& e) {
+                message = e.what();
+            }
+        });
+        return message;
+    };
+    {
+        GltfDoc doc;
+        const int mesh = doc.mesh(-1);
+        for (int i = 0; i < 40; ++i) doc.node({{"children", {i + 1, i + 1}}}, i == 0);
+        doc.node({{"mesh", mesh}}, false);
+        const std::string e = error(doc);
+        EXPECT_NE(e.find("m.gltf: node 40: expected a node tree, got a node reached a second time"),
+                  std::string::npos)
+            << e;
+    }
+    {
+        GltfDoc doc;  // a cycle 0 → 1 → 0
+        doc.node({{"mesh", doc.mesh(-1)}, {"children", {1}}});
+        doc.node({{"children", {0}}}, false);
+        EXPECT_NE(error(doc).find("node 0: expected a node tree, got a node reached a second"),
+                  std::string::npos);
+    }
+    {
+        GltfDoc doc;  // a root listed twice
+        doc.node({{"mesh", doc.mesh(-1)}});
+        doc.j["scenes"][0]["nodes"].push_back(0);
+        EXPECT_NE(error(doc).find("reached a second time"), std::string::npos);
+    }
+    {
+        GltfDoc doc;  // a chain of 300 nodes
+        for (int i = 0; i < 300; ++i) doc.node({{"children", {i + 1}}}, i == 0);
+        doc.node({{"mesh", doc.mesh(-1)}}, false);
+        EXPECT_NE(error(doc).find("node 257: expected a node tree at most 256 deep"),
+                  std::string::npos);
+    }
+    GltfDoc doc;  // one mesh, two nodes: two parts
+    const int mesh = doc.mesh(-1);
+    doc.node({{"mesh", mesh}});
+    doc.node({{"mesh", mesh}, {"translation", {3, 0, 0}}});
+    EXPECT_EQ(load(doc).parts.size(), 2u);
+}
+
+// Each placement of a mesh copies it, so the triangles placed, instances included, are bounded
+// before any accessor is read (kMaxSceneTriangles; here a bound of 10): five placements of the
+// quad (10 triangles) load, six fail naming the sixth node.
+TEST_F(GltfTest, TrianglesPlacedByInstancesAreBounded) {
+    GltfDoc doc;
+    const int mesh = doc.mesh(-1);
+    for (int i = 0; i < 5; ++i) doc.node({{"name", "n" + std::to_string(i)}, {"mesh", mesh}});
+    EXPECT_EQ(load_gltf(write("five.gltf", doc.gltf()), 10).parts.size(), 5u);
+    doc.node({{"name", "n5"}, {"mesh", mesh}});
+    try {
+        load_gltf(write("six.gltf", doc.gltf()), 10);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("six.gltf: node n5: expected at most 10 triangles"),
+                  std::string::npos)
+            << e.what();
+    }
 }
 
 TEST_F(GltfTest, MirroringNodeKeepsFrontFacesOutward) {

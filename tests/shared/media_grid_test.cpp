@@ -112,6 +112,60 @@ TEST(MediaGrid, PhotonDensitySamplesItsCells) {
     EXPECT_THROW(PhotonDensity(2, {1.0f}), std::invalid_argument);
 }
 
+// The significance stop (docs/media.md, "The filter beside a caustic's focus"): a bright line
+// (a caustic's focus, 10 over a field of 1) with many photons a voxel. His filter alone lets the
+// voxels beside the line climb (their differences shrink after the first level) and read the
+// blurred line; with the stop, the step from 1 to that blur is many standard errors at 1,000
+// crossings, so they keep level 0 and the field exactly. Noise with one crossing a voxel is still
+// filtered (its steps are within its errors). A stop that never fired, or fired on noise, fails.
+TEST(MediaGrid, SignificanceStopKeepsAFocusSharpAndFiltersNoise) {
+    const glm::ivec3 size(32, 32, 32);
+    const size_t voxels = size_t(size.x) * size.y * size.z;
+    const auto index = [&](int x, int y, int z) { return (size_t(z) * size.y + y) * size.x + x; };
+    std::vector<float> line(voxels, 1.0f), many(voxels, 1000.0f), ones(voxels, 1.0f);
+    for (int z = 0; z < size.z; ++z) line[index(16, 16, z)] = 10.0f;
+    std::vector<glm::vec3> flow(voxels, glm::vec3(0.0f));
+    const std::vector<float> heavy(voxels, 1.0f);
+    const MediaReconstruction his = reconstruct_adaptive(size, line, flow, many, heavy, 0.1f, 4);
+    const MediaReconstruction stopped =
+        reconstruct_adaptive(size, line, flow, many, heavy, 0.1f, 4, 3.0f);
+    // The stop accepts a step within 3 standard errors (1/√1000 ≈ 3.2% each level): no voxel
+    // off by more than 10%, the line and the voxels beside it exact.
+    int his_blurred = 0;
+    float worst = 0.0f;
+    for (int y = 8; y <= 24; ++y)
+        for (int x = 8; x <= 24; ++x) {
+            const size_t i = index(x, y, 16);
+            if (std::abs(his.fluence[i] - line[i]) > 0.1f * line[i]) ++his_blurred;
+            worst = std::max(worst, std::abs(stopped.fluence[i] - line[i]) / line[i]);
+            if (std::abs(x - 16) <= 1 && std::abs(y - 16) <= 1) {
+                EXPECT_EQ(stopped.level[i], 0) << x << " " << y;
+                EXPECT_EQ(stopped.fluence[i], line[i]) << x << " " << y;
+            }
+        }
+    std::printf(
+        "significance stop: his filter reads %d of 289 voxels around the line more than "
+        "10%% off, ours at most %.1f%%\n",
+        his_blurred, 100.0f * worst);
+    EXPECT_LT(worst, 0.1f);
+    EXPECT_GT(his_blurred, 4);  // the test's premise: his filter alone blurs the focus
+    // Noise (±50%, one crossing a voxel): filtered as by his filter alone.
+    std::vector<float> noisy(voxels);
+    double error_in = 0.0, error_out = 0.0;
+    for (size_t i = 0; i < voxels; ++i) {
+        const float u = float(hash_u32(uint32_t(i)) >> 8) / float(1 << 24);
+        noisy[i] = 2.0f * (0.5f + u);
+    }
+    const MediaReconstruction r =
+        reconstruct_adaptive(size, noisy, flow, ones, heavy, 0.1f, 4, 3.0f);
+    for (size_t i = 0; i < voxels; ++i) {
+        error_in += (noisy[i] - 2.0) * (noisy[i] - 2.0);
+        error_out += (r.fluence[i] - 2.0) * (r.fluence[i] - 2.0);
+    }
+    std::printf("significance stop on noise: squared error %.1f -> %.1f\n", error_in, error_out);
+    EXPECT_LT(error_out, 0.05 * error_in);
+}
+
 // Pfeuti's reconstruction (ch. 3.2.4): a constant field comes back unchanged at any level; light
 // weights (dense photons) keep level 0 and the field exactly; heavy weights over noise pick higher
 // levels and cut the noise, but the centre-surround filter picks lower levels beside an edge than

@@ -259,6 +259,24 @@ TEST_F(MeshIo, OffCountsAreChecked) {
     EXPECT_NE(err.find("fuzzed.off: byte"), std::string::npos) << err;
 }
 
+// OpenMesh trims a line before reading its keyword, so " f ..." is a face; the check skipped lines
+// that did not start with the keyword, and a face whose vertices OpenMesh could not read tripped
+// its assertion `!vhandles.empty()` and aborted (found by the mesh_io fuzz target; the input is
+// tests/fuzz/corpus/mesh_io/indented_face.obj). Indented lines are now checked as OpenMesh reads
+// them: the bad face is an error naming its line, and an indented good file loads.
+TEST_F(MeshIo, IndentedObjLinesAreCheckedAsOpenMeshReadsThem) {
+    const std::string err = load_error(write("fuzzed.obj",
+                                             "v 1\xdb"
+                                             "FfA 5\n f \xc9\xce /2 -3\n"));
+    EXPECT_NE(err.find("fuzzed.obj: line 2: face refers to vertex"), std::string::npos) << err;
+    const Mesh m =
+        load_mesh(write("indented.obj", "  v 0 0 0\n\tv 1 0 0\n v 0 0 1\n \t f 1 3 2\n"));
+    EXPECT_EQ(m.triangles.size(), 1u);
+    EXPECT_NE(load_error(write("indented_bad.obj", " v 0 0 0\n v 1 0 0\n v 0 0 1\n  f 1 2 4\n"))
+                  .find("line 4: face refers to vertex \"4\" but only 3"),
+              std::string::npos);
+}
+
 TEST_F(MeshIo, TruncatedStlAndObjAreRejected) {
     const Mesh cube = make_box(glm::vec3(1.0f));
     for (const char* ext : {".stl", ".obj"}) {

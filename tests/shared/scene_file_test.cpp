@@ -723,6 +723,51 @@ TEST_F(SceneFile, DuplicateJsonKeysAreRejected) {
         << err2;
 }
 
+// The triangles every object places together are bounded (kMaxSceneTriangles, 2^26): many objects
+// naming one large mesh file would otherwise load copies until memory ran out. The base scene
+// places 322 (the quad's 2 and the sphere's 320): a bound of 322 loads it, 321 fails naming the
+// sphere's object.
+TEST_F(SceneFile, TrianglesEveryObjectPlacesAreBounded) {
+    const Json j = base_scene();
+    EXPECT_EQ(parse_scene(j.dump(), (dir_ / "t.json").string(), 322).objects.size(), 2u);
+    try {
+        parse_scene(j.dump(), (dir_ / "t.json").string(), 321);
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("t.json: /objects/1: expected at most 321 triangles "
+                                             "in the scene (kMaxSceneTriangles), got 322"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
+// A room plus a tile 10^7 away (the sweep's mixed_scale): the ray offset (1e-5 of the diagonal,
+// 141 units) and the frame's near plane (1e-3, 14,142 units) swallow the room, and every render
+// of it was black without a word (pt's too). The load now warns of both, naming objects; the base
+// scene alone gets no warning.
+TEST_F(SceneFile, AFarTileWarnsThatTheRoomIsClippedAndSteppedOver) {
+    Json j = base_scene();
+    ::testing::internal::CaptureStderr();
+    parse_scene(j.dump(), (dir_ / "one_scale.json").string());
+    EXPECT_EQ(::testing::internal::GetCapturedStderr(), "");
+    j["objects"].push_back({{"name", "far_tile"},
+                            {"material", "white"},
+                            {"shape", {{"type", "quad"}, {"size", {1, 1}}}},
+                            {"transform", {{"translate", {9999000, 0, 9999000}}}}});
+    ::testing::internal::CaptureStderr();
+    parse_scene(j.dump(), (dir_ / "far_tile.json").string());
+    const std::string err = ::testing::internal::GetCapturedStderr();
+    EXPECT_NE(err.find("far_tile.json: the scene is 1.41e+07 across (its bounds' diagonal); "
+                       "object 'floor' has a vertex 3.74 from the camera"),
+              std::string::npos)
+        << err;
+    EXPECT_NE(err.find("nearer than the frame's near plane (1.41e+04"), std::string::npos) << err;
+    EXPECT_NE(err.find("3 objects are smaller than ten ray offsets (1.41e+03, the offset 1e-5 of "
+                       "the diagonal), and rays may step over them: 'floor' (5.66), 'ball' (1.73)"),
+              std::string::npos)
+        << err;
+}
+
 TEST_F(SceneFile, ParseSceneResolvesPathsAgainstTheSceneFile) {
     save_mesh(make_box(glm::vec3(1.0f)), (dir_ / "box.ply").string());
     Json j = base_scene();

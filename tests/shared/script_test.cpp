@@ -518,6 +518,47 @@ TEST(Script, RunawayLoopStopsAtTheBudgetAndTheNextCallRuns) {
     }
 }
 
+// Lua's pattern matcher runs in C, out of the instruction hook's reach: forty "a*" against forty
+// a's backtracked without end (afterglow render hung past 60 s; the budget never fired). find,
+// match, gmatch and gsub, as functions and as string methods, bound their work first (100 steps
+// per instruction of the budget) and fail naming themselves; everyday patterns still run, and the
+// next frame runs.
+TEST(Script, PatternsThatWouldBacktrackForeverAreRefused) {
+    Scene scene = small_scene();
+    const std::vector<std::string> calls = {
+        "local s = ('a'):rep(40); return s:match(('a*'):rep(40) .. 'b')",
+        "return string.find(('a'):rep(40), ('a-'):rep(40) .. 'b')",
+        "for w in string.gmatch(('a'):rep(40), ('a?'):rep(40) .. 'b') do end",
+        "return (('a'):rep(40)):gsub(('a+'):rep(40) .. 'b', 'x')",
+        // a plain find of a long needle in a long haystack is n × m too
+        "local s = ('a'):rep(2000000); return s:find(('a'):rep(1000000) .. 'b', 1, true)",
+    };
+    for (const std::string& call : calls) {
+        SCOPED_TRACE(call);
+        Script s = script(
+            "function on_frame(scene, frame)\n"
+            "  if frame == 0 then " +
+            call +
+            " end\n"
+            "  scene:object('cube'):translate(1, 0, 0)\n"
+            "end\n");
+        test::within_deadline(std::chrono::seconds(20),
+                              [&] { EXPECT_FALSE(s.on_frame(scene, 0, 0.0)); });
+        EXPECT_THAT(error_of(s), HasSubstr("test.lua:2: string."));
+        EXPECT_THAT(error_of(s), HasSubstr("over the budget of 10^9 (matching runs in C"));
+        EXPECT_TRUE(s.on_frame(scene, 1, 0.0)) << error_of(s);
+    }
+    Script fine = script(
+        "function on_frame(scene, frame)\n"
+        "  assert(('lamp_3'):match('^lamp_(%d+)$') == '3')\n"
+        "  assert(select(2, string.gsub(('a b  c'):rep(1000), '%s+', ' ')) == 2000)\n"
+        "  assert(string.find('x.y', '.', 1, true) == 2)\n"
+        "  local n = 0 for k, v in string.gmatch('a=1, b=2', '(%w+)=(%w+)') do n = n + 1 end\n"
+        "  assert(n == 2)\n"
+        "end\n");
+    EXPECT_TRUE(fine.on_frame(scene, 0, 0.0)) << error_of(fine);
+}
+
 // A coroutine kept between frames (an animation, say) survives another frame's runaway loop.
 TEST(Script, CoroutinesOutliveABudgetError) {
     Scene scene = small_scene();

@@ -50,6 +50,8 @@ struct FrameRecord {
     int iim_texels = 0, iim_pending = 0;
     // CPU gather rays of the frame's IIM texels: traced, and re-read from the ray cache.
     uint64_t rays_traced = 0, rays_reused = 0;
+    // The frame ended with its photon work still running (a frame-time target: it did not wait).
+    bool workers_behind = false;
 };
 
 struct SettleAnalysis {

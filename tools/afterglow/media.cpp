@@ -48,6 +48,11 @@ const Command kMediaCommand{
                 "view-march rays per pixel over the hemisphere of the surface the camera sees, "
                 "for the light the fog scatters onto it (0: none)",
                 0, 4096, MediaMethodSettings{}.fog_on_surfaces_rays),
+        integer("emissive-photons", "N",
+                "photons from the scene's emissive surfaces (mesh lights and lamps that are no "
+                "light): at least N, more where their power over the light's asks for more (0: "
+                "none)",
+                0, 1 << 26, MediaMethodSettings{}.emissive_photons),
         flag("adaptive",
              "his adaptive pipeline (ch. 3.2): pilot photons, importance-sampled photons "
              "(--photons of them), per-voxel mipmap filtering"),
@@ -59,6 +64,12 @@ const Command kMediaCommand{
             "delta-weight", "W",
             "adaptive: photon weight per mipmap level, for a 64-voxel grid (scaled by 64 / --grid)",
             1e-12, 1.0, MediaAdaptiveSettings{}.delta_weight),
+        number(
+            "significance", "Z",
+            "adaptive: a voxel climbs a mipmap level only while the step to it is within Z "
+            "standard errors, each level's relative error 1/sqrt(photons crossing its voxel) (0: "
+            "off, his filter)",
+            0.0, 1e9, MediaAdaptiveSettings{}.significance),
         number("gradient", "X",
                "adaptive: a coarse voxel is sampled tightly where its fluence gradient times its "
                "size reaches X times the mean fluence",
@@ -106,6 +117,7 @@ int run_media(const Args& args) {
     settings.march_step = float(args.get_double("step"));
     settings.surface_bounces = args.get_int("surface-bounces");
     settings.fog_on_surfaces_rays = args.get_int("surface-rays");
+    settings.emissive_photons = args.get_int("emissive-photons");
     settings.octree = !args.has("no-octree");
     settings.phase_spread = !args.has("his-phase");
     settings.deposit = args.get("deposit") == "walk" ? gpu::MediaDeposit::voxel_walk
@@ -114,6 +126,7 @@ int run_media(const Args& args) {
     settings.adaptive.pilot_side = args.get_int("pilots");
     settings.adaptive.background = float(args.get_double("background"));
     settings.adaptive.delta_weight = float(args.get_double("delta-weight"));
+    settings.adaptive.significance = float(args.get_double("significance"));
     settings.adaptive.gradient = float(args.get_double("gradient"));
     settings.adaptive.shadow = float(args.get_double("shadow"));
     settings.adaptive.reconstruct = !args.has("no-filter");
@@ -154,13 +167,14 @@ int run_media(const Args& args) {
             result.pilots_marched, 1e3 * t.pilot_generation, 1e3 * t.pilot_marching,
             1e3 * t.distribution, 1e3 * t.reconstruction);
     std::printf(
-        "media: grid %dx%dx%d, %zu photons marched (+%zu from surfaces), %dx%d pixels on %s\n"
+        "media: grid %dx%dx%d, %zu photons marched (+%zu from surfaces, +%zu from emissive "
+        "surfaces), %dx%d pixels on %s\n"
         "  voxelisation %.1f ms, smoothing %.1f ms, octree %.1f ms, photon generation %.1f ms, "
         "photon marching %.1f ms, viewing %.1f ms, total %.1f ms\n",
         result.grid.x, result.grid.y, result.grid.z, result.photons_marched, result.photons_bounced,
-        scene.camera.width, scene.camera.height, context->renderer().c_str(), 1e3 * t.voxelisation,
-        1e3 * t.smoothing, 1e3 * t.octree, 1e3 * t.photon_generation, 1e3 * t.photon_marching,
-        1e3 * t.viewing, 1e3 * t.total());
+        result.photons_emissive, scene.camera.width, scene.camera.height,
+        context->renderer().c_str(), 1e3 * t.voxelisation, 1e3 * t.smoothing, 1e3 * t.octree,
+        1e3 * t.photon_generation, 1e3 * t.photon_marching, 1e3 * t.viewing, 1e3 * t.total());
     if (!result.levels.empty() && args.has("slices")) {
         std::vector<float> levels(result.levels.begin(), result.levels.end());
         write_image(grid_slice(result.grids, levels, 2, result.grids.size.z / 2),

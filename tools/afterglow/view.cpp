@@ -474,6 +474,8 @@ void Viewer::make_pipeline() {
 void Viewer::apply_requests() {
     ViewRequests r = std::move(requests_);
     requests_ = ViewRequests{};
+    // Settings are written directly, not through scene_edit.h: the workers must be done first.
+    if (r.settings || r.indirect || r.backend) loop_->begin_edits();
     if (r.select) controller_->select(*r.select, state_);
     if (r.settings) scene_.settings = *r.settings;
     if (r.indirect) {
@@ -839,8 +841,8 @@ int Viewer::run() {
         handle_events(events);
         controller_->advance(state_.replaying ? 1.0 / 30.0 : std::min(0.1, loop_ms / 1000.0));
 
-        // Edits happen between frames: the last frame's photon work is finished.
-        loop_->begin_edits();
+        // Edits happen between frames, each after the photon work in flight (scene_edit.h
+        // waits for it); a frame that edits nothing does not wait.
         const bool had_restart = requests_.restart;
         apply_requests();
         if (had_restart) script_start_frame = frame_;

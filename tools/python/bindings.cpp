@@ -151,6 +151,8 @@ py::dict stats_dict(const PipelineStats& s) {
     d["texel_gather_ms"] = s.texel_gather_ms;
     d["gather_rays"] = s.gather_rays;
     d["gather_rays_reused"] = s.gather_rays_reused;
+    d["hand_overs"] = s.hand_overs;
+    d["workers_behind"] = s.workers_behind;
     d["draw_ms"] = s.draw_ms;
     d["wait_ms"] = s.wait_ms;
     d["early_hand_over"] = s.early_hand_over;
@@ -448,6 +450,7 @@ py::dict converge(const SceneRef& holder, std::optional<std::string> script, int
         {"iim_pending", [](const cli::FrameRecord& r) { return double(r.iim_pending); }},
         {"rays_traced", [](const cli::FrameRecord& r) { return double(r.rays_traced); }},
         {"rays_reused", [](const cli::FrameRecord& r) { return double(r.rays_reused); }},
+        {"workers_behind", [](const cli::FrameRecord& r) { return r.workers_behind ? 1.0 : 0.0; }},
     };
     py::dict table;  // insertion-ordered
     for (const auto& [name, get] : columns) {
