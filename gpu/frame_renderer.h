@@ -104,7 +104,9 @@ public:
     // When the scene, the lights or the indirect term's revision change, the cube-map faces
     // showing an older state are rendered again round robin, all of them within this many
     // frames: a converging IIM changes every frame, an edited scene often, and the six faces
-    // per mirror or glass object cost more than the frame itself. A new term texture is
+    // per mirror or glass object cost more than the frame itself. The frame of an edit after
+    // frames without one renders none (it draws every light's direct light anew), so after such
+    // an edit they follow within kIndirectRefreshFrames + 1 frames. A new term texture is
     // rendered whole at once.
     static constexpr size_t kIndirectRefreshFrames = 4;
     // Frames in the running mean the last render showed (1: that frame alone), and whether the
@@ -223,6 +225,7 @@ private:
     uint64_t generation_ = 0;                // moves on with every change of what the cube maps see
     std::vector<uint64_t> face_generation_;  // per object × 6 faces: the generation shown
     int last_face_ = -1;                     // the face the round robin rendered last
+    bool last_edited_ = false;               // the last render's scene version was new
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
 

@@ -282,6 +282,7 @@ PipelineStats Pipeline::frame() {
     stats.frame_ms = ms_since(start) + carried_wait_ms;
     stats.budget_iim_texels = budgets.iim_texels;
     stats.budget_photons = budgets.retrace_photons;
+    stats.budget_gather_ms = budgets.gather_ms;
     scheduler_.measure(stats);
     return stats;
 }

@@ -24,6 +24,7 @@ struct PipelineStats {
     // scene edit before it: Scene::before_edit), also counted in frame_ms.
     // The scheduler's budgets for this frame (fixed counts without a frame-time target).
     int budget_iim_texels = 0, budget_photons = 0;
+    double budget_gather_ms = 0;  // the GL thread's planned share for gathering (0: no target)
     // The photon work was handed over between gather chunks, not at the end of the frame: the
     // rest of this frame's gathers read its AIMs.
     bool early_hand_over = false;

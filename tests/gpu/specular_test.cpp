@@ -239,12 +239,22 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     EXPECT_TRUE(renderer.cube_maps_current());        // a new term texture: every face at once
     EXPECT_DOUBLE_EQ(specular(renderer, 1), before);  // kept
     set_albedo(scene, scene.find_object("floor"), glm::vec3(0.2f));
-    specular(renderer, 1);
+    // The edit's frame draws the direct light anew and leaves the faces to the frames after it.
+    EXPECT_DOUBLE_EQ(specular(renderer, 1), before) << "the edit's frame renders no face";
+    EXPECT_FALSE(renderer.cube_maps_current());
+    EXPECT_LT(specular(renderer, 1), before) << "the frame after it renders a share";
     EXPECT_FALSE(renderer.cube_maps_current()) << "a share of the faces a frame";
     const double darker = settle(renderer, 1);
     EXPECT_LT(darker, 0.6 * before) << "the mirror must show the darker floor";
     FrameRenderer fresh(scene, meshes, 32, 32);
     EXPECT_DOUBLE_EQ(specular(fresh, 1), darker);
+    // In a run of edits (an object moving every frame) only the first frame skips the faces.
+    set_albedo(scene, scene.find_object("floor"), glm::vec3(0.3f));
+    EXPECT_DOUBLE_EQ(specular(renderer, 1), darker);
+    set_albedo(scene, scene.find_object("floor"), glm::vec3(0.4f));
+    EXPECT_GT(specular(renderer, 1), darker) << "the second edit's frame renders its share";
+    set_albedo(scene, scene.find_object("floor"), glm::vec3(0.2f));
+    EXPECT_DOUBLE_EQ(settle(renderer, 1), darker);
     // A new indirect term (non-zero now) reaches the mirror only through a new revision.
     std::vector<glm::vec3> lit(size_t(scene.atlas.width) * size_t(scene.atlas.height),
                                glm::vec3(5.0f));

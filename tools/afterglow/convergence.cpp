@@ -212,6 +212,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.rays_traced = st.gather_rays - st.gather_rays_reused;
         r.rays_reused = st.gather_rays_reused;
         r.workers_behind = st.workers_behind;
+        r.gather_ms = st.gather_ms, r.draw_ms = st.draw_ms, r.wait_ms = st.wait_ms;
+        r.gather_plan_ms = st.budget_gather_ms;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
         if (on_frame) on_frame(f + 1);
@@ -269,7 +271,9 @@ double converged_error(const Scene& scene, const std::string& script_path, int f
 std::string convergence_csv(const ConvergenceRun& run) {
     std::ostringstream csv;
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
-           "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused,workers_behind\n";
+           "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused,workers_behind,"
+           "gather_ms,draw_ms,wait_ms,"
+           "gather_plan_ms\n";
     // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
     // (and its mode, unless selective) so both join one methods plot.
     std::string method = kPipelineModeNames[size_t(run.mode)];
@@ -281,7 +285,8 @@ std::string convergence_csv(const ConvergenceRun& run) {
             << (r.edited ? 1 : 0) << ',' << r.relmse << ',' << r.rmse << ',' << r.ssim << ','
             << r.groups_invalidated << ',' << r.photons_retraced << ',' << r.aim_texels << ','
             << r.iim_texels << ',' << r.iim_pending << ',' << r.rays_traced << ',' << r.rays_reused
-            << ',' << (r.workers_behind ? 1 : 0) << "\n";
+            << ',' << (r.workers_behind ? 1 : 0) << ',' << r.gather_ms << ',' << r.draw_ms << ','
+            << r.wait_ms << ',' << r.gather_plan_ms << "\n";
     return csv.str();
 }
 

@@ -52,6 +52,10 @@ struct FrameRecord {
     uint64_t rays_traced = 0, rays_reused = 0;
     // The frame ended with its photon work still running (a frame-time target: it did not wait).
     bool workers_behind = false;
+    // Where the frame's time went on the GL thread (PipelineStats): gathering (with its uploads),
+    // drawing, waiting for the workers or an edit's wait for them; and the gathering the
+    // scheduler planned (0 without a frame-time target).
+    double gather_ms = 0.0, draw_ms = 0.0, wait_ms = 0.0, gather_plan_ms = 0.0;
 };
 
 struct SettleAnalysis {
