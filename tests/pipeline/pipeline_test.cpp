@@ -17,6 +17,7 @@
 #include "shared/pipeline/frame_loop.h"
 #include "shared/scene_edit.h"
 #include "shared/scene_file.h"
+#include "tests/shared/deadline.h"
 
 namespace ag {
 namespace {
@@ -211,7 +212,7 @@ TEST_F(PipelineTest, TheGlThreadDrawsWhileThePhotonWorkRuns) {
     PipelineOptions options{48, 48};
     options.on_cpu_work_start = [&] {
         std::unique_lock lock(m);
-        if (cv.wait_for(lock, std::chrono::seconds(60), [&] { return drawn; }))
+        if (test::wait_running(cv, lock, std::chrono::seconds(60), [&] { return drawn; }))
             ++overlapped;
         else
             ++timed_out;
@@ -244,7 +245,6 @@ TEST_F(PipelineTest, TheGlThreadDrawsWhileThePhotonWorkRuns) {
 // the gate, the GL thread done drawing, the edit inside its wait), never for a fixed time; the
 // two timed waits it measures start from such an event, with 50 ms of slack.
 TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
-    using Clock = std::chrono::steady_clock;
     Scene scene = cornell();
     scene.settings.schedule.frame_ms = 33.0f;
     std::mutex m;
@@ -256,7 +256,7 @@ TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
         std::unique_lock lock(m);
         ++started;
         cv.notify_all();
-        cv.wait_for(lock, std::chrono::seconds(60), [&] { return !hold; });
+        test::wait_running(cv, lock, std::chrono::seconds(60), [&] { return !hold; });
         ++passed;
     };
     options.on_gl_drawn = [&] {
@@ -273,10 +273,11 @@ TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
         }
         cv.notify_all();
     };
-    // Waits (at most 60 s, a hang guard) until `ready` holds; returns whether it does.
+    // Waits (at most 60 s of running time, a hang guard) until `ready` holds; returns whether it
+    // does.
     auto await = [&](const std::function<bool()>& ready) {
         std::unique_lock lock(m);
-        return cv.wait_for(lock, std::chrono::seconds(60), ready);
+        return test::wait_running(cv, lock, std::chrono::seconds(60), ready);
     };
     auto counts = [&] {
         std::lock_guard lock(m);
@@ -311,8 +312,8 @@ TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
     set_hold(false);
     // The frames take the work over once it is done, however long the worker takes to get there.
     int taken_over_at = -1;
-    const Clock::time_point give_up = Clock::now() + std::chrono::seconds(60);  // hang guard
-    for (int f = 0; taken_over_at < 0 && Clock::now() < give_up; ++f)
+    test::RunningTime running;  // a hang guard: 60 s
+    for (int f = 0; taken_over_at < 0 && running.tick() < std::chrono::seconds(60); ++f)
         if (loop.step().hand_overs > 0) taken_over_at = f;
     EXPECT_GE(taken_over_at, 0);
 
