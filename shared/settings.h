@@ -158,6 +158,10 @@ struct GatherSettings {
 struct ScheduleSettings {
     float frame_ms = 0.0f;    // frame-time target; 0 = no target: the fixed per-frame counts
     bool counts_cap = false;  // with a target, also hold the fixed counts as upper limits
+    // With a target, a frame still waits for its photon work at its end, as without one: offline
+    // runs that count frames (tests, converge) then see each result in a frame that does not
+    // depend on how fast the worker threads ran. Interactive runs leave it off (#11).
+    bool wait_for_workers = false;
 };
 
 struct IndirectSettings {
@@ -377,6 +381,9 @@ void visit_settings(Settings& s, Visitor& v) {
                          "frame-time target in ms; 0 = fixed per-frame counts"});
     v.field(Field<bool>{"counts_cap", s.schedule.counts_cap, 0, 1,
                         "with a target, the fixed counts still cap the work"});
+    v.field(Field<bool>{"wait_for_workers", s.schedule.wait_for_workers, 0, 1,
+                        "with a target, a frame still waits for its photon work (frame counts "
+                        "that do not depend on thread timing)"});
     v.end_section();
     v.section("indirect", "the indirect term: which method supplies it");
     v.field(EnumField<IndirectMethodKind, kIndirectMethodNames.size()>{

@@ -115,7 +115,8 @@ Pipeline::~Pipeline() {
 }
 
 bool Pipeline::waits_for_workers() const {
-    return mode_ == PipelineMode::full || !(scene_.settings.schedule.frame_ms > 0.0f);
+    return mode_ == PipelineMode::full || !(scene_.settings.schedule.frame_ms > 0.0f) ||
+           scene_.settings.schedule.wait_for_workers;
 }
 
 void Pipeline::update_media() {

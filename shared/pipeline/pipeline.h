@@ -120,7 +120,8 @@ private:
     // Waits for the CPU side, stages its results for the GL side and adds its counts to `stats`.
     void hand_over(PipelineStats& stats);
     // A frame waits for its photon work at the end: without a frame-time target (offline runs,
-    // frame by frame deterministic) and in `full` mode (everything every frame).
+    // frame by frame deterministic), with settings.schedule.wait_for_workers, and in `full` mode
+    // (everything every frame).
     bool waits_for_workers() const;
     // Between gather chunks: hand_over() if the workers have finished (never waits) and upload
     // the new AIM texels at once; true when AIMs changed.

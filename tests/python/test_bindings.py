@@ -225,16 +225,19 @@ def test_convergence_study(cornell):
 
 
 def test_frames_release_the_gil_and_block_edits(cornell):
+    """The other thread runs Python while frames run (the GIL is released) and its edits are
+    refused while the pipeline holds the scene. A refused edit proves both: it can only happen
+    inside a frame, and only if the GIL was released there. Frames run until three edits were
+    refused, not for a fixed number of frames: on a loaded machine the other thread may not be
+    scheduled at all during a few short frames (the test counted its ticks during 12 frames and
+    wanted 3)."""
     p = afterglow.Pipeline(cornell, size=(32, 32), threads=1)
     p.run(1)
-    ticks, refused = [], []
-    running = threading.Event()
+    refused = []
     stop = threading.Event()
 
     def other_thread():
-        running.wait()
         while not stop.is_set():
-            ticks.append(time.perf_counter())
             try:
                 cornell.object("cube").translate((1.0, 0.0, 0.0))
             except RuntimeError as e:
@@ -243,14 +246,12 @@ def test_frames_release_the_gil_and_block_edits(cornell):
 
     t = threading.Thread(target=other_thread)
     t.start()
-    running.set()
-    start = time.perf_counter()
-    p.run(12)
-    end = time.perf_counter()
+    give_up = time.monotonic() + 60.0  # a hang guard, not a measurement
+    frames = 0
+    while len(refused) < 3 and time.monotonic() < give_up:
+        p.run(1)
+        frames += 1
     stop.set()
     t.join()
-    # The other thread ran Python while the frames ran (the GIL was released), and its edits
-    # were refused while the pipeline held the scene.
-    during = [x for x in ticks if start < x < end]
-    assert len(during) >= 3, (len(during), end - start)
-    assert refused and "being rendered" in refused[0]
+    assert len(refused) >= 3, (len(refused), frames)
+    assert all("being rendered" in r for r in refused), refused[0]
