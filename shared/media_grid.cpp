@@ -326,7 +326,7 @@ MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vect
                                          const std::vector<glm::vec3>& flow,
                                          const std::vector<float>& count,
                                          const std::vector<float>& weight, float delta_weight,
-                                         int max_level, float significance) {
+                                         int max_level, float significance, bool fractional) {
     std::vector<glm::ivec3> sizes{size};
     std::vector<std::vector<float>> fluence_levels{fluence}, count_levels{count},
         weight_levels{weight};
@@ -360,7 +360,12 @@ MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vect
                 int w_level = 0;
                 while (w_level < top && read(count_levels, w_level) < 1.0f) ++w_level;
                 const float w = read(weight_levels, w_level);
-                const int weight_level = std::clamp(int(std::floor(w / delta_weight)), 0, top);
+                // His ⌊w / Δweight⌋, or (fractional, not his) w / Δweight itself: the voxel
+                // reads between the two levels around it, so the filter does not jump where w
+                // crosses a multiple of Δweight.
+                const float ratio = w / delta_weight;
+                const float wl = fractional ? ratio : std::floor(ratio);
+                const float weight_level = std::clamp(wl, 0.0f, float(top));
                 // Centre-surround filter (Listing B.3): up a level while the difference between
                 // successive levels does not grow.
                 int level = 0;
@@ -379,7 +384,8 @@ MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vect
                         next_diff = std::abs(centre_value - surround);
                     }
                 }
-                level = std::min(level, weight_level);
+                const float combined = std::min(float(level), weight_level);
+                level = int(std::ceil(combined));
                 // Significance stop (not his; the intersection-of-confidence-intervals rule of
                 // adaptive kernel estimation): up a level only while the step from this level's
                 // value to the next is within `significance` standard errors, each level's
@@ -398,10 +404,19 @@ MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vect
                     }
                     level = l;
                 }
+                // A fractional level l0 + t reads (1 − t) of level l0 and t of level l0 + 1 (the
+                // stop may cut it to the integer level where it halted).
+                const float final_level = std::min(combined, float(level));
+                const int l0 = int(std::floor(final_level));
+                const float t = final_level - float(l0);
                 const size_t i = at(size, {x, y, z});
-                out.level[i] = uint8_t(level);
-                out.fluence[i] = read(fluence_levels, level);
-                out.flow[i] = read(flow_levels, level);
+                out.level[i] = uint8_t(std::lround(final_level));
+                out.fluence[i] = read(fluence_levels, l0);
+                out.flow[i] = read(flow_levels, l0);
+                if (t > 0.0f) {
+                    out.fluence[i] += t * (read(fluence_levels, l0 + 1) - out.fluence[i]);
+                    out.flow[i] += t * (read(flow_levels, l0 + 1) - out.flow[i]);
+                }
             }
     return out;
 }

@@ -143,7 +143,9 @@ bool plane_sample(PlaneSampling order, int i, int count, glm::vec2& uv);
 // pyramids of fluence and flow (each level half the last, a 4-tap [1 3 3 1]/8 filter per axis), of
 // the photon count (box) and of the mean photon weight (box over voxels with photons, Listing
 // B.2); each voxel then reads the pyramid, trilinearly at its centre, at level
-// min(centre-surround level, ⌊weight / Δweight⌋).
+// min(centre-surround level, ⌊weight / Δweight⌋) — or, `fractional` (not his), at
+// min(centre-surround level, weight / Δweight), a fractional level l + t read as (1 − t) of level
+// l and t of level l + 1.
 struct MediaReconstruction {
     std::vector<float> fluence;
     std::vector<glm::vec3> flow;
@@ -153,12 +155,13 @@ struct MediaReconstruction {
 // `count` per voxel: photon crossings; `weight`: their mean weight (0 where none).
 // `significance` > 0 (not his): a voxel climbs from a level to the next only while the step
 // between their values is within `significance` standard errors (each level's relative error
-// 1/√(its crossings)).
+// 1/√(its crossings)). `level` holds the level read, rounded.
 MediaReconstruction reconstruct_adaptive(const glm::ivec3& size, const std::vector<float>& fluence,
                                          const std::vector<glm::vec3>& flow,
                                          const std::vector<float>& count,
                                          const std::vector<float>& weight, float delta_weight,
-                                         int max_level, float significance = 0.0f);
+                                         int max_level, float significance = 0.0f,
+                                         bool fractional = false);
 
 // Solid angle (sr) of box `b` seen from a point outside it: the sum over its faces turned to the
 // point of the rectangle formula.

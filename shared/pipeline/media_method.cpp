@@ -411,7 +411,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     const float delta_weight = a.delta_weight * 64.0f / float(longest);
     MediaReconstruction filtered =
         reconstruct_adaptive(grid.size, marched.fluence, marched.flow, crossings, weight,
-                             delta_weight, a.max_level, a.significance);
+                             delta_weight, a.max_level, a.significance, a.fractional_level);
     result.timing.reconstruction = since(start);
     result.levels = std::move(filtered.level);
     marched.fluence = std::move(filtered.fluence);

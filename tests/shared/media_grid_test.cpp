@@ -166,6 +166,51 @@ TEST(MediaGrid, SignificanceStopKeepsAFocusSharpAndFiltersNoise) {
     EXPECT_LT(error_out, 0.05 * error_in);
 }
 
+// The fractional weight level (session 14, docs/media.md): noise (±50%, one crossing a voxel,
+// the stop on) under a uniform photon weight w from 0.2 to 2 Δweight. His ⌊w / Δweight⌋ reads
+// the same level 1 everywhere from Δweight to just below 2 Δweight (the error flat, then a
+// cliff at 2 Δweight: where fog_sphere_point's uniform set sat at 50,000 photons, 0.62 of
+// uniform's photons); w / Δweight read continuously filters more at every step of w, with no
+// jump. A rule that truncated the level, or ignored w, fails.
+TEST(MediaGrid, FractionalWeightLevelHasNoCliff) {
+    const glm::ivec3 size(32, 32, 32);
+    const size_t voxels = size_t(size.x) * size.y * size.z;
+    std::vector<float> noisy(voxels), ones(voxels, 1.0f);
+    const std::vector<glm::vec3> flow(voxels, glm::vec3(0.0f));
+    for (size_t i = 0; i < voxels; ++i) {
+        const float u = float(hash_u32(uint32_t(i) + 7u) >> 8) / float(1 << 24);
+        noisy[i] = 2.0f * (0.5f + u);
+    }
+    const float delta = 0.1f;
+    const auto error = [&](float w, bool fractional) {
+        const std::vector<float> weight(voxels, w * delta);
+        const MediaReconstruction r =
+            reconstruct_adaptive(size, noisy, flow, ones, weight, delta, 4, 3.0f, fractional);
+        double e = 0.0;
+        for (float f : r.fluence) e += (f - 2.0) * (f - 2.0);
+        return e;
+    };
+    std::printf("fractional weight level, squared error at w / dweight:");
+    double last_fractional = 1e30;
+    for (int k = 2; k <= 20; ++k) {
+        const float w = 0.1f * float(k);
+        const double his = error(w, false), ours = error(w, true);
+        std::printf(" %.1f: %.0f/%.0f", double(w), his, ours);
+        EXPECT_LT(ours, 0.97 * last_fractional) << "w " << w;  // more filtering at every step
+        if (k % 10 != 0) {
+            EXPECT_LT(ours, 0.97 * his) << "w " << w;
+        }
+        last_fractional = ours;
+    }
+    std::printf("\n");
+    // His rule: flat from Δweight to just below 2 Δweight, then a cliff; ours continuous there.
+    EXPECT_EQ(error(1.1f, false), error(1.9f, false));
+    EXPECT_GT(error(1.99f, false), 1.5 * error(2.01f, false));
+    EXPECT_LT(error(1.99f, true), 1.05 * error(2.01f, true));
+    // At whole multiples of Δweight both rules read the same level.
+    EXPECT_EQ(error(1.0f, true), error(1.0f, false));
+}
+
 // Pfeuti's reconstruction (ch. 3.2.4): a constant field comes back unchanged at any level; light
 // weights (dense photons) keep level 0 and the field exactly; heavy weights over noise pick higher
 // levels and cut the noise, but the centre-surround filter picks lower levels beside an edge than

@@ -151,6 +151,8 @@ const Command kBenchCommand{
                 "Hammersley rotation), its RMSE the root mean square over them (default 1)",
                 1, 256),
         flag("curve-only", "'media': the equal-RMSE curve alone (no Tables 4.1-4.5, no octree)"),
+        flag("integer-level",
+             "'media': the adaptive pipeline with his integer weight level (before session 14)"),
         flag("versus-cpu",
              "'irradiance_cache': Gautron's Table 4.2 without Radiance: one frame by a CPU "
              "irradiance cache in Radiance's manner (eye rays, octree lookups, records on a miss) "

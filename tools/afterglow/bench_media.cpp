@@ -232,6 +232,7 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
     // His viewing pass is the volume term alone: not the fog's light on the surfaces (the frame's
     // indirect term, ours), which would add its march rays to the pass's time.
     base.fog_on_surfaces_rays = 0;
+    base.adaptive.fractional_level = !args.has("integer-level");
     std::printf(
         "bench media: %s at %dx%d, %d voxels along the longest side (llvmpipe timings: a "
         "software rasteriser on shared CPU cores, not a GPU)\n",

@@ -77,6 +77,9 @@ const Command kMediaCommand{
         number("shadow", "X",
                "adaptive: ... or where its fluence is at most X times the mean (0: never)", 0.0,
                1.0, MediaAdaptiveSettings{}.shadow),
+        flag("integer-level",
+             "adaptive: his integer weight level floor(w / delta-weight) instead of the "
+             "fractional w / delta-weight (blending the two mipmap levels around it)"),
         flag("no-filter",
              "adaptive: the importance-sampled deposits as they are (no mipmap levels)"),
         number("dense-cut", "X",
@@ -130,6 +133,7 @@ int run_media(const Args& args) {
     settings.adaptive.gradient = float(args.get_double("gradient"));
     settings.adaptive.shadow = float(args.get_double("shadow"));
     settings.adaptive.reconstruct = !args.has("no-filter");
+    settings.adaptive.fractional_level = !args.has("integer-level");
     settings.adaptive.free_space = !args.has("his-sphere");
     settings.adaptive.stratified = !args.has("his-sphere");
     settings.adaptive.dense_cut = float(args.get_double("dense-cut"));
