@@ -133,8 +133,10 @@ std::vector<float> hemi_band_weights(int resolution, float half_width, float ban
                          oy1 = std::min(y1, a);
             const double overlap =
                 ox0 < ox1 && oy0 < oy1 ? rectangle_weight(ox0, ox1, oy0, oy1) : 0.0;
-            w[size_t(j) * r + size_t(i)] =
-                std::max(0.0, rectangle_weight(x0, x1, y0, y1) - overlap);
+            // A pixel all but covered keeps no rounding residue: the smallest weight sets the
+            // specular tag (alpha per unit weight), which a residue of 1e-17 would blow up.
+            const double whole = rectangle_weight(x0, x1, y0, y1), rest = whole - overlap;
+            w[size_t(j) * r + size_t(i)] = rest > 1e-9 * whole ? rest : 0.0;
         }
     add_border_stretch(w, r, b);
     return std::vector<float>(w.begin(), w.end());

@@ -135,7 +135,7 @@ struct GatherSettings {
     GatherBackend backend = GatherBackend::automatic;
     float plane_half_width = 2.0f;  // hemi-plane half-width a at unit distance (a=2: 83%)
     int plane_resolution = 32;      // pixels across the hemi-plane
-    BorderCorrection border_correction = BorderCorrection::stretch;
+    BorderCorrection border_correction = BorderCorrection::band;
     float band_half_width = 8.0f;  // border_correction=band: the second view's half-width
     int texels_per_frame = 20;     // IIM texels gathered per frame (thesis: ≤ 20)
     int blend_frames = 4;          // frames over which a new IIM fades in
