@@ -161,6 +161,10 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
     orthonormal_basis(n, t, b);
     const bool plane = settings.hemisphere == GatherHemisphere::plane;
     const float a = settings.plane_half_width;
+    // With the band, the directions within the wider plane are seen as they are and only those
+    // beyond it are stretched, onto the wider plane's border (the GL gather's second view).
+    const bool band = settings.border_correction == BorderCorrection::band;
+    const float edge_width = band ? std::max(a, settings.band_half_width) : a;
     const int bounces = std::max(0, settings.specular_bounces);
 
     // The cached hits are this texel's as last traced when the cache holds all of them.
@@ -196,7 +200,7 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
         // The concentric map keeps the QMC points' strata compact, which matters at a few hundred
         // rays.
         glm::vec3 d = square_to_cosine_hemisphere({wrap(p.x + shift.x), wrap(p.y + shift.y)});
-        if (plane && std::max(std::abs(d.x), std::abs(d.y)) > a * d.z) {
+        if (plane && std::max(std::abs(d.x), std::abs(d.y)) > edge_width * d.z) {
             // A direction the hemi-plane misses (Larsen ch. 11; Gautron 2006, Table 4.1): none
             // counts it as black, renormalise leaves it out of the mean, stretch reads the plane
             // point nearest to it in plane coordinates (clamp-to-edge), stretch_radial the border
@@ -207,10 +211,11 @@ GatherResult CpuGather::gather_point(const GatherPoint& point, glm::vec2 shift,
                 continue;
             }
             if (settings.border_correction == BorderCorrection::renormalize) continue;
-            if (settings.border_correction == BorderCorrection::stretch) {
+            if (settings.border_correction == BorderCorrection::stretch || band) {
                 const float z = std::max(d.z, 1e-7f);  // grazing: clamps to the border anyway
+                const float e = edge_width;
                 d = glm::normalize(
-                    glm::vec3(std::clamp(d.x / z, -a, a), std::clamp(d.y / z, -a, a), 1.0f));
+                    glm::vec3(std::clamp(d.x / z, -e, e), std::clamp(d.y / z, -e, e), 1.0f));
             } else {
                 const float r = std::sqrt(d.x * d.x + d.y * d.y);
                 const float edge = a / std::max(std::abs(d.x), std::abs(d.y)) * r;  // border

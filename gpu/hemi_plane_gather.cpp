@@ -99,7 +99,48 @@ double rectangle_weight(double x0, double x1, double y0, double y1) {
            corner_weight(x0, y0);
 }
 
+// Gautron's border pixels "virtually stretched to fill the remaining solid angle": each border
+// pixel of an r×r plane of half-width a reaches out to the horizon perpendicular to its edge
+// (x ≥ a over its own y range), and each corner pixel also takes the quadrant beyond its corner,
+// so a missing direction reads the plane point nearest to it in plane coordinates (clamp-to-edge).
+void add_border_stretch(std::vector<double>& w, int r, double a) {
+    constexpr double kFar = 1e7;  // the horizon, in plane coordinates
+    const double step = 2.0 * a / r;
+    for (int k = 0; k < r; ++k) {
+        const double lo = -a + k * step, hi = lo + step;
+        w[size_t(k) * r] += rectangle_weight(-kFar, -a, lo, hi);                // left column
+        w[size_t(k) * r + size_t(r - 1)] += rectangle_weight(a, kFar, lo, hi);  // right
+        w[size_t(k)] += rectangle_weight(lo, hi, -kFar, -a);                    // bottom row
+        w[size_t(r - 1) * r + size_t(k)] += rectangle_weight(lo, hi, a, kFar);  // top
+    }
+    const double quadrant = rectangle_weight(a, kFar, a, kFar);
+    for (const size_t corner :
+         {size_t(0), size_t(r - 1), size_t(r - 1) * r, size_t(r - 1) * r + size_t(r - 1)})
+        w[corner] += quadrant;
+}
+
 }  // namespace
+
+std::vector<float> hemi_band_weights(int resolution, float half_width, float band_half_width) {
+    const int r = resolution;
+    const double a = half_width, b = std::max(band_half_width, half_width), step = 2.0 * b / r;
+    std::vector<double> w(size_t(r) * size_t(r));
+    for (int j = 0; j < r; ++j)
+        for (int i = 0; i < r; ++i) {
+            const double x0 = -b + i * step, y0 = -b + j * step, x1 = x0 + step, y1 = y0 + step;
+            // The pixel's cosine-weighted solid angle less its overlap with the first plane.
+            const double ox0 = std::max(x0, -a), ox1 = std::min(x1, a), oy0 = std::max(y0, -a),
+                         oy1 = std::min(y1, a);
+            const double overlap =
+                ox0 < ox1 && oy0 < oy1 ? rectangle_weight(ox0, ox1, oy0, oy1) : 0.0;
+            // A pixel all but covered keeps no rounding residue: the smallest weight sets the
+            // specular tag (alpha per unit weight), which a residue of 1e-17 would blow up.
+            const double whole = rectangle_weight(x0, x1, y0, y1), rest = whole - overlap;
+            w[size_t(j) * r + size_t(i)] = rest > 1e-9 * whole ? rest : 0.0;
+        }
+    add_border_stretch(w, r, b);
+    return std::vector<float>(w.begin(), w.end());
+}
 
 double hemi_plane_coverage(float half_width) {
     const double a = half_width, s = a / std::sqrt(1.0 + a * a);
@@ -121,22 +162,7 @@ std::vector<float> hemi_plane_weights(int resolution, float half_width,
     if (correction == BorderCorrection::renormalize) {
         for (double& v : w) v /= sum;  // Larsen: scale up by the covered fraction
     } else if (correction == BorderCorrection::stretch) {
-        // Gautron's border pixels "virtually stretched to fill the remaining solid angle": each
-        // border pixel reaches out to the horizon perpendicular to its edge (x ≥ a over its own
-        // y range), and each corner pixel also takes the quadrant beyond its corner, so a missing
-        // direction reads the plane point nearest to it in plane coordinates (clamp-to-edge).
-        constexpr double kFar = 1e7;  // the horizon, in plane coordinates
-        for (int k = 0; k < r; ++k) {
-            const double lo = -a + k * step, hi = lo + step;
-            w[size_t(k) * r] += rectangle_weight(-kFar, -a, lo, hi);                // left column
-            w[size_t(k) * r + size_t(r - 1)] += rectangle_weight(a, kFar, lo, hi);  // right
-            w[size_t(k)] += rectangle_weight(lo, hi, -kFar, -a);                    // bottom row
-            w[size_t(r - 1) * r + size_t(k)] += rectangle_weight(lo, hi, a, kFar);  // top
-        }
-        const double quadrant = rectangle_weight(a, kFar, a, kFar);
-        for (const size_t corner :
-             {size_t(0), size_t(r - 1), size_t(r - 1) * r, size_t(r - 1) * r + size_t(r - 1)})
-            w[corner] += quadrant;
+        add_border_stretch(w, r, a);
     } else if (correction == BorderCorrection::stretch_radial) {
         // Directions beyond the plane are pushed radially (same azimuth) onto the
         // border pixel they would leave through; integrate their cosine-weighted solid angle.
@@ -179,10 +205,11 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
                           std::max(1, max_side / resolution_));
     layers_ = std::min(tiles_x_ * tiles_x_, std::max(1, int(max_layers)));
     program_ = Program("hemi-plane gather", kVertex, kFragment);
+    band_ = scene.settings.gather.border_correction == BorderCorrection::band;
+    const int views = band_ ? 2 * layers_ : layers_;
     color_ = make_texture();
     gl::BindTexture(GL_TEXTURE_2D_ARRAY, color_.get());
-    gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, level_ + 1, GL_RGBA32F, resolution_, resolution_,
-                     layers_);
+    gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, level_ + 1, GL_RGBA32F, resolution_, resolution_, views);
     gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
     gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
     gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
@@ -190,20 +217,29 @@ HemiPlaneGather::HemiPlaneGather(const Scene& scene, const SceneMeshes& meshes, 
         distance_ = make_texture();
         gl::BindTexture(GL_TEXTURE_2D_ARRAY, distance_.get());
         gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, level_ + 1, GL_RGBA32F, resolution_, resolution_,
-                         layers_);
+                         views);
         gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST_MIPMAP_NEAREST);
         gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
         gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
     }
-    const std::vector<float> w =
-        hemi_plane_weights(resolution_, scene.settings.gather.plane_half_width,
-                           scene.settings.gather.border_correction);
-    std::vector<float> rgba(w.size() * 4, 0.0f);
-    for (size_t i = 0; i < w.size(); ++i) rgba[4 * i] = w[i];
+    const GatherSettings& gs = scene.settings.gather;
+    std::vector<float> w =
+        hemi_plane_weights(resolution_, gs.plane_half_width, gs.border_correction);
+    auto weight_texture = [&](const std::vector<float>& table) {
+        std::vector<float> rgba(table.size() * 4, 0.0f);
+        for (size_t i = 0; i < table.size(); ++i) rgba[4 * i] = table[i];
+        return make_float_texture(resolution_, resolution_, false, rgba.data());
+    };
+    weights_ = weight_texture(w);
+    if (band_) {
+        const std::vector<float> band =
+            hemi_band_weights(resolution_, gs.plane_half_width, gs.band_half_width);
+        band_weights_ = weight_texture(band);
+        w.insert(w.end(), band.begin(), band.end());
+    }
     weight_sum_ = 0.0;
     for (float v : w) weight_sum_ += v;
-    weights_ = make_float_texture(resolution_, resolution_, false, rgba.data());
-    if (scene.settings.gather.specular_bounces > 0) {
+    if (gs.specular_bounces > 0) {
         float smallest = 1.0f;
         for (float v : w)
             if (v > 0.0f) smallest = std::min(smallest, v);
@@ -282,9 +318,14 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
     glm::mat4 reverse(1.0f);
     reverse[2][2] = -1.0f;
     reverse[3][2] = 1.0f;  // z' = w − z
-    const glm::mat4 projection =
-        reverse * glm::frustumRH_ZO(-a * near_plane, a * near_plane, -a * near_plane,
-                                    a * near_plane, near_plane, far_plane);
+    auto plane_projection = [&](float half) {
+        return reverse * glm::frustumRH_ZO(-half * near_plane, half * near_plane,
+                                           -half * near_plane, half * near_plane, near_plane,
+                                           far_plane);
+    };
+    const glm::mat4 projection = plane_projection(a);
+    const glm::mat4 band_projection =
+        plane_projection(std::max(a, scene_.settings.gather.band_half_width));
 
     for (size_t first = 0; first < texels.size(); first += size_t(per_pass)) {
         const size_t count = std::min(texels.size() - first, size_t(per_pass));
@@ -299,27 +340,38 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
         gl::ClearColor(0, 0, 0, 0);
         gl::ClearDepth(0.0);
         gl::Uniform2i(program_.location("tile_origin"), 0, 0);
-        for (size_t k = 0; k < count; ++k) {
-            const GatherPoint& at = texels[first + k];
-            const glm::vec3 n = glm::normalize(at.normal);
-            const glm::vec3 p = at.position + offset * n;
-            const glm::vec3 helper = std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
-            const glm::mat4 view =
-                glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
-            const glm::mat4 vp = projection * view;
-            gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0,
-                                        GLint(k));
-            if (distances_)
-                gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1, distance_.get(),
-                                            0, GLint(k));
-            gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-            program_.set("view_projection", vp);
-            program_.set("eye", p);
-            for (size_t o = 0; o < scene_.objects.size(); ++o) {
-                program_.set("model", model_matrix(scene_.objects[o]));
-                program_.set("specular",
-                             scene_.objects[o].material.type == MaterialType::diffuse ? 0 : 1);
-                meshes_.draw(o);
+        // The plane of every texel into layers 0..count-1, then with band_ the wider view of
+        // every texel into layers layers_..layers_+count-1.
+        for (int view_set = 0; view_set < (band_ ? 2 : 1); ++view_set) {
+            if (view_set == 1) {
+                gl::ActiveTexture(GL_TEXTURE1);
+                gl::BindTexture(GL_TEXTURE_2D, band_weights_.get());
+            }
+            const glm::mat4& proj = view_set == 0 ? projection : band_projection;
+            for (size_t k = 0; k < count; ++k) {
+                const GatherPoint& at = texels[first + k];
+                const glm::vec3 n = glm::normalize(at.normal);
+                const glm::vec3 p = at.position + offset * n;
+                const glm::vec3 helper =
+                    std::abs(n.y) < 0.9f ? glm::vec3(0, 1, 0) : glm::vec3(1, 0, 0);
+                const glm::mat4 view =
+                    glm::lookAt(p, p + n, glm::normalize(glm::cross(glm::cross(n, helper), n)));
+                const glm::mat4 vp = proj * view;
+                const GLint layer = GLint(k) + (view_set == 1 ? GLint(layers_) : 0);
+                gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, color_.get(), 0,
+                                            layer);
+                if (distances_)
+                    gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT1,
+                                                distance_.get(), 0, layer);
+                gl::Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+                program_.set("view_projection", vp);
+                program_.set("eye", p);
+                for (size_t o = 0; o < scene_.objects.size(); ++o) {
+                    program_.set("model", model_matrix(scene_.objects[o]));
+                    program_.set("specular",
+                                 scene_.objects[o].material.type == MaterialType::diffuse ? 0 : 1);
+                    meshes_.draw(o);
+                }
             }
         }
         // One reduction for the whole batch: level log2(R) of each layer holds its texel's mean.
@@ -329,9 +381,10 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
         gl::ActiveTexture(GL_TEXTURE3);
         gl::BindTexture(GL_TEXTURE_2D_ARRAY, color_.get());
         gl::GenerateMipmap(GL_TEXTURE_2D_ARRAY);
-        std::vector<float> means(size_t(layers_) * 4);
+        const size_t views = band_ ? 2 * size_t(layers_) : size_t(layers_);
+        std::vector<float> means(views * 4);
         gl::GetTexImage(GL_TEXTURE_2D_ARRAY, level_, GL_RGBA, GL_FLOAT, means.data());
-        std::vector<float> inverse(distances_ ? size_t(layers_) * 4 : 0);
+        std::vector<float> inverse(distances_ ? views * 4 : 0);
         if (distances_) {
             gl::BindTexture(GL_TEXTURE_2D_ARRAY, distance_.get());
             gl::GenerateMipmap(GL_TEXTURE_2D_ARRAY);
@@ -341,11 +394,19 @@ std::vector<GatherResult> HemiPlaneGather::gather_views(const std::vector<Gather
         gl::BindFramebuffer(GL_FRAMEBUFFER, fbo_.get());
         const float pixels = float(resolution_) * float(resolution_);
         for (size_t k = 0; k < count; ++k) {
-            const float* m = &means[4 * k];  // layer k
-            out[first + k].iim = pixels * glm::vec3(m[0], m[1], m[2]);
+            // Layer k, plus layer layers_ + k with the band: the two views' weights partition
+            // the hemisphere, so their sums add.
+            glm::vec4 m(means[4 * k], means[4 * k + 1], means[4 * k + 2], means[4 * k + 3]);
+            float inv = distances_ ? inverse[4 * k] : 0.0f;
+            if (band_) {
+                const size_t b = 4 * (size_t(layers_) + k);
+                m += glm::vec4(means[b], means[b + 1], means[b + 2], means[b + 3]);
+                if (distances_) inv += inverse[b];
+            }
+            out[first + k].iim = pixels * glm::vec3(m);
             if (distances_) {
                 // Σ w / Σ w/d over the whole (corrected) view; nothing seen: infinitely far.
-                const double sum = double(pixels) * double(inverse[4 * k]);
+                const double sum = double(pixels) * double(inv);
                 out[first + k].harmonic_distance =
                     sum > 0.0 ? float(weight_sum_ / sum) : std::numeric_limits<float>::infinity();
             }

@@ -3,7 +3,8 @@
 // eq. 11.2, F(x,y) = ΔA / (π (x² + y² + 1)²), and sum by mipmap reduction in float. Many texels
 // are gathered per pass: each owns an R×R tile of one framebuffer and a single mipmap pass leaves
 // every tile's mean at level log2(R). The part of the hemisphere the plane misses is corrected by
-// Larsen's renormalisation or Gautron's border stretch (Gautron 2006, Table 4.1).
+// Larsen's renormalisation or Gautron's border stretch (Gautron 2006, Table 4.1), or rendered
+// through a second, wider plane (`band`).
 #pragma once
 
 #include <glm/glm.hpp>
@@ -19,9 +20,15 @@ namespace ag::gpu {
 
 // Per-pixel weights of an R×R hemi-plane of half-width a (at unit distance), row-major from the
 // plane's (−a, −a) corner. Exact per pixel (integrated, not point-sampled); `correction` adds the
-// missing hemisphere as in settings. Sum: coverage for none, 1 for renormalize and stretch.
+// missing hemisphere as in settings. Sum: coverage for none and band, 1 for renormalize and
+// the stretches.
 std::vector<float> hemi_plane_weights(int resolution, float half_width,
                                       BorderCorrection correction);
+
+// border_correction=band: the weights of the second, wider view (half-width band_half_width, the
+// same resolution): each pixel's cosine-weighted solid angle outside the first plane [-a, a]²,
+// its border stretched to the horizon. Sum: 1 − coverage(half_width).
+std::vector<float> hemi_band_weights(int resolution, float half_width, float band_half_width);
 
 // Cosine-weighted fraction of the hemisphere a square of half-width a at unit distance covers:
 // (4/π)·s·atan(s), s = a/√(1+a²).
@@ -67,9 +74,11 @@ private:
     int max_per_pass_ = 0;
     float specular_tag_ = 0.0f;  // alpha per unit weight of mirror/glass pixels; 0 = not tagged
     bool distances_ = false;
-    double weight_sum_ = 1.0;  // Σ w of the weight table (the coverage, or 1 when corrected)
+    bool band_ = false;        // a second view per texel renders the band beyond the plane
+    double weight_sum_ = 1.0;  // Σ w of the weight tables (the coverage, or 1 when corrected)
     Program program_;
-    Texture color_, weights_, distance_;
+    // With band_, layer layers_ + k holds texel k's band view (weights band_weights_).
+    Texture color_, weights_, band_weights_, distance_;
     Renderbuffer depth_;
     Framebuffer fbo_;
 };

@@ -58,9 +58,14 @@ inline constexpr std::array kRcGatherNames = {"rays", "gl"};
 // out to the horizon (`stretch`: each border pixel perpendicular to its edge and the corner pixels
 // over the corner quadrants, the plane's clamp-to-edge; `stretch_radial`: the border point at the
 // missing direction's own azimuth). docs/irradiance_cache.md compares the two stretches.
-enum class BorderCorrection { none, renormalize, stretch, stretch_radial };
+// `band` renders the missing band itself: a second view through a wider plane of half-width
+// band_half_width at the same resolution, weighted only outside the first plane, its border
+// stretched over what is left (≈1.3% at 8). The stretches assume the horizon looks like the
+// plane's border; a surface facing out of an open room or towards a far bright room sees
+// otherwise (docs/fidelity.md, "Session 14").
+enum class BorderCorrection { none, renormalize, stretch, stretch_radial, band };
 inline constexpr std::array kBorderCorrectionNames = {"none", "renormalize", "stretch",
-                                                      "stretch_radial"};
+                                                      "stretch_radial", "band"};
 
 // What the CPU gather samples: `full`, cosine-weighted rays over the whole hemisphere (no plane,
 // no correction: the exact gather of the AIMs); `plane`, only directions through the hemi-plane
@@ -130,10 +135,11 @@ struct GatherSettings {
     GatherBackend backend = GatherBackend::automatic;
     float plane_half_width = 2.0f;  // hemi-plane half-width a at unit distance (a=2: 83%)
     int plane_resolution = 32;      // pixels across the hemi-plane
-    BorderCorrection border_correction = BorderCorrection::stretch;
-    int texels_per_frame = 20;  // IIM texels gathered per frame (thesis: ≤ 20)
-    int blend_frames = 4;       // frames over which a new IIM fades in
-    int cpu_rays = 256;         // rays per texel for the CPU gather backend
+    BorderCorrection border_correction = BorderCorrection::band;
+    float band_half_width = 8.0f;  // border_correction=band: the second view's half-width
+    int texels_per_frame = 20;     // IIM texels gathered per frame (thesis: ≤ 20)
+    int blend_frames = 4;          // frames over which a new IIM fades in
+    int cpu_rays = 256;            // rays per texel for the CPU gather backend
     // The CPU gather keeps each texel's rays' first hits (about 24 bytes a ray) while the
     // geometry they crossed stays put: after an AIM-only change (a light, an albedo, photons
     // moved elsewhere) a texel is re-read, not re-traced, and after a move only the rays that
@@ -359,6 +365,8 @@ void visit_settings(Settings& s, Visitor& v) {
     v.field(EnumField<BorderCorrection, kBorderCorrectionNames.size()>{
         "border_correction", s.gather.border_correction, kBorderCorrectionNames,
         "missing-hemisphere correction"});
+    v.field(Field<float>{"band_half_width", s.gather.band_half_width, 0.2, 1000,
+                         "border_correction=band: half-width of the wider second view"});
     v.field(Field<int>{"texels_per_frame", s.gather.texels_per_frame, 1, 1e6,
                        "IIM texels gathered per frame"});
     v.field(Field<int>{"blend_frames", s.gather.blend_frames, 1, 1000,

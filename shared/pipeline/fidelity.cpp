@@ -168,7 +168,8 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     const std::vector<Variant> corrections = {{"none", BorderCorrection::none},
                                               {"renormalize", BorderCorrection::renormalize},
                                               {"stretch", BorderCorrection::stretch},
-                                              {"stretch_radial", BorderCorrection::stretch_radial}};
+                                              {"stretch_radial", BorderCorrection::stretch_radial},
+                                              {"band", BorderCorrection::band}};
     for (const Variant& v : corrections)
         values["cpu_plane_" + v.name] =
             iim_of(cpu_gather(n_ref, GatherHemisphere::plane, v.correction, 0));

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "gl_fixture.h"
@@ -27,6 +28,12 @@ TEST(HemiPlaneWeights, SumToTheAnalyticCoverage) {
                 for (float v : hemi_plane_weights(r, a, c)) corrected += v;
                 EXPECT_NEAR(corrected, 1.0, 1e-3) << kBorderCorrectionNames[size_t(c)];
             }
+            // The band: the plane uncorrected plus the wider view's weights, which hold the rest.
+            double plane = 0.0, band = 0.0;
+            for (float v : hemi_plane_weights(r, a, BorderCorrection::band)) plane += v;
+            for (float v : hemi_band_weights(r, a, 4.0f * a)) band += v;
+            EXPECT_NEAR(plane, hemi_plane_coverage(a), 1e-4);
+            EXPECT_NEAR(band, 1.0 - hemi_plane_coverage(a), 1e-4) << "a " << a << " r " << r;
         }
     }
     EXPECT_NEAR(hemi_plane_coverage(2.0f), 0.83, 0.005);  // DESIGN.md: 83% at a = 2
@@ -85,6 +92,27 @@ TEST(HemiPlaneWeights, StretchHoldsTheDirectionsThatClampOntoEachBorderPixel) {
             const size_t k = size_t(j) * r + size_t(i);
             EXPECT_NEAR(stretch[k] - none[k], expected[k], 1e-2 * expected[k])
                 << "pixel " << i << ", " << j;
+        }
+}
+
+// The band view's pixels wholly inside the first plane weigh nothing; those wholly outside weigh
+// their whole cosine-weighted solid angle (an r×r plane of half-width 8 against a = 2; the plain
+// table is integrated by 8×8 midpoints, within 0.12% of the closed form here, held to 0.3%).
+TEST(HemiPlaneWeights, TheBandWeighsOnlyWhatThePlaneMisses) {
+    const int r = 16;
+    const float a = 2.0f, b = 8.0f;
+    const std::vector<float> band = hemi_band_weights(r, a, b);
+    const std::vector<float> whole = hemi_plane_weights(r, b, BorderCorrection::none);
+    for (int j = 1; j < r - 1; ++j)
+        for (int i = 1; i < r - 1; ++i) {
+            const size_t k = size_t(j) * r + size_t(i);
+            const float x0 = -b + i * 2 * b / r, y0 = -b + j * 2 * b / r, x1 = x0 + 2 * b / r,
+                        y1 = y0 + 2 * b / r;
+            if (x0 >= -a && x1 <= a && y0 >= -a && y1 <= a) {
+                EXPECT_EQ(band[k], 0.0f) << i << ", " << j;
+            } else if (x1 <= -a || x0 >= a || y1 <= -a || y0 >= a) {
+                EXPECT_NEAR(band[k], whole[k], 3e-3 * whole[k]) << i << ", " << j;
+            }
         }
 }
 
@@ -156,6 +184,67 @@ TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
 
 // plane_resolution 1024 is documented as valid: 256 tiles of 1024² would need a 16k² framebuffer
 // (GL_OUT_OF_MEMORY), so the gather takes fewer tiles per pass instead.
+// A surface whose hemi-plane sees only a dark square and the light beyond it (a face looking out
+// of an open room towards a lit far room, docs/fidelity.md "Session 14"): the border stretch
+// spreads the dark border over the missing band and reads nearly nothing; the band's second view
+// sees the light there. Exact: L (1 − the dark square's form factor), in closed form (the form
+// factor of a parallel rectangle with a corner above the point). The receiver's 9 texels sit at
+// 0 and ±0.5, so the square's edges lie 1.79–2.84 plane half-widths out, in the band. Measured:
+// stretch reads 0 at the centre texel (off by 1.000); the band 0.8–12.5% low, worst at the centre
+// texel, whose edge (2.32) falls inside one of the band's 0.5-wide pixels (b = 8 over 32 pixels),
+// which reads it dark: the band's point sampling, bound 15%.
+TEST_F(HemiPlaneGatherTest, TheBandSeesTheLightBeyondADarkPlane) {
+    const float h = 0.95f, dark = 2.2f;
+    const glm::vec3 radiance(1.0f);
+    auto corner = [](double x, double y) {
+        const double sx = std::sqrt(1.0 + x * x), sy = std::sqrt(1.0 + y * y);
+        return (x / sx * std::atan(y / sx) + y / sy * std::atan(x / sy)) / (2.0 * std::numbers::pi);
+    };
+    auto rectangle = [&](double x0, double x1, double y0, double y1) {
+        return corner(x1, y1) - corner(x0, y1) - corner(x1, y0) + corner(x0, y0);
+    };
+    for (BorderCorrection c : {BorderCorrection::stretch, BorderCorrection::band}) {
+        Scene scene = receiver_under_plane(1.0f, 50.0f, c);
+        Object square;
+        square.name = "dark square";
+        square.mesh = make_quad(2.0f * dark, 2.0f * dark);
+        square.transform.translation = {0.0f, h, 0.0f};
+        square.transform.rotation = glm::angleAxis(glm::radians(180.0f), glm::vec3(1, 0, 0));
+        scene.objects.push_back(square);
+        init_versions(scene);
+        make_surfaces_and_atlas(scene);
+        SceneMeshes meshes(scene);
+        LightmapTexture aim(scene.atlas);
+        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                      glm::vec3(0.0f));
+        std::vector<int> receiver_texels;
+        for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
+            const TexelRecord& t = scene.atlas.texels[size_t(i)];
+            if (t.object == 1)
+                values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
+            else if (t.object == 0)
+                receiver_texels.push_back(i);
+        }
+        aim.update_all(values);
+        HemiPlaneGather gather(scene, meshes, 16);
+        const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
+        ASSERT_FALSE(r.empty());
+        double worst = 0.0;
+        for (size_t k = 0; k < r.size(); ++k) {
+            const glm::vec3 p = scene.atlas.texels[size_t(receiver_texels[k])].position;
+            const double exact = 1.0 - rectangle((-dark - p.x) / h, (dark - p.x) / h,
+                                                 (-dark - p.z) / h, (dark - p.z) / h);
+            worst = std::max(worst, std::abs(r[k].iim.x / exact - 1.0));
+        }
+        std::printf("%s: worst texel off by %.3f\n", kBorderCorrectionNames[size_t(c)], worst);
+        if (c == BorderCorrection::band) {
+            EXPECT_LT(worst, 0.15);
+        } else {
+            EXPECT_GT(worst, 0.5);  // the stretch: what the band is for
+        }
+    }
+}
+
 TEST_F(HemiPlaneGatherTest, LargestPlaneResolutionFitsTheFramebuffer) {
     Scene scene = receiver_under_plane(1.0f, 50.0f, BorderCorrection::renormalize);
     scene.settings.gather.plane_resolution = 1024;

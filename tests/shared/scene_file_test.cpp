@@ -567,7 +567,7 @@ TEST_F(SceneFile, MalformedScenesEachGetTheirOwnMessage) {
              j["settings"] = {{"gather", {{"border_correction", "clamp"}}}};
          },
          "/settings/gather/border_correction",
-         "expected one of none, renormalize, stretch, stretch_radial, got \"clamp\""},
+         "expected one of none, renormalize, stretch, stretch_radial, band, got \"clamp\""},
         // Participating media (docs/media.md).
         {"media_not_array", [](Json& j) { j["media"] = Json::object(); }, "/media",
          "expected an array"},

@@ -344,6 +344,7 @@ int bench_gather(const std::vector<std::string>& scenes, int repeat, const Args&
                 "GL batched", "GL unbatched", "CPU R² rays", "CPU 256 rays", "256 re-read");
     for (const std::string& path : scenes) {
         Scene scene = load_scene(path);
+        args.apply_settings(scene);  // --set, e.g. gather.border_correction
         ThreadPool pool(1);
         cpu::PhotonSimulation sim(scene, pool);
         sim.trace_all();
