@@ -143,6 +143,23 @@ Scene receiver_under_plane(float h, float half_size, BorderCorrection correction
     return s;
 }
 
+// The AIM of receiver_under_plane's scene: the plane (object 1) at `radiance`, everything else
+// dark. Returns the receiver's (object 0's) texels.
+std::vector<int> light_the_plane(const Scene& scene, LightmapTexture& aim, glm::vec3 radiance) {
+    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
+                                  glm::vec3(0.0f));
+    std::vector<int> receiver_texels;
+    for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
+        const TexelRecord& t = scene.atlas.texels[size_t(i)];
+        if (t.object == 1)
+            values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
+        else if (t.object == 0)
+            receiver_texels.push_back(i);
+    }
+    aim.update_all(values);
+    return receiver_texels;
+}
+
 }  // namespace
 
 class HemiPlaneGatherTest : public test::GlTest {};
@@ -155,17 +172,7 @@ TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
         const Scene scene = receiver_under_plane(1.0f, 50.0f, c);
         SceneMeshes meshes(scene);
         LightmapTexture aim(scene.atlas);
-        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
-                                      glm::vec3(0.0f));
-        std::vector<int> receiver_texels;
-        for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
-            const TexelRecord& t = scene.atlas.texels[size_t(i)];
-            if (t.object == 1)
-                values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
-            else
-                receiver_texels.push_back(i);
-        }
-        aim.update_all(values);
+        const std::vector<int> receiver_texels = light_the_plane(scene, aim, radiance);
         HemiPlaneGather gather(scene, meshes, 16);
         const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
         ASSERT_FALSE(r.empty());
@@ -182,8 +189,6 @@ TEST_F(HemiPlaneGatherTest, UniformPlaneFillingTheViewGivesPiLTimesCoverage) {
     }
 }
 
-// plane_resolution 1024 is documented as valid: 256 tiles of 1024² would need a 16k² framebuffer
-// (GL_OUT_OF_MEMORY), so the gather takes fewer tiles per pass instead.
 // A surface whose hemi-plane sees only a dark square and the light beyond it (a face looking out
 // of an open room towards a lit far room, docs/fidelity.md "Session 14"): the border stretch
 // spreads the dark border over the missing band and reads nearly nothing; the band's second view
@@ -215,17 +220,7 @@ TEST_F(HemiPlaneGatherTest, TheBandSeesTheLightBeyondADarkPlane) {
         make_surfaces_and_atlas(scene);
         SceneMeshes meshes(scene);
         LightmapTexture aim(scene.atlas);
-        std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
-                                      glm::vec3(0.0f));
-        std::vector<int> receiver_texels;
-        for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
-            const TexelRecord& t = scene.atlas.texels[size_t(i)];
-            if (t.object == 1)
-                values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = radiance;
-            else if (t.object == 0)
-                receiver_texels.push_back(i);
-        }
-        aim.update_all(values);
+        const std::vector<int> receiver_texels = light_the_plane(scene, aim, radiance);
         HemiPlaneGather gather(scene, meshes, 16);
         const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());
         ASSERT_FALSE(r.empty());
@@ -245,6 +240,8 @@ TEST_F(HemiPlaneGatherTest, TheBandSeesTheLightBeyondADarkPlane) {
     }
 }
 
+// plane_resolution 1024 is documented as valid: 256 tiles of 1024² would need a 16k² framebuffer
+// (GL_OUT_OF_MEMORY), so the gather takes fewer tiles per pass instead.
 TEST_F(HemiPlaneGatherTest, LargestPlaneResolutionFitsTheFramebuffer) {
     Scene scene = receiver_under_plane(1.0f, 50.0f, BorderCorrection::renormalize);
     scene.settings.gather.plane_resolution = 1024;
