@@ -247,17 +247,9 @@ TEST_F(HemiPlaneGatherTest, LargestPlaneResolutionFitsTheFramebuffer) {
     scene.settings.gather.plane_resolution = 1024;
     SceneMeshes meshes(scene);
     LightmapTexture aim(scene.atlas);
-    std::vector<glm::vec3> values(size_t(scene.atlas.width) * size_t(scene.atlas.height),
-                                  glm::vec3(0.0f));
-    std::vector<int> receiver_texels;
-    for (int i = 0; i < int(scene.atlas.texels.size()); ++i) {
-        const TexelRecord& t = scene.atlas.texels[size_t(i)];
-        if (t.object == 1)
-            values[size_t(t.y) * size_t(scene.atlas.width) + size_t(t.x)] = glm::vec3(1.0f);
-        else if (receiver_texels.size() < 2)
-            receiver_texels.push_back(i);
-    }
-    aim.update_all(values);
+    const std::vector<int> all = light_the_plane(scene, aim, glm::vec3(1.0f));
+    const std::vector<int> receiver_texels(
+        all.begin(), all.begin() + std::min<std::ptrdiff_t>(2, std::ssize(all)));
     HemiPlaneGather gather(scene, meshes, 256);
     EXPECT_LE(gather.tiles_per_pass(), 4);  // at most 2×2 tiles of 1024²
     const std::vector<GatherResult> r = gather.gather(receiver_texels, aim.id());

@@ -25,6 +25,15 @@ namespace ag::gpu {
 
 namespace {
 
+// pt's `term` of `scene` with single scattering in the media (volume_bounces 1), at `spp`.
+Image pt_term(const Scene& scene, int spp, FrameTerm term) {
+    cpu::ReferenceSettings settings;
+    settings.spp = spp;
+    settings.volume_bounces = 1;
+    ThreadPool pool(2);
+    return cpu::render_reference(scene, settings, pool).components[size_t(term)];
+}
+
 using test::GlTest;
 
 class MediaViewTest : public GlTest {};
@@ -110,12 +119,7 @@ TEST_F(MediaViewTest, EmissiveSurfacesThatAreNoLightsLightTheFog) {
     panel.material.emits_light = false;
     scene.objects.push_back(panel);
     scene.camera.width = scene.camera.height = 24;
-    cpu::ReferenceSettings settings;
-    settings.spp = 256;
-    settings.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::volume)];
+    const Image pt = pt_term(scene, 256, FrameTerm::volume);
     MediaMethodSettings method;
     method.grid = 32;
     method.photons = 50000;
@@ -512,12 +516,7 @@ double mean_red(const Image& image) {
 TEST_F(MediaViewTest, ForwardPhaseSeesTheFloorsLightInTheFog) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_fog_floor.json");
     scene.camera.width = scene.camera.height = 24;
-    cpu::ReferenceSettings settings;
-    settings.spp = 256;
-    settings.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, settings, pool).components[size_t(FrameTerm::volume)];
+    const Image pt = pt_term(scene, 256, FrameTerm::volume);
     MediaMethodSettings method;
     method.grid = 32;
     method.photons = 50000;
@@ -551,12 +550,7 @@ TEST_F(MediaViewTest, ForwardPhaseSeesTheFloorsLightInTheFog) {
 TEST_F(MediaViewTest, PipelineSeesThroughTheGlass) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_glass_checker.json");
     scene.settings.gather.backend = GatherBackend::cpu;
-    cpu::ReferenceSettings reference;
-    reference.spp = 256;
-    reference.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::specular)];
+    const Image pt = pt_term(scene, 256, FrameTerm::specular);
     const auto frame_specular = [&](bool through_glass) {
         MediaMethodSettings settings;
         settings.grid = 64;
@@ -661,12 +655,7 @@ TEST_F(MediaViewTest, PipelineLightsTheSurfacesThroughTheFog) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_fog_floor.json");
     scene.settings.gather.backend = GatherBackend::cpu;
     scene.camera.width = scene.camera.height = 24;
-    cpu::ReferenceSettings reference;
-    reference.spp = 256;
-    reference.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::direct)];
+    const Image pt = pt_term(scene, 256, FrameTerm::direct);
     MediaMethodSettings settings;
     settings.grid = 16;
     settings.photons = 2000;
@@ -690,12 +679,7 @@ TEST_F(MediaViewTest, PipelineIndirectHasTheFogsLightOnTheSurfaces) {
     scene.media[0].phase_k = 0.3f;
     scene.settings.gather.backend = GatherBackend::cpu;
     scene.camera.width = scene.camera.height = 24;
-    cpu::ReferenceSettings reference;
-    reference.spp = 1024;
-    reference.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::indirect)];
+    const Image pt = pt_term(scene, 1024, FrameTerm::indirect);
     MediaMethodSettings settings;
     settings.grid = 64;
     settings.photons = 20000;
@@ -718,12 +702,7 @@ TEST_F(MediaViewTest, PipelineIndirectHasTheFogsLightOnTheSurfaces) {
 TEST_F(MediaViewTest, PipelineIndirectDimsWhatTheGatherSeesThroughTheFog) {
     Scene scene = load_scene(std::string(AG_SOURCE_DIR) + "/scenes/media_fog_wall.json");
     scene.camera.width = scene.camera.height = 24;
-    cpu::ReferenceSettings reference;
-    reference.spp = 1024;
-    reference.volume_bounces = 1;
-    ThreadPool pool(2);
-    const Image pt =
-        cpu::render_reference(scene, reference, pool).components[size_t(FrameTerm::indirect)];
+    const Image pt = pt_term(scene, 1024, FrameTerm::indirect);
     for (const GatherBackend backend : {GatherBackend::cpu, GatherBackend::gl}) {
         Scene local = scene;
         local.settings.gather.backend = backend;
