@@ -214,6 +214,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.workers_behind = st.workers_behind;
         r.gather_ms = st.gather_ms, r.draw_ms = st.draw_ms, r.wait_ms = st.wait_ms;
         r.gather_plan_ms = st.budget_gather_ms;
+        r.photon_ms = st.photon_ms, r.aim_ms = st.aim_ms;
+        r.early_hand_over = st.early_hand_over;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
         if (on_frame) on_frame(f + 1);
@@ -273,7 +275,7 @@ std::string convergence_csv(const ConvergenceRun& run) {
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
            "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused,workers_behind,"
            "gather_ms,draw_ms,wait_ms,"
-           "gather_plan_ms\n";
+           "gather_plan_ms,photon_ms,aim_ms,early_hand_over\n";
     // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
     // (and its mode, unless selective) so both join one methods plot.
     std::string method = kPipelineModeNames[size_t(run.mode)];
@@ -286,7 +288,8 @@ std::string convergence_csv(const ConvergenceRun& run) {
             << r.groups_invalidated << ',' << r.photons_retraced << ',' << r.aim_texels << ','
             << r.iim_texels << ',' << r.iim_pending << ',' << r.rays_traced << ',' << r.rays_reused
             << ',' << (r.workers_behind ? 1 : 0) << ',' << r.gather_ms << ',' << r.draw_ms << ','
-            << r.wait_ms << ',' << r.gather_plan_ms << "\n";
+            << r.wait_ms << ',' << r.gather_plan_ms << ',' << r.photon_ms << ',' << r.aim_ms << ','
+            << (r.early_hand_over ? 1 : 0) << "\n";
     return csv.str();
 }
 

@@ -56,6 +56,10 @@ struct FrameRecord {
     // drawing, waiting for the workers or an edit's wait for them; and the gathering the
     // scheduler planned (0 without a frame-time target).
     double gather_ms = 0.0, draw_ms = 0.0, wait_ms = 0.0, gather_plan_ms = 0.0;
+    // The photon work handed over in this frame: the workers' time on it, and whether it was
+    // taken over during the gather (selective) rather than at the frame's end.
+    double photon_ms = 0.0, aim_ms = 0.0;
+    bool early_hand_over = false;
 };
 
 struct SettleAnalysis {
