@@ -120,6 +120,11 @@ const Command kBenchCommand{
                 "and report the area under that error (how far the light lags a continuous move); "
                 "0 = off (default: 4 for the ladder's continuous move, else off)",
                 0, 1000, 0),
+        number("changed-region", "T",
+               "'settle': score only the pixels whose reference indirect light the script changes "
+               "by more than the fraction T (the pm references of the state after the script's "
+               "first frame and of the final state; default: the whole image)",
+               0.001, 10.0),
         text("modes", "LIST",
              "'settle': the modes to run, comma-separated (selective, full, full-budget); "
              "selective's speed-up needs full-budget",

@@ -192,6 +192,8 @@ int bench_settle(const Args& args, int width, int height) {
     const std::string component = "indirect";
     const int phases = args.get_int("phases", 1);
     const int phase_step = args.get_int("phase-step", 1);
+    const double region_fraction =
+        args.has("changed-region") ? args.get_double("changed-region", 0.1) : 0.0;
     std::ostringstream summary;  // the speed-up over phases, per entry
 
     std::vector<LadderEntry> ladder;
@@ -213,12 +215,16 @@ int bench_settle(const Args& args, int width, int height) {
     const bool prime = !args.has("no-prime");
     std::printf(
         "bench settle: %dx%d, --frame-ms %s, %s; indirect relMSE against the pm reference of the "
-        "final state; settled = %s, settle = from the last edit until the error stays within 10%% "
-        "of it\n",
+        "final state%s; settled = %s, settle = from the last edit until the error stays within "
+        "10%% of it\n",
         width, height,
         frame_ms_given ? fixed(frame_ms_flag, 1).c_str() : "33 (bumpy and conference 200)",
         prime ? "each run starts from the converged state of frame 0 (untimed)"
               : "each run starts from nothing",
+        region_fraction > 0.0 ? (", over the pixels whose reference changes by more than " +
+                                 fixed(region_fraction, 3) + " (--changed-region)")
+                                    .c_str()
+                              : "",
         prime ? "the error of the converged final state" : "the mean of the last tenth of frames");
     std::printf("%-10s %8s %-22s %4s %-11s %9s %6s %8s %15s %15s %9s %9s %9s %9s %8s\n", "scene",
                 "tris", "script", "lead", "mode", "settled", "frames", "settle_s",
@@ -230,7 +236,7 @@ int bench_settle(const Args& args, int width, int height) {
            "first_"
            "edit,last_edit,settle_frames,settle_s,frame_ms_mean_settle,frame_ms_p95_settle,frame_"
            "ms_mean,frame_ms_p95,photons_retraced,aim_texels,iim_texels,error_area,error_area_"
-           "window_s,speedup_vs_full_budget,speedup_at_least,tracking_area\n";
+           "window_s,speedup_vs_full_budget,speedup_at_least,tracking_area,region_pixels\n";
     const std::filesystem::path runs_dir =
         std::filesystem::absolute(csv_path).parent_path() / (stem(csv_path) + ".runs");
     int measured = 0;
@@ -270,12 +276,44 @@ int bench_settle(const Args& args, int width, int height) {
         request.log_prefix = "afterglow bench settle";
         const std::string reference_path = cached_reference(scene, entry.script, frames, request);
         const Image reference = read_reference(reference_path, component, width, height);
+        // --changed-region: the error only where the edit changes the light, so that an edit
+        // whose change is small against the whole image's error is still seen.
+        Image region;
+        const Image* mask = nullptr;
+        size_t region_pixels = 0;
+        if (region_fraction > 0.0) {
+            const Image before = read_reference(cached_reference(scene, entry.script, 1, request),
+                                                component, width, height);
+            region = changed_region(before, reference, region_fraction);
+            for (float v : region.pixels) region_pixels += v != 0.0f;
+            if (region_pixels == 0) {
+                std::printf(
+                    "skipping %s with %s: no pixel's indirect light changes by more than "
+                    "%g\n",
+                    entry.scene.c_str(), entry.script.c_str(), region_fraction);
+                continue;
+            }
+            mask = &region;
+            // The region to look at: the final state's indirect light where it is scored.
+            Image shown(width, height);
+            for (int y = 0; y < height; ++y)
+                for (int x = 0; x < width; ++x)
+                    shown.set_rgb(
+                        x, y, region.at(x, y)[0] != 0.0f ? reference.rgb(x, y) : glm::vec3(0.0f));
+            std::filesystem::create_directories(runs_dir);
+            write_image(
+                shown,
+                (runs_dir / (request.name + "." + stem(entry.script) + ".region.png")).string());
+            std::printf("%s with %s: %zu of %d pixels change by more than %g\n",
+                        request.name.c_str(), stem(entry.script).c_str(), region_pixels,
+                        width * height, region_fraction);
+        }
 
         // Every mode converges to the same state (repair == rebuild): its error is the settled
         // value all three are measured against, so a mode that never got there within the run
         // does not settle on a plateau of its own.
         const double target = prime ? converged_error(scene, entry.script, frames, width, height,
-                                                      component, reference, threads)
+                                                      component, reference, threads, mask)
                                     : 0.0;
         // Tracked entries: the reference of the state after f + 1 script frames for every
         // track_every-th frame f (states after the last edit share one cached reference).
@@ -297,14 +335,18 @@ int bench_settle(const Args& args, int width, int height) {
             std::vector<std::map<int, double>> tracked;
             for (PipelineMode mode : modes) {
                 std::map<int, double>& errors = tracked.emplace_back();
+                std::map<int, double> in_region;
                 runs.push_back(run_convergence(
                     scene, entry.script, mode, frames, width, height, component,
                     [&](int) -> const Image& { return reference; }, threads, prime, {},
                     [&](int f, const Image& image) {
                         if (auto it = own_state.find(f); it != own_state.end())
                             errors[f] = compare_images(image, it->second).rel_mse;
+                        if (mask) in_region[f] = compare_images(image, reference, mask).rel_mse;
                     },
                     lead_in));
+                if (mask)
+                    for (FrameRecord& r : runs.back().frames) r.relmse = in_region.at(r.frame);
                 runs.back().settle = analyse_settle(runs.back().frames, target);
                 std::filesystem::create_directories(runs_dir);
                 write_file_atomically(
@@ -375,7 +417,8 @@ int bench_settle(const Args& args, int width, int height) {
                     << r.photons << ',' << r.aim_texels << ',' << r.iim_texels << ',' << r.auc
                     << ',' << window << ',' << (speedup_ok ? fixed(speedup, 4) : "") << ','
                     << (bound_ok ? fixed(at_least, 4) : "") << ','
-                    << (r.tracking_auc >= 0.0 ? fixed(r.tracking_auc, 6) : "") << "\n";
+                    << (r.tracking_auc >= 0.0 ? fixed(r.tracking_auc, 6) : "") << ','
+                    << region_pixels << "\n";
             }
             if (track_every > 0) {
                 std::printf(

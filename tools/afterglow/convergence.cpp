@@ -13,6 +13,7 @@
 #include <iostream>
 #include <optional>
 #include <sstream>
+#include <stdexcept>
 
 #include "cpu/reference/reference.h"
 #include "shared/frame_terms.h"
@@ -249,7 +250,7 @@ double p95(std::vector<double> v) {
 
 double converged_error(const Scene& scene, const std::string& script_path, int frames, int width,
                        int height, const std::string& component, const Image& reference,
-                       int threads) {
+                       int threads, const Image* mask) {
     Scene final_state = scene;
     if (!script_path.empty()) {
         Script ahead(script_path);
@@ -267,7 +268,25 @@ double converged_error(const Scene& scene, const std::string& script_path, int f
                       PipelineOptions{width, height, threads, PipelineMode::selective});
     pipeline.prime();
     const gpu::FrameImages images = pipeline.images();
-    return compare_images(term ? images.aov[size_t(*term)] : images.frame, reference).rel_mse;
+    return compare_images(term ? images.aov[size_t(*term)] : images.frame, reference, mask).rel_mse;
+}
+
+Image changed_region(const Image& before, const Image& after, double fraction) {
+    if (before.width != after.width || before.height != after.height)
+        throw std::invalid_argument("changed_region: the images differ in size");
+    double mean = 0.0;
+    for (int y = 0; y < after.height; ++y)
+        for (int x = 0; x < after.width; ++x) mean += double(luminance(after.rgb(x, y)));
+    mean /= std::max(1.0, double(after.width) * double(after.height));
+    Image mask(after.width, after.height, 1);
+    for (int y = 0; y < after.height; ++y)
+        for (int x = 0; x < after.width; ++x) {
+            const double a = luminance(before.rgb(x, y)), b = luminance(after.rgb(x, y));
+            const double larger = std::max(a, b);
+            if (larger > 0.01 * mean && std::abs(b - a) > fraction * larger)
+                mask.at(x, y)[0] = 1.0f;
+        }
+    return mask;
 }
 
 std::string convergence_csv(const ConvergenceRun& run) {

@@ -102,9 +102,14 @@ SettleAnalysis analyse_settle(const std::vector<FrameRecord>& frames, double tar
 // The relMSE against `reference` of the converged final state: `scene` after `frames` frames of
 // the script, primed at once (Pipeline::prime) and drawn. Every mode converges to it (repair ==
 // rebuild), so it is the settled value that runs of different modes are measured against.
+// `mask` (may be null): only its non-zero pixels are scored.
 double converged_error(const Scene& scene, const std::string& script_path, int frames, int width,
                        int height, const std::string& component, const Image& reference,
-                       int threads);
+                       int threads, const Image* mask = nullptr);
+
+// The pixels where `after` differs from `before` by more than `fraction` of the larger of the
+// two (Rec. 709 luminance), among those brighter than 1% of `after`'s mean: 1 there, 0 elsewhere.
+Image changed_region(const Image& before, const Image& after, double fraction);
 
 // Runs `frames` frames of `scene` (a copy; its camera size is overwritten by width × height) with
 // the script (may be empty) in `mode`, comparing `component` ("full" or a frame term) with
