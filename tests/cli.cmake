@@ -157,6 +157,15 @@ add_test(NAME cli.bench_soak_change_log
                  --set photons.retrace_budget=400 --set caustics.photons=1000
          WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.bench_soak_change_log PROPERTIES LABELS gl)
+# bench frame reports each mode's mean frame time and its p95 (issue #12: the default's frame time
+# against the old, mean and p95); the CPU gather and 64² keep it to a few seconds.
+add_test(NAME cli.bench_frame_p95
+         COMMAND ${AG_EXPECT} 0
+                 "static: [0-9.]+ fps \\([0-9.]+ ms/frame, p95 [0-9.]+ ms\\).*gather backend cpu"
+                 ${AG_BIN} bench frame scenes/cornell.json --size 64 --frames 3 --repeat 1
+                 --gather cpu --set caustics.photons=1000
+         WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.bench_frame_p95 PROPERTIES LABELS gl)
 # bench's own --size N|WxH is read digit by digit too: 4294967360 = 2^32 + 64 used to wrap to 64.
 foreach(size IN ITEMS 4294967360 64x4294967328 0 5x 5x5x5 x5)
   ag_cli_test(bench_soak_bad_size_${size} 2
