@@ -190,7 +190,7 @@ std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity,
 namespace {
 
 // The knots of a bilinear density's `side` + 1 segments along one axis: 0, ½/side, 1½/side, …,
-// 1 − ½/side, 1; knot k carries centre max(k − 1, 0) … min(k − 1, side − 1).
+// 1 − ½/side, 1; knot k holds the value of the centre clamp(k − 1, 0, side − 1).
 double knot(int k, int side) {
     if (k <= 0) return 0.0;
     if (k > side) return 1.0;
