@@ -187,7 +187,47 @@ std::vector<MediaPhoton> sphere_photons(const glm::vec3& light, float intensity,
     return photons;
 }
 
-PhotonDensity::PhotonDensity(int side, const std::vector<float>& cells) : side_(side) {
+namespace {
+
+// The knots of a bilinear density's `side` + 1 segments along one axis: 0, ½/side, 1½/side, …,
+// 1 − ½/side, 1; knot k holds the value of the centre clamp(k − 1, 0, side − 1).
+double knot(int k, int side) {
+    if (k <= 0) return 0.0;
+    if (k > side) return 1.0;
+    return (double(k) - 0.5) / double(side);
+}
+int knot_centre(int k, int side) { return std::clamp(k - 1, 0, side - 1); }
+
+// The fraction s ∈ [0, 1] of a linear segment of length h, values a → b, holding mass `mass`
+// from its start: h (a s + (b − a) s²/2) = mass, in the form without cancellation.
+double invert_linear(double a, double b, double h, double mass) {
+    const double m = mass / h;
+    const double root = std::sqrt(std::max(0.0, a * a + 2.0 * (b - a) * m));
+    const double denominator = a + root;
+    if (!(denominator > 0.0)) return 0.5;
+    return std::clamp(2.0 * m / denominator, 0.0, 1.0);
+}
+
+// The last index lo in [0, n) with c(lo) ≤ target (c ascending from c(0) = 0, n + 1 values),
+// past segments of zero mass.
+template <typename Cumulative>
+int find_segment(const Cumulative& c, int n, double target) {
+    int lo = 0, hi = n;  // c(lo) ≤ target < c(hi)
+    while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (c(mid) <= target)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    while (lo + 1 < n && c(lo + 1) <= target) ++lo;  // skip empty cells
+    return lo;
+}
+
+}  // namespace
+
+PhotonDensity::PhotonDensity(int side, const std::vector<float>& cells, bool bilinear)
+    : side_(side), bilinear_(bilinear) {
     if (side < 1 || cells.size() != size_t(side) * size_t(side))
         throw std::invalid_argument("PhotonDensity: expected side² cells");
     double total = 0.0;
@@ -199,6 +239,28 @@ PhotonDensity::PhotonDensity(int side, const std::vector<float>& cells) : side_(
     const double cells_count = double(side) * side;
     pdf_.resize(cells.size());
     for (size_t i = 0; i < cells.size(); ++i) pdf_[i] = double(cells[i]) * cells_count / total;
+    if (bilinear) {
+        // Along x within each row, and along y over the rows' means: trapezoids between knots.
+        const size_t knots = size_t(side) + 2;
+        rows_.assign(size_t(side) * knots, 0.0);
+        std::vector<double> mean(size_t(side), 0.0);
+        for (int y = 0; y < side; ++y) {
+            double* row = &rows_[size_t(y) * knots];
+            const double* value = &pdf_[size_t(y) * size_t(side)];
+            for (int k = 0; k <= side; ++k)
+                row[k + 1] =
+                    row[k] + 0.5 * (knot(k + 1, side) - knot(k, side)) *
+                                 (value[knot_centre(k, side)] + value[knot_centre(k + 1, side)]);
+            for (int x = 0; x < side; ++x) mean[size_t(y)] += value[x] / double(side);
+        }
+        marginal_.assign(knots, 0.0);
+        for (int k = 0; k <= side; ++k)
+            marginal_[size_t(k) + 1] =
+                marginal_[size_t(k)] +
+                0.5 * (knot(k + 1, side) - knot(k, side)) *
+                    (mean[size_t(knot_centre(k, side))] + mean[size_t(knot_centre(k + 1, side))]);
+        return;
+    }
     marginal_.assign(size_t(side) + 1, 0.0);
     rows_.assign(size_t(side) * (size_t(side) + 1), 0.0);
     for (int y = 0; y < side; ++y) {
@@ -209,28 +271,68 @@ PhotonDensity::PhotonDensity(int side, const std::vector<float>& cells) : side_(
 }
 
 double PhotonDensity::pdf(glm::vec2 uv) const {
+    if (bilinear_) {
+        // Between the centres around uv (clamped at the outer half cells).
+        const auto around = [&](float t, int& lo, int& hi, double& f) {
+            const double c = std::clamp(double(t) * side_ - 0.5, 0.0, double(side_ - 1));
+            lo = std::min(int(c), side_ - 1);
+            hi = std::min(lo + 1, side_ - 1);
+            f = c - lo;
+        };
+        int x0, x1, y0, y1;
+        double fx, fy;
+        around(uv.x, x0, x1, fx);
+        around(uv.y, y0, y1, fy);
+        const auto at = [&](int x, int y) { return pdf_[size_t(y) * size_t(side_) + size_t(x)]; };
+        return (1.0 - fy) * ((1.0 - fx) * at(x0, y0) + fx * at(x1, y0)) +
+               fy * ((1.0 - fx) * at(x0, y1) + fx * at(x1, y1));
+    }
     const int x = std::clamp(int(uv.x * float(side_)), 0, side_ - 1);
     const int y = std::clamp(int(uv.y * float(side_)), 0, side_ - 1);
     return pdf_[size_t(y) * size_t(side_) + size_t(x)];
 }
 
 glm::vec2 PhotonDensity::sample(glm::vec2 uniform) const {
+    const double below_one = std::nextafter(1.0, 0.0);
+    if (bilinear_) {
+        const int n = side_, segments = side_ + 1;
+        const size_t knots = size_t(side_) + 2;
+        // The marginal along y: linear between the knots, there the row's mean (its profile's
+        // integral over x, the last of its cumulative masses).
+        const auto row_mean = [&](int k) {
+            return rows_[size_t(knot_centre(k, n)) * knots + knots - 1];
+        };
+        const double ty = double(uniform.y) * marginal_[size_t(segments)];
+        const int sy = find_segment([&](int k) { return marginal_[size_t(k)]; }, segments, ty);
+        const double hy = knot(sy + 1, n) - knot(sy, n);
+        const double fy =
+            invert_linear(row_mean(sy), row_mean(sy + 1), hy, ty - marginal_[size_t(sy)]);
+        const double y = std::min(knot(sy, n) + fy * hy, below_one);
+        // The conditional along x at y: the two knot rows' profiles blended, (1 − fy) and fy.
+        const double* lo = &rows_[size_t(knot_centre(sy, n)) * knots];
+        const double* hi = &rows_[size_t(knot_centre(sy + 1, n)) * knots];
+        const auto cumulative = [&](int k) { return (1.0 - fy) * lo[k] + fy * hi[k]; };
+        const double* vlo = &pdf_[size_t(knot_centre(sy, n)) * size_t(n)];
+        const double* vhi = &pdf_[size_t(knot_centre(sy + 1, n)) * size_t(n)];
+        const auto value = [&](int k) {
+            const int c = knot_centre(k, n);
+            return (1.0 - fy) * vlo[c] + fy * vhi[c];
+        };
+        const double tx = double(uniform.x) * cumulative(segments);
+        const int sx = find_segment(cumulative, segments, tx);
+        const double hx = knot(sx + 1, n) - knot(sx, n);
+        const double fx = invert_linear(value(sx), value(sx + 1), hx, tx - cumulative(sx));
+        const double x = std::min(knot(sx, n) + fx * hx, below_one);
+        return {float(x), float(y)};
+    }
     // Inverts a cumulative sum `c` (n + 1 entries, c[0] = 0) at u ∈ [0, 1): the cell and the
     // position inside it, linear within the cell.
-    const auto invert = [](const double* c, int n, double u) {
+    const auto invert = [&](const double* c, int n, double u) {
         const double target = u * c[n];
-        int lo = 0, hi = n;  // c[lo] ≤ target < c[hi]
-        while (hi - lo > 1) {
-            const int mid = (lo + hi) / 2;
-            if (c[mid] <= target)
-                lo = mid;
-            else
-                hi = mid;
-        }
-        while (lo + 1 < n && c[lo + 1] <= target) ++lo;  // skip empty cells
+        const int lo = find_segment([&](int k) { return c[k]; }, n, target);
         const double width = c[lo + 1] - c[lo];
         const double t = width > 0.0 ? std::clamp((target - c[lo]) / width, 0.0, 1.0) : 0.5;
-        return std::min((double(lo) + t) / double(n), std::nextafter(1.0, 0.0));
+        return std::min((double(lo) + t) / double(n), below_one);
     };
     const double y = invert(marginal_.data(), side_, double(uniform.y));
     const int row = std::clamp(int(y * side_), 0, side_ - 1);

@@ -96,16 +96,21 @@ PhotonSource photon_source(const glm::vec3& light, float intensity, const Bounds
 bool source_photon(const PhotonSource& source, glm::vec2 uv, double pdf, int count,
                    MediaPhoton& photon);
 
-// A piecewise-constant density over the unit square on a `side` × `side` grid of cells, sampled
-// by Pharr and Humphreys' two-stage inversion (his ch. 3.2.3: the marginal along y, then the row's
-// conditional along x, by binary search on the cumulative sums).
+// A density over the unit square from a `side` × `side` grid of cells, sampled by Pharr and
+// Humphreys' two-stage inversion (his ch. 3.2.3: the marginal along y, then the row's
+// conditional along x, by binary search on the cumulative sums). Piecewise constant (his), or
+// `bilinear` (ours, docs/media.md "Session 15"): the cells' values at their centres, interpolated
+// bilinearly and held constant over the outer half cells, which has the same integral as the
+// cells (each centre's tent covers one cell's area) and no jump at the cell edges, so the
+// weights 1/(N p) of photons drawn through it change continuously.
 class PhotonDensity {
 public:
     PhotonDensity() = default;
     // `cells` (side², row-major, y rows) ≥ 0 with a positive sum; normalised here.
-    PhotonDensity(int side, const std::vector<float>& cells);
+    PhotonDensity(int side, const std::vector<float>& cells, bool bilinear = false);
     int side() const { return side_; }
-    // The density (mean 1 over the square) of the cell holding `uv`.
+    bool bilinear() const { return bilinear_; }
+    // The density (mean 1 over the square) at `uv`: its cell's, or bilinear between centres.
     double pdf(glm::vec2 uv) const;
     // Maps a uniform point to one distributed by the density.
     glm::vec2 sample(glm::vec2 uniform) const;
@@ -113,9 +118,13 @@ public:
 
 private:
     int side_ = 0;
-    std::vector<double> pdf_;       // per cell, mean 1
-    std::vector<double> marginal_;  // side + 1 cumulative sums over rows
-    std::vector<double> rows_;      // side × (side + 1) cumulative sums within each row
+    bool bilinear_ = false;
+    std::vector<double> pdf_;  // per cell, mean 1
+    // Piecewise constant: side + 1 cumulative sums over rows; side × (side + 1) within each row.
+    // Bilinear: over the side + 1 segments between the knots 0, ½/side, 1½/side, …, 1 (side + 2
+    // cumulative masses), of the rows' means along y; of each row's values along x.
+    std::vector<double> marginal_;
+    std::vector<double> rows_;
 };
 
 // 2D Hammersley point i of `count`, shifted by `shift` modulo 1 (a Cranley–Patterson rotation;

@@ -307,7 +307,7 @@ gpu::MediaMarchResult march_adaptive(const MediaGrid& grid, const PhotonSource& 
     result.timing.octree += piloted.octree_seconds;
 
     start = Clock::now();
-    const PhotonDensity density(side, pilot_density(grid, piloted, source, a));
+    const PhotonDensity density(side, pilot_density(grid, piloted, source, a), a.bilinear_density);
     result.density = density.cells();
     result.timing.distribution = since(start);
 

@@ -159,6 +159,9 @@ const Command kBenchCommand{
         flag("curve-only", "'media': the equal-RMSE curve alone (no Tables 4.1-4.5, no octree)"),
         flag("integer-level",
              "'media': the adaptive pipeline with his integer weight level (before session 14)"),
+        flag("constant-density",
+             "'media': the adaptive pipeline with his piecewise-constant photon density (before "
+             "session 15)"),
         flag("versus-cpu",
              "'irradiance_cache': Gautron's Table 4.2 without Radiance: one frame by a CPU "
              "irradiance cache in Radiance's manner (eye rays, octree lookups, records on a miss) "

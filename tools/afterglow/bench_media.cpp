@@ -233,6 +233,7 @@ int bench_media(const Args& args, const std::string& scene_path, int width, int 
     // indirect term, ours), which would add its march rays to the pass's time.
     base.fog_on_surfaces_rays = 0;
     base.adaptive.fractional_level = !args.has("integer-level");
+    base.adaptive.bilinear_density = !args.has("constant-density");
     std::printf(
         "bench media: %s at %dx%d, %d voxels along the longest side (llvmpipe timings: a "
         "software rasteriser on shared CPU cores, not a GPU)\n",

@@ -80,6 +80,9 @@ const Command kMediaCommand{
         flag("integer-level",
              "adaptive: his integer weight level floor(w / delta-weight) instead of the "
              "fractional w / delta-weight (blending the two mipmap levels around it)"),
+        flag("constant-density",
+             "adaptive: his piecewise-constant photon density over the plane's cells instead of "
+             "the density read bilinearly between their centres"),
         flag("no-filter",
              "adaptive: the importance-sampled deposits as they are (no mipmap levels)"),
         number("dense-cut", "X",
@@ -134,6 +137,7 @@ int run_media(const Args& args) {
     settings.adaptive.shadow = float(args.get_double("shadow"));
     settings.adaptive.reconstruct = !args.has("no-filter");
     settings.adaptive.fractional_level = !args.has("integer-level");
+    settings.adaptive.bilinear_density = !args.has("constant-density");
     settings.adaptive.free_space = !args.has("his-sphere");
     settings.adaptive.stratified = !args.has("his-sphere");
     settings.adaptive.dense_cut = float(args.get_double("dense-cut"));
