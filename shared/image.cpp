@@ -139,12 +139,28 @@ void write_image(const Image& image, const std::string& path, float exposure_ev)
 }
 
 Image read_image(const std::string& path) {
+    // OIIO reads devices and FIFOs without end ("/dev/zero" as a texture or reference hung).
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+        throw_input_error(path, "",
+                          fs::exists(path, ec) ? "cannot read image: expected a regular file"
+                                               : "cannot read image: no such file");
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw_input_error(path, "", "cannot read image: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
-    Image image(spec.width, spec.height, spec.nchannels);
-    if (image.pixels.empty() ||
-        !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
+    // The header's size is checked before anything is allocated from it: a PNG of a hundred
+    // bytes may claim 100000 x 100000 pixels, and `Image` would allocate (and zero) them all.
+    if (spec.width < 1 || spec.height < 1 || spec.width > kMaxImageSide ||
+        spec.height > kMaxImageSide || spec.nchannels < 1)
+        throw_input_error(path, "",
+                          "expected an image of 1 to " + std::to_string(kMaxImageSide) +
+                              " pixels on a side with at least one channel, got " +
+                              std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                              " with " + std::to_string(spec.nchannels) + " channels");
+    // Every reader takes RGB or RGBA: further channels (an EXR's depth, its AOVs) are not read.
+    const int channels = std::min(spec.nchannels, 4);
+    Image image(spec.width, spec.height, channels);
+    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
         throw_input_error(path, "", "cannot decode image: " + in->geterror());
     const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
     if (srgb)

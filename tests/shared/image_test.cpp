@@ -174,4 +174,61 @@ TEST(Image, UnreadableFileIsAnInputErrorNamingIt) {
     }
 }
 
+// A header is checked before anything is allocated from it: this PPM of a few bytes claims
+// 100000 x 100000 pixels (120 GB as float RGB; std::bad_alloc, or the OOM killer, before).
+TEST(Image, AHeaderClaimingHugeDimensionsIsRefusedBeforeAllocating) {
+    for (const auto& [name, dims] :
+         {std::pair{"huge.ppm", "100000 100000"}, std::pair{"wide.ppm", "16385 1"}}) {
+        const fs::path p = temp_dir() / name;
+        std::ofstream(p, std::ios::binary) << "P6\n" << dims << "\n255\n" << std::string(12, 'x');
+        try {
+            read_image(p.string());
+            FAIL() << "expected InputError for " << name;
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(p.string()), std::string::npos) << what;
+            EXPECT_NE(what.find("1 to 16384 pixels on a side"), std::string::npos) << what;
+        }
+    }
+    const fs::path p = temp_dir() / "edge.ppm";
+    std::ofstream(p, std::ios::binary) << "P6\n16384 1\n255\n" << std::string(16384 * 3, 'x');
+    EXPECT_EQ(read_image(p.string()).width, 16384);
+}
+
+// Readers take RGB or RGBA: an EXR's further channels are not read, and a grey image reads as
+// grey through rgb() (it read past the pixel's one float before).
+TEST(Image, AtMostFourChannelsAreReadAndGreyReadsAsGrey) {
+    const fs::path p = temp_dir() / "five.exr";
+    Image five(3, 2, 5);
+    for (size_t i = 0; i < five.pixels.size(); ++i) five.pixels[i] = float(i % 5);
+    write_image(five, p.string());
+    const Image back = read_image(p.string());
+    EXPECT_EQ(back.channels, 4);
+    ASSERT_EQ(back.pixels.size(), size_t(3 * 2 * 4));
+    EXPECT_EQ(back.rgb(2, 1), glm::vec3(0.0f, 1.0f, 2.0f));
+    Image grey(2, 1, 1);
+    grey.pixels = {0.25f, 0.5f};
+    EXPECT_EQ(grey.rgb(1, 0), glm::vec3(0.5f));
+}
+
+// OpenImageIO reads devices without end: /dev/zero as a reference image or texture hung.
+TEST(Image, OnlyRegularFilesAreRead) {
+    for (const std::string& p : {std::string("/dev/zero"), temp_dir().string()}) {
+        try {
+            read_image(p);
+            FAIL() << "expected InputError for " << p;
+        } catch (const InputError& e) {
+            EXPECT_EQ(std::string(e.what()), p + ": cannot read image: expected a regular file");
+        }
+    }
+    try {
+        read_image((temp_dir() / "absent.exr").string());
+        FAIL() << "expected InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("absent.exr: cannot read image: no such file"),
+                  std::string::npos)
+            << e.what();
+    }
+}
+
 }  // namespace ag
