@@ -151,17 +151,32 @@ Image read_image(const std::string& path) {
     // The header's size is checked before anything is allocated from it: a PNG of a hundred
     // bytes may claim 100000 x 100000 pixels, and `Image` would allocate (and zero) them all.
     if (spec.width < 1 || spec.height < 1 || spec.width > kMaxImageSide ||
-        spec.height > kMaxImageSide || spec.nchannels < 1)
+        spec.height > kMaxImageSide || spec.nchannels < 1 || spec.depth != 1)
         throw_input_error(path, "",
-                          "expected an image of 1 to " + std::to_string(kMaxImageSide) +
+                          "expected a 2D image of 1 to " + std::to_string(kMaxImageSide) +
                               " pixels on a side with at least one channel, got " +
                               std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                              (spec.depth != 1 ? " x " + std::to_string(spec.depth) : "") +
                               " with " + std::to_string(spec.nchannels) + " channels");
     // Every reader takes RGB or RGBA: further channels (an EXR's depth, its AOVs) are not read.
     const int channels = std::min(spec.nchannels, 4);
-    Image image(spec.width, spec.height, channels);
-    if (!in->read_image(0, 0, 0, channels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-        throw_input_error(path, "", "cannot decode image: " + in->geterror());
+    Image image;
+    image.width = spec.width;
+    image.height = spec.height;
+    image.channels = channels;
+    // Rows are decoded a band at a time into storage reserved (not yet touched) for the whole
+    // image: a truncated file that claims 16384 x 16384 fails at its first missing band, having
+    // zeroed and filled only what it held, not 4 GiB.
+    const size_t row = size_t(spec.width) * size_t(channels);
+    image.pixels.reserve(row * size_t(spec.height));
+    constexpr int kBand = 64;
+    for (int y = 0; y < spec.height; y += kBand) {
+        const int end = std::min(spec.height, y + kBand);
+        image.pixels.resize(row * size_t(end));
+        if (!in->read_scanlines(0, 0, spec.y + y, spec.y + end, 0, 0, channels,
+                                OIIO::TypeDesc::FLOAT, image.pixels.data() + row * size_t(y)))
+            throw_input_error(path, "", "cannot decode image: " + in->geterror());
+    }
     const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
     if (srgb)
         for (size_t i = 0; i < image.pixels.size(); ++i)
