@@ -169,13 +169,20 @@ Image read_image(const std::string& path) {
     // zeroed and filled only what it held, not 4 GiB.
     const size_t row = size_t(spec.width) * size_t(channels);
     image.pixels.reserve(row * size_t(spec.height));
-    constexpr int kBand = 64;
-    for (int y = 0; y < spec.height; y += kBand) {
-        const int end = std::min(spec.height, y + kBand);
+    // Tiled files (OpenEXR's tiles) are read a row of tiles at a time (OIIO's read_scanlines
+    // divides by zero on them: SIGFPE).
+    const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    const int band = tiled ? std::max(1, 64 / spec.tile_height) * spec.tile_height : 64;
+    for (int y = 0; y < spec.height; y += band) {
+        const int end = std::min(spec.height, y + band);
         image.pixels.resize(row * size_t(end));
-        if (!in->read_scanlines(0, 0, spec.y + y, spec.y + end, 0, 0, channels,
-                                OIIO::TypeDesc::FLOAT, image.pixels.data() + row * size_t(y)))
-            throw_input_error(path, "", "cannot decode image: " + in->geterror());
+        float* data = image.pixels.data() + row * size_t(y);
+        const bool ok =
+            tiled ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y, spec.y + end,
+                                   spec.z, spec.z + 1, 0, channels, OIIO::TypeDesc::FLOAT, data)
+                  : in->read_scanlines(0, 0, spec.y + y, spec.y + end, spec.z, 0, channels,
+                                       OIIO::TypeDesc::FLOAT, data);
+        if (!ok) throw_input_error(path, "", "cannot decode image: " + in->geterror());
     }
     const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
     if (srgb)
