@@ -9,6 +9,7 @@
 #include <cctype>
 #include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 #include <map>
@@ -25,6 +26,28 @@ namespace {
 // must not stop the load.
 bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, int,
                 const unsigned char*, int, void*) {
+    return true;
+}
+
+// tinygltf's own file reader takes a directory for a file of 2^63 - 1 bytes (std::bad_alloc
+// escaped the load: an image `uri` of "/tmp") and reads devices; this one reads regular files
+// only, as many bytes as the file system says they hold. The glTF file, its buffers and images.
+bool read_regular_file(std::vector<unsigned char>* out, std::string* err, const std::string& path,
+                       void*) {
+    std::error_code ec;
+    const bool regular = std::filesystem::is_regular_file(path, ec);
+    const std::uintmax_t size = regular && !ec ? std::filesystem::file_size(path, ec) : 0;
+    const auto fail = [&](const std::string& why) {
+        if (err) *err += path + ": " + why + "\n";
+        return false;
+    };
+    if (!regular || ec)
+        return fail(std::filesystem::exists(path, ec) ? "expected a regular file" : "no such file");
+    if (size == 0) return fail("the file is empty");
+    std::ifstream file(path, std::ios::binary);
+    out->resize(size_t(size));
+    if (!file.read(reinterpret_cast<char*>(out->data()), std::streamsize(size)))
+        return fail("cannot read the file");
     return true;
 }
 
@@ -481,6 +504,8 @@ private:
 Model load_gltf(const std::string& path, int64_t max_triangles) {
     tinygltf::TinyGLTF loader;
     loader.SetImageLoader(skip_image, nullptr);
+    loader.SetFsCallbacks({&tinygltf::FileExists, &tinygltf::ExpandFilePath, &read_regular_file,
+                           &tinygltf::WriteWholeFile, nullptr});
     tinygltf::Model gltf;
     std::string error, warning;
     std::string ext = std::filesystem::path(path).extension().string();

@@ -139,13 +139,51 @@ void write_image(const Image& image, const std::string& path, float exposure_ev)
 }
 
 Image read_image(const std::string& path) {
+    // OIIO reads devices and FIFOs without end ("/dev/zero" as a texture or reference hung).
+    std::error_code ec;
+    if (!fs::is_regular_file(path, ec))
+        throw_input_error(path, "",
+                          fs::exists(path, ec) ? "cannot read image: expected a regular file"
+                                               : "cannot read image: no such file");
     auto in = OIIO::ImageInput::open(path);
     if (!in) throw_input_error(path, "", "cannot read image: " + OIIO::geterror());
     const OIIO::ImageSpec& spec = in->spec();
-    Image image(spec.width, spec.height, spec.nchannels);
-    if (image.pixels.empty() ||
-        !in->read_image(0, 0, 0, spec.nchannels, OIIO::TypeDesc::FLOAT, image.pixels.data()))
-        throw_input_error(path, "", "cannot decode image: " + in->geterror());
+    // The header's size is checked before anything is allocated from it: a PNG of a hundred
+    // bytes may claim 100000 x 100000 pixels, and `Image` would allocate (and zero) them all.
+    if (spec.width < 1 || spec.height < 1 || spec.width > kMaxImageSide ||
+        spec.height > kMaxImageSide || spec.nchannels < 1 || spec.depth != 1)
+        throw_input_error(path, "",
+                          "expected a 2D image of 1 to " + std::to_string(kMaxImageSide) +
+                              " pixels on a side with at least one channel, got " +
+                              std::to_string(spec.width) + " x " + std::to_string(spec.height) +
+                              (spec.depth != 1 ? " x " + std::to_string(spec.depth) : "") +
+                              " with " + std::to_string(spec.nchannels) + " channels");
+    // Every reader takes RGB or RGBA: further channels (an EXR's depth, its AOVs) are not read.
+    const int channels = std::min(spec.nchannels, 4);
+    Image image;
+    image.width = spec.width;
+    image.height = spec.height;
+    image.channels = channels;
+    // Rows are decoded a band at a time into storage reserved (not yet touched) for the whole
+    // image: a truncated file that claims 16384 x 16384 fails at its first missing band, having
+    // zeroed and filled only what it held, not 4 GiB.
+    const size_t row = size_t(spec.width) * size_t(channels);
+    image.pixels.reserve(row * size_t(spec.height));
+    // Tiled files (OpenEXR's tiles) are read a row of tiles at a time (OIIO's read_scanlines
+    // divides by zero on them: SIGFPE).
+    const bool tiled = spec.tile_width > 0 && spec.tile_height > 0;
+    const int band = tiled ? std::max(1, 64 / spec.tile_height) * spec.tile_height : 64;
+    for (int y = 0; y < spec.height; y += band) {
+        const int end = std::min(spec.height, y + band);
+        image.pixels.resize(row * size_t(end));
+        float* data = image.pixels.data() + row * size_t(y);
+        const bool ok =
+            tiled ? in->read_tiles(0, 0, spec.x, spec.x + spec.width, spec.y + y, spec.y + end,
+                                   spec.z, spec.z + 1, 0, channels, OIIO::TypeDesc::FLOAT, data)
+                  : in->read_scanlines(0, 0, spec.y + y, spec.y + end, spec.z, 0, channels,
+                                       OIIO::TypeDesc::FLOAT, data);
+        if (!ok) throw_input_error(path, "", "cannot decode image: " + in->geterror());
+    }
     const bool srgb = spec.format == OIIO::TypeDesc::UINT8 || spec.format == OIIO::TypeDesc::UINT16;
     if (srgb)
         for (size_t i = 0; i < image.pixels.size(); ++i)

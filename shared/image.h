@@ -18,9 +18,10 @@ struct Image {
         : width(w), height(h), channels(c), pixels(size_t(w) * h * c, 0.0f) {}
     float* at(int x, int y) { return &pixels[(size_t(y) * width + x) * channels]; }
     const float* at(int x, int y) const { return &pixels[(size_t(y) * width + x) * channels]; }
+    // A one- or two-channel image (a grey EXR read from a file) reads as grey.
     glm::vec3 rgb(int x, int y) const {
         const float* p = at(x, y);
-        return {p[0], p[1], p[2]};
+        return channels >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
     }
     void set_rgb(int x, int y, const glm::vec3& c) {
         float* p = at(x, y);
@@ -42,8 +43,13 @@ float srgb_decode(float encoded);
 // std::runtime_error naming the file on failure; the destination is untouched then.
 void write_image(const Image& image, const std::string& path, float exposure_ev = 0.0f);
 
-// Reads any OIIO format to linear float (PNG/JPEG decoded from sRGB). Throws InputError naming
-// the file if it cannot be read.
+// The largest image side read_image accepts: the largest `--size` (16384² pixels, 4 GiB of RGBA
+// floats, is the most a header can make it allocate).
+inline constexpr int kMaxImageSide = 16384;
+
+// Reads any OIIO format to linear float (PNG/JPEG decoded from sRGB), at most its first four
+// channels. Throws InputError naming the file if it cannot be read or its header claims more than
+// kMaxImageSide pixels on a side.
 Image read_image(const std::string& path);
 
 // Writes `bytes` to `path` atomically (temporary file in the same folder, then rename).

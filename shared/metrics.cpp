@@ -75,10 +75,7 @@ double pixel_rel_mse(const glm::vec3& a, const glm::vec3& b) {
 
 }  // namespace
 
-glm::vec3 pixel_rgb(const Image& image, int x, int y) {
-    const float* p = image.at(x, y);
-    return image.channels >= 3 ? glm::vec3(p[0], p[1], p[2]) : glm::vec3(p[0]);
-}
+glm::vec3 pixel_rgb(const Image& image, int x, int y) { return image.rgb(x, y); }
 
 double ssim(const Image& test, const Image& reference, const Image* mask) {
     check_sizes(test, reference, mask);

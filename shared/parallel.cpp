@@ -27,6 +27,7 @@ void ThreadPool::parallel_for(size_t count, const std::function<void(size_t)>& b
     chunk_ = std::max<size_t>(1, chunk);
     active_ = workers_.size();
     error_ = nullptr;
+    error_index_ = 0;
     ++generation_;
     wake_.notify_all();
     done_.wait(lock, [this] { return active_ == 0; });
@@ -45,11 +46,18 @@ void ThreadPool::worker_loop() {
             const size_t begin = next_, end = std::min(count_, next_ + chunk_);
             next_ = end;
             lock.unlock();
+            size_t i = begin;
             try {
-                for (size_t i = begin; i < end; ++i) (*body_)(i);
+                for (; i < end; ++i) (*body_)(i);
             } catch (...) {
+                // Chunks are handed out in index order, so every index below i is in a chunk
+                // already handed out and runs to its end: keeping the lowest index's exception
+                // rethrows what a serial loop would, whichever thread threw first.
                 lock.lock();
-                if (!error_) error_ = std::current_exception();
+                if (!error_ || i < error_index_) {
+                    error_ = std::current_exception();
+                    error_index_ = i;
+                }
                 next_ = count_;
                 lock.unlock();
             }

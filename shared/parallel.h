@@ -22,7 +22,9 @@ public:
     int size() const { return int(workers_.size()); }
 
     // Runs body(i) for i in [0, count) on the workers, in chunks; returns when all are done.
-    // The calling thread only waits. Exceptions from body are rethrown (the first one).
+    // The calling thread only waits. If bodies throw, no further chunks start and the exception
+    // of the lowest index that threw is rethrown: the one a serial loop would throw, on any
+    // thread count and interleaving (where whether body(i) throws depends on i alone).
     void parallel_for(size_t count, const std::function<void(size_t)>& body, size_t chunk = 1);
 
 private:
@@ -36,6 +38,7 @@ private:
     uint64_t generation_ = 0;
     bool stop_ = false;
     std::exception_ptr error_;
+    size_t error_index_ = 0;  // the index error_ came from
 };
 
 }  // namespace ag

@@ -135,7 +135,7 @@ ag_cli_test(render_script_directory 1 "scenes: a script must be a regular file" 
             scenes/cornell.json --script scenes -o ${CMAKE_CURRENT_BINARY_DIR}/never_written.exr)
 ag_cli_test(render_script_dev_zero 1 "/dev/zero: a script must be a regular file" render
             scenes/cornell.json --script /dev/zero -o ${CMAKE_CURRENT_BINARY_DIR}/never_written.exr)
-set_tests_properties(cli.render_script_dev_zero PROPERTIES TIMEOUT 20)
+ag_test_timeout(cli.render_script_dev_zero 20)
 # --set is checked against the scene as loading checks it: the photon budget, the light samples
 # and the lightmap atlas (before anything is allocated), exit 2 naming --set, the setting and the
 # limit.
@@ -233,12 +233,16 @@ if(AG_PYTHON)
 else()
   set(ag_robust_python python3)
 endif()
+# Each run's own limit (running time): the sweep's default of 120 s, scaled like the CTest limits.
+math(EXPR ag_robust_run_limit "120 * ${AG_TEST_TIME_SCALE}")
 foreach(mode ci methods)
   add_test(NAME cli.robustness_sweep_${mode}
            COMMAND ${ag_robust_python} ${PROJECT_SOURCE_DIR}/tools/robustness_sweep.py
-                   --afterglow ${AG_BIN} --mode ${mode} -j 2
+                   --afterglow ${AG_BIN} --mode ${mode} -j 2 --timeout ${ag_robust_run_limit}
            WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
   set_tests_properties(cli.robustness_sweep_${mode} PROPERTIES SKIP_RETURN_CODE 77 PROCESSORS 2)
 endforeach()
-set_tests_properties(cli.robustness_sweep_ci PROPERTIES LABELS gl TIMEOUT 900)
-set_tests_properties(cli.robustness_sweep_methods PROPERTIES LABELS slow TIMEOUT 1800)
+set_tests_properties(cli.robustness_sweep_ci PROPERTIES LABELS gl)
+set_tests_properties(cli.robustness_sweep_methods PROPERTIES LABELS slow)
+ag_test_timeout(cli.robustness_sweep_ci 900)
+ag_test_timeout(cli.robustness_sweep_methods 1800)

@@ -335,6 +335,69 @@ end
 """
 
 
+# Every edit in `bad` must be refused: an edit accepted raises an error, which the frame loop
+# reports as "edit skipped" and the sweep counts as a failure. Then one valid edit, so the frames
+# after the refusals still move the cube.
+SCRIPT_REFUSED_EDITS = """-- positions, colours, albedos, cameras and rotations at 1e30, NaN and infinity
+local nan, inf = 0 / 0, math.huge
+local bad = {
+    function(s) s:object("cube"):set_position(1e30, -1e30, 1e30) end,
+    function(s) s:object("cube"):set_position(-1e30, 0.15, 0.3) end,
+    function(s) s:object("cube"):set_position(nan, 0.15, 0.3) end,
+    function(s) s:object("cube"):set_position(0.3, inf, 0.3) end,
+    function(s) s:object("cube"):set_position(-1e7, 1e7, -1e7) end,
+    function(s) s:object("cube"):rotate(0, 0, 0, 30) end,
+    function(s) s:object("cube"):rotate(nan, 1, 0, 30) end,
+    function(s) s:object("cube"):rotate(0, 1, 0, inf) end,
+    function(s) s:light("lamp"):set_position(1e30, 0.5, 0.5) end,
+    function(s) s:light("lamp"):set_position(0.5, nan, 0.5) end,
+    function(s) s:light("lamp"):set_color(nan, 1, 1) end,
+    function(s) s:light("lamp"):set_color(-1, 1, 1) end,
+    function(s) s:light("lamp"):set_color(1e30, 1, 1) end,
+    function(s) s:light("lamp"):set_color(inf, 1, 1) end,
+    function(s) s:object("sphere"):set_albedo(nan, 0.5, 0.5) end,
+    function(s) s:object("cube"):set_albedo(1.5, 0.5, 0.5) end,
+    function(s) s:object("cube"):set_albedo(-0.5, 0.5, 0.5) end,
+    function(s) s:set_camera({eye = {nan, 0.5, -1.44}}) end,
+    function(s) s:set_camera({eye = {0.5, 0.5, -1e30}}) end,
+    function(s) s:set_camera({fov_y = nan}) end,
+    function(s) s:set_camera({fov_y = 1e30}) end,
+    function(s) s:set_camera({eye = {0.5, 0.5, 0.5}, target = {0.5, 0.5, 0.5}}) end,
+}
+function on_frame(scene, frame, time)
+    if frame == 1 then
+        for i, f in ipairs(bad) do
+            if pcall(f, scene) then error("edit " .. i .. " was accepted") end
+        end
+        scene:object("cube"):set_position(0.4, 0.15, 0.35)
+    end
+end
+"""
+
+# A unit cube for the mesh-scale cases (its `scale` flattens, mirrors or shrinks it).
+CUBE_OBJ = """v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 3 4 8 7
+f 2 3 7 6
+f 1 5 8 4
+"""
+
+
+def box_mesh(scale):
+    return edit(lambda sc: sc["objects"].append(
+        {"name": "box2", "material": "white", "mesh": "cube.obj", "scale": scale,
+         "transform": {"translate": [0.5, 0.4, 0.5]}}))
+
+
 # One floor triangle 10^7 across (the world-size limit measures its reach from the origin: 5*10^6
 # per corner) and one of side 10^-5 above the room's floor: every size relative to the scene's
 # extent (texel size, radii, tolerances) meets a triangle 10^12 times smaller.
@@ -376,7 +439,7 @@ def media_scene(sigma_s, sigma_a, light="point"):
 
 class Case:
     def __init__(self, name, scene, why, files=None, script=None, runs=None, full_only=False,
-                 refuse=None, ci=None, timeout=None, black=False, known=None):
+                 refuse=None, ci=None, timeout=None, black=False, known=None, size=None):
         self.name, self.scene, self.why = name, scene, why
         self.files = files or {}          # extra files beside the scene: name -> text
         self.script = script              # Lua source, written as NAME.lua and named by the scene
@@ -387,6 +450,7 @@ class Case:
         self.timeout = timeout            # seconds per run instead of --timeout
         self.black = black                # every image must be 0 exactly: no light reaches them
         self.known = known or {}          # run -> a known failure, reported but not counted
+        self.size = size                  # --size WxH instead of SIZE (not with black=True)
 
 
 def cases():
@@ -735,6 +799,46 @@ def cases():
         add(name, edit(settings(**{k.replace(".", "__"): v for k, v in kv.items()})),
             "settings at the ends of their ranges: " + ", ".join(
                 "%s=%s" % (k, json.dumps(v)) for k, v in kv.items()), runs=runs_)
+    # Session 15: the input classes the sweep missed.
+    add("size_1x1", cornell(), "--size 1x1: one pixel through every renderer", size="1x1")
+    add("size_16384x1", cornell(), "--size 16384x1: the widest image, one row",
+        size="16384x1")
+    add("albedo_denormal", edit(lambda sc: (
+        sc["materials"]["white"].update(albedo=1e-320),
+        sc["materials"]["cube"].update(albedo=-0.0))),
+        "albedo 1e-320 (a double denormal, 0 as a float) and -0.0")
+    add("mesh_flattened", box_mesh([0.2, 1e-30, 0.2]),
+        "a cube mesh scaled flat: its sides dropped (warned), top and bottom coincident and "
+        "facing apart", files={"cube.obj": CUBE_OBJ})
+    add("mesh_mirrored", box_mesh(-0.2), "a cube mesh scaled by -0.2 (mirrored, winding fixed)",
+        files={"cube.obj": CUBE_OBJ})
+    add("only_cube", edit(lambda sc: sc.update(
+        objects=[o for o in sc["objects"] if o["name"] == "cube"])),
+        "one cube and the lamp in the void: most rays and photons escape")
+    add("script_refused_edits", edit(lambda sc: sc.update(script="script_refused_edits.lua")),
+        "a script's edits at 1e30, NaN and infinity, a zero axis, a camera with eye = target: "
+        "each refused (pcall), then one valid move", script=SCRIPT_REFUSED_EDITS,
+        ci=["render_iim"])
+    for name, fn, why, pattern in [
+        ("albedo_nan_refused",
+         lambda sc: sc["materials"]["white"].update(albedo=float("nan")),
+         "albedo NaN (written as the bare NaN JSON does not have)", r"line \d+, column \d+"),
+        ("intensity_inf_refused", lambda sc: sc["lights"][0].update(intensity=float("inf")),
+         "intensity Infinity", r"line \d+, column \d+"),
+        ("intensity_negative_refused", lambda sc: sc["lights"][0].update(intensity=-1),
+         "a negative intensity", r"/lights/0/intensity: expected a number in \[0, 1e\+15\]"),
+        ("quad_zero_area_refused",
+         lambda sc: sc["lights"].__setitem__(0, quad_light(0.4, 0.999, 2.0, size=0.0)),
+         "a quad light of zero area", r"/lights/0/corners: expected a parallelogram of non-zero"),
+        ("no_objects_refused", lambda sc: sc.update(objects=[]), "a scene without objects",
+         r"/objects: expected at least one object"),
+    ]:
+        add(name, edit(fn), why + " is refused", refuse=pattern)
+    for name, scale, pattern in [("mesh_scale_0_refused", 0, r"expected non-zero scale"),
+                                 ("mesh_scale_1e-30_refused", 1e-30,
+                                  r"makes all 12 triangles degenerate")]:
+        add(name, box_mesh(scale), "a mesh scaled by %g is refused" % scale, refuse=pattern,
+            files={"cube.obj": CUBE_OBJ})
     # The same extremes in the white furnace: nothing absorbed, so every cap is reached.
     add("furnace_caps", chain_scene(furnace(1.0), settings(
         photons__max_bounces=1000, gpu_pm__bounces=16, vpl__source="random_walk",
@@ -954,6 +1058,9 @@ def run_compare(afterglow, args):
 
 def run_one(afterglow, folder, case, run_name, args, suffixes, timeout):
     scene_path = os.path.join(folder, case.name + ".json")
+    if case.size:
+        args = [case.size if i > 0 and args[i - 1] == "--size" else a
+                for i, a in enumerate(args)]
     out = os.path.join(folder, "%s.%s.exr" % (case.name, run_name))
     if args[0] == "converge":  # a CSV of per-frame errors instead of images
         out = out[:-len(".exr")] + ".csv"

@@ -313,7 +313,8 @@ TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
     // The frames take the work over once it is done, however long the worker takes to get there.
     int taken_over_at = -1;
     test::RunningTime running;  // a hang guard: 60 s
-    for (int f = 0; taken_over_at < 0 && running.tick() < std::chrono::seconds(60); ++f)
+    for (int f = 0;
+         taken_over_at < 0 && running.tick() < std::chrono::seconds(60) * test::kTimeScale; ++f)
         if (loop.step().hand_overs > 0) taken_over_at = f;
     EXPECT_GE(taken_over_at, 0);
 

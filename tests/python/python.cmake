@@ -2,14 +2,14 @@
 # Under the sanitizers the module is instrumented, so Python (not built with ASan) gets the ASan
 # and UBSan runtimes preloaded; leak checking is off for it (CPython leaves its own allocations at
 # exit). The docs example runs the same code as the bindings test, slowly there: normal build only.
-set(python_env "")
+set(python_env "AG_TEST_TIME_SCALE=${AG_TEST_TIME_SCALE}")
 if(AG_SANITIZE)
   execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=libasan.so
                   OUTPUT_VARIABLE asan_runtime OUTPUT_STRIP_TRAILING_WHITESPACE)
   execute_process(COMMAND ${CMAKE_CXX_COMPILER} -print-file-name=libubsan.so
                   OUTPUT_VARIABLE ubsan_runtime OUTPUT_STRIP_TRAILING_WHITESPACE)
-  set(python_env "LD_PRELOAD=${asan_runtime} ${ubsan_runtime}"
-                 "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1")
+  list(APPEND python_env "LD_PRELOAD=${asan_runtime} ${ubsan_runtime}"
+       "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1")
 endif()
 foreach(name bindings sweep docs_example)
   if(AG_SANITIZE AND name STREQUAL "docs_example")

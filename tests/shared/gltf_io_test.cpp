@@ -534,6 +534,45 @@ TEST_F(GltfTest, BadInputIsAnErrorNamingTheFile) {
     EXPECT_THROW(load(empty), InputError);  // no meshes
 }
 
+// Files a glTF names are read only if they are regular files: an image `uri` naming a folder
+// made tinygltf's reader allocate 2^63 - 1 bytes (std::bad_alloc escaped the load), one naming
+// /dev/zero made OpenImageIO read forever; a buffer naming a device is an error naming it.
+// (Before the fix the folder image gave std::bad_alloc, not a warning.)
+TEST_F(GltfTest, ImagesAndBuffersThatAreNotRegularFilesAreNotRead) {
+    for (const std::string& uri : {path("a_folder"), std::string("/dev/zero")}) {
+        std::filesystem::create_directories(path("a_folder"));
+        GltfDoc doc;
+        const int mat = doc.material(
+            {{"pbrMetallicRoughness",
+              {{"baseColorFactor", {0.5, 1, 1, 1}}, {"baseColorTexture", {{"index", 0}}}}}});
+        doc.j["textures"] = {{{"source", 0}}};
+        doc.j["images"] = {{{"uri", uri}}};
+        doc.node({{"mesh", doc.mesh(mat)}});
+        std::string warnings;
+        test::within_deadline(std::chrono::seconds(20), [&] {
+            const Model m = load(doc, &warnings);
+            ASSERT_EQ(m.parts.size(), 1u);
+            EXPECT_FALSE(m.parts[0].material.albedo_map);
+        });
+        EXPECT_NE(warnings.find(uri + ": cannot read image: expected a regular file"),
+                  std::string::npos)
+            << warnings;
+    }
+    GltfDoc doc;
+    doc.node({{"mesh", doc.mesh(-1)}});
+    Json j = nlohmann::json::parse(doc.gltf());
+    j["buffers"][0]["uri"] = "/dev/zero";
+    try {
+        load_gltf(write("device_buffer.gltf", j.dump()));
+        FAIL() << "expected an InputError";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("device_buffer.gltf: cannot read glTF:"),
+                  std::string::npos)
+            << e.what();
+        EXPECT_NE(std::string(e.what()).find("/dev/zero"), std::string::npos) << e.what();
+    }
+}
+
 TEST(ExternalScenes, KhronosBoxLoadsThroughItsScene) {
     const std::filesystem::path file =
         std::filesystem::path(AG_SOURCE_DIR) / "scenes" / "box_gltf.json";

@@ -277,6 +277,16 @@ TEST_F(MeshIo, IndentedObjLinesAreCheckedAsOpenMeshReadsThem) {
               std::string::npos);
 }
 
+// What a file held is quoted in errors: control characters (here a terminal escape sequence and
+// a bell) are shown as '?', not sent to the terminal as they were.
+TEST_F(MeshIo, ControlCharactersInQuotedBytesAreShownAsQuestionMarks) {
+    const std::string err =
+        load_error(write("escape.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 \x1b[2J\a\n"));
+    EXPECT_NE(err.find("escape.obj: line 4: face refers to vertex \"?[2J?\""), std::string::npos)
+        << err;
+    EXPECT_EQ(err.find('\x1b'), std::string::npos);
+}
+
 TEST_F(MeshIo, TruncatedStlAndObjAreRejected) {
     const Mesh cube = make_box(glm::vec3(1.0f));
     for (const char* ext : {".stl", ".obj"}) {

@@ -9,7 +9,8 @@ function(ag_viewer_test name)
            COMMAND ${CMAKE_CURRENT_LIST_DIR}/viewer_test.sh ${name} $<TARGET_FILE:afterglow>
                    $<TARGET_FILE:viewer_check> ${PROJECT_BINARY_DIR}/viewer_test/${name}
            WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
-  set_tests_properties(viewer.${name} PROPERTIES LABELS gl SKIP_RETURN_CODE 77 TIMEOUT 120)
+  set_tests_properties(viewer.${name} PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+  ag_test_timeout(viewer.${name} 120)
 endfunction()
 
 # cornell_move_cube.lua through the viewer: screenshots, not blank, the cube's shadow moved.

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "shared/image.h"
 #include "shared/settings.h"
 
 namespace ag {
@@ -65,7 +66,7 @@ Option frame_ms_option();
 // --set KEY=VALUE, repeatable: any scene setting (visit_settings keys, "section.key").
 Option settings_option();
 
-inline constexpr int kMaxImageSize = 16384;
+inline constexpr int kMaxImageSize = kMaxImageSide;  // what read_image reads back
 
 struct Command {
     std::string name;
