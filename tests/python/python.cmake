@@ -11,8 +11,8 @@ if(AG_SANITIZE)
   list(APPEND python_env "LD_PRELOAD=${asan_runtime} ${ubsan_runtime}"
        "ASAN_OPTIONS=detect_leaks=0:abort_on_error=1")
 endif()
-foreach(name bindings sweep docs_example)
-  if(AG_SANITIZE AND name STREQUAL "docs_example")
+foreach(name bindings sweep docs_example plot_convergence)
+  if(AG_SANITIZE AND name MATCHES "^(docs_example|plot_convergence)$")
     continue()
   endif()
   add_test(NAME python.${name}
