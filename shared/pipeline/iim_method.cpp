@@ -1,7 +1,9 @@
 #include "shared/pipeline/iim_method.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <string>
 
 #include "gpu/gl.h"
 #include "shared/scene_edit.h"
@@ -70,38 +72,25 @@ void IimMethod::set_backend(GatherBackend backend) {
 }
 
 void IimMethod::choose_backend() {
-    // A short measurement on up to 32 texels, each backend warmed up once. Only the gatherers
-    // run: the IIM itself is not touched.
-    std::vector<int> sample;
-    for (size_t t = 0; t < scene_.atlas.texels.size() && sample.size() < 32; ++t)
-        sample.push_back(int(t));
-    if (sample.empty()) {
-        backend_ = GatherBackend::gl;
-        return;
-    }
-    auto time_us = [&](GatherBackend b) {
-        const auto t = std::chrono::steady_clock::now();
-        gatherer(b).gather(sample);
-        gpu::gl::Finish();
-        const double ms =
-            std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t).count();
-        return 1000.0 * ms / double(sample.size());
-    };
-    // Each backend timed twice, in turn, and its faster time kept: one timing taken while the
-    // machine was busy elsewhere once picked the GL gather on llvmpipe for a whole run (2.2 ms a
-    // texel against the CPU's 0.25: a `full` baseline of 1.4 s a frame in `tools/run` under load).
-    // Traced, not re-read: the timed gather would find the warm-up's rays in the ray cache.
-    cpu_gather_.use_ray_cache(false);
-    for (GatherBackend b : {GatherBackend::gl, GatherBackend::cpu}) {  // warmed up once
-        gatherer(b).gather(sample);
-        gpu::gl::Finish();
-    }
-    gl_us_ = time_us(GatherBackend::gl);
-    cpu_us_ = time_us(GatherBackend::cpu);
-    gl_us_ = std::min(gl_us_, time_us(GatherBackend::gl));
-    cpu_us_ = std::min(cpu_us_, time_us(GatherBackend::cpu));
-    cpu_gather_.use_ray_cache(true);
-    backend_ = cpu_us_ < gl_us_ ? GatherBackend::cpu : GatherBackend::gl;
+    // By the GL renderer, not by timing. Until session 16 both backends were timed on 32 texels
+    // at load and the faster kept: on a busy machine the timing could flip, so the same scene and
+    // settings gave different images from one run to the next (a `full` baseline in `tools/run`
+    // gathered by GL on llvmpipe at 2.2 ms a texel against the CPU's 0.25, and python.bindings'
+    // comparison of the CLI with the module failed once under the sanitizers). A software
+    // rasteriser (Mesa's llvmpipe, softpipe or swrast: OSMesa, or EGL without a GPU) gathers a
+    // texel 10-60x slower than the CPU rays on this machine (`afterglow bench gather`); a GPU
+    // rasterises the hemi-planes in parallel.
+    const GLubyte* r = gpu::gl::GetString(GL_RENDERER);
+    const std::string renderer = r ? reinterpret_cast<const char*>(r) : "";
+    std::string lower = renderer;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const bool software = lower.find("llvmpipe") != std::string::npos ||
+                          lower.find("softpipe") != std::string::npos ||
+                          lower.find("swrast") != std::string::npos ||
+                          lower.find("software") != std::string::npos;
+    backend_ = software ? GatherBackend::cpu : GatherBackend::gl;
+    backend_reason_ = "automatic: the GL renderer '" + renderer + "' is " +
+                      (software ? "a software rasteriser" : "not a software rasteriser");
 }
 
 void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {

@@ -5,6 +5,7 @@
 
 #include <chrono>
 #include <memory>
+#include <string>
 #include <vector>
 
 #include "cpu/cpu_gather.h"
@@ -50,11 +51,10 @@ public:
     GLuint texture() const { return texture_.id(); }
     Gatherer& gatherer(GatherBackend backend);
     GatherBackend backend() const { return backend_; }
-    // Switches the backend (gl or cpu; `automatic` is only measured at construction).
+    // Switches the backend (gl or cpu; `automatic` is only resolved at construction).
     void set_backend(GatherBackend backend);
-    // Per-texel gather cost measured when choosing the backend (µs; 0 if not measured).
-    double gl_gather_us() const { return gl_us_; }
-    double cpu_gather_us() const { return cpu_us_; }
+    // Why `automatic` chose the backend it did ("" when the settings named one).
+    const std::string& backend_reason() const { return backend_reason_; }
 
 private:
     void choose_backend();
@@ -87,7 +87,7 @@ private:
     cpu::CpuGather cpu_gather_;
     SpecularRoutedGather routed_gather_{gl_gather_, cpu_gather_};
     GatherBackend backend_ = GatherBackend::gl;
-    double gl_us_ = 0.0, cpu_us_ = 0.0;
+    std::string backend_reason_;
     PipelineMode mode_ = PipelineMode::selective;  // of the last update()
     uint64_t seen_sequence_ = 0;                   // scene changes looked at
     std::vector<Bounds> placed_;                   // per object: world bounds when last seen

@@ -390,14 +390,9 @@ void Pipeline::set_gather_backend(GatherBackend backend) {
     if (IimMethod* m = iim_method()) m->set_backend(backend);
 }
 
-double Pipeline::gl_gather_us() const {
+std::string Pipeline::gather_backend_reason() const {
     const IimMethod* m = iim_method();
-    return m ? m->gl_gather_us() : 0.0;
-}
-
-double Pipeline::cpu_gather_us() const {
-    const IimMethod* m = iim_method();
-    return m ? m->cpu_gather_us() : 0.0;
+    return m ? m->backend_reason() : std::string();
 }
 
 const std::vector<char>& Pipeline::texel_pending() const {

@@ -100,8 +100,7 @@ public:
     // Gather backend of the IIM method (gl when there is none).
     GatherBackend gather_backend() const;
     void set_gather_backend(GatherBackend backend);
-    double gl_gather_us() const;
-    double cpu_gather_us() const;
+    std::string gather_backend_reason() const;  // why `automatic` chose it; "" otherwise
 
     // For the viewer's diagnostic views; read them between frames.
     const cpu::PhotonSimulation& photons() {

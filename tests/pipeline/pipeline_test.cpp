@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cctype>
 #include <chrono>
 #include <condition_variable>
 #include <functional>
@@ -66,6 +67,30 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     for (size_t a = 0; a < after.aov.size(); ++a)
         EXPECT_EQ(before.aov[a].pixels, after.aov[a].pixels) << kFrameTermNames[a];
     EXPECT_EQ(before.frame.pixels, after.frame.pixels);
+}
+
+// `gather.backend = automatic` is resolved by the GL renderer, not by timing both backends: the
+// same scene and settings must give the same image however busy the machine is. Fails if the
+// choice is timed (no reason is given then) or names another renderer than the context's.
+TEST_F(PipelineTest, TheAutomaticGatherBackendFollowsTheRendererNotATiming) {
+    Scene scene = cornell();
+    scene.settings.gather.backend = GatherBackend::automatic;
+    const std::string renderer = context_->renderer();
+    std::string lower = renderer;
+    for (char& c : lower) c = char(std::tolower(static_cast<unsigned char>(c)));
+    const bool software = lower.find("llvmpipe") != std::string::npos ||
+                          lower.find("softpipe") != std::string::npos ||
+                          lower.find("swrast") != std::string::npos;
+    for (int run = 0; run < 2; ++run) {
+        Pipeline pipeline(scene, PipelineOptions{16, 16});
+        EXPECT_EQ(pipeline.gather_backend(), software ? GatherBackend::cpu : GatherBackend::gl);
+        EXPECT_NE(pipeline.gather_backend_reason().find("'" + renderer + "'"), std::string::npos)
+            << pipeline.gather_backend_reason();
+    }
+    scene.settings.gather.backend = GatherBackend::gl;  // named: taken as it is, no reason
+    Pipeline named(scene, PipelineOptions{16, 16});
+    EXPECT_EQ(named.gather_backend(), GatherBackend::gl);
+    EXPECT_EQ(named.gather_backend_reason(), "");
 }
 
 // A settled pipeline accumulates the frame: nothing it shows changes any more (the IIM's and the

@@ -83,11 +83,9 @@ int run_render(const Args& args) {
     auto context = gpu::make_gl_context(backend);
     Pipeline pipeline(scene, PipelineOptions{width * supersample, height * supersample, threads});
     if (scene.settings.gather.backend == GatherBackend::automatic && pipeline.iim_method())
-        std::fprintf(
-            stderr,
-            "afterglow render: gather backend %s (measured %.1f us/texel GL, %.1f us/texel CPU)\n",
-            kGatherBackendNames[size_t(pipeline.gather_backend())], pipeline.gl_gather_us(),
-            pipeline.cpu_gather_us());
+        std::fprintf(stderr, "afterglow render: gather backend %s (%s)\n",
+                     kGatherBackendNames[size_t(pipeline.gather_backend())],
+                     pipeline.gather_backend_reason().c_str());
     Progress progress("render", frames, !args.has("quiet"));
     double total_ms = 0.0;
     const PipelineStats last =

@@ -813,9 +813,8 @@ int Viewer::run() {
     initial_ = snapshot(scene_);
     if (scene_.settings.gather.backend == GatherBackend::automatic)
         state_.message(std::string("gather backend ") +
-                       kGatherBackendNames[size_t(pipeline_->gather_backend())] + " (measured " +
-                       std::to_string(int(pipeline_->gl_gather_us())) + " us/texel GL, " +
-                       std::to_string(int(pipeline_->cpu_gather_us())) + " us/texel CPU)");
+                       kGatherBackendNames[size_t(pipeline_->gather_backend())] + " (" +
+                       pipeline_->gather_backend_reason() + ")");
     if (script_) {
         state_.script.path = script_path_;
         state_.script.playing = true;
