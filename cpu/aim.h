@@ -6,8 +6,8 @@
 // in order of Δf / area, above a threshold, under a per-frame budget. With aim.exact_direct the
 // direct part comes from shadow rays over each texel and the kNN estimate counts bounced hits only.
 // Texel parts inside or under another object (aim.covered_texels) hold no photons: they are left
-// out of the flux scale and of the kNN disc, and wholly covered texels take their neighbours'
-// value.
+// out of the flux scale (and with aim.covered_disc out of the kNN disc), and wholly covered texels
+// take their neighbours' value.
 #pragma once
 
 #include <cstdint>
