@@ -142,15 +142,15 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
         [&](size_t i) { texture_mean_[i] = texel_texture_mean(scene_, scene_.atlas.texels[i]); },
         256);
     disc_on_.assign(scene_.atlas.texels.size(), ~uint64_t(0));
-    if (scene_.settings.aim.exact_direct || scene_.settings.aim.covered_texels)
-        rays_ = std::make_unique<RayTracer>(scene_);
+    if (scene_.settings.aim.exact_direct) rays_ = std::make_unique<RayTracer>(scene_);
+    // The covered cells are tested at the first rebuild (sync_covered), not here: a pipeline whose
+    // indirect method reads no photon maps never builds an AIM and pays nothing for them.
     if (scene_.settings.aim.covered_texels) {
         covered_.assign(n, 0);
         open_ = coverage_;
         open_fraction_.assign(scene_.atlas.texels.size(), 1.0f);
         open_record_.assign(scene_.atlas.texels.size(), 1);
         covered_changed_.assign(scene_.surfaces.size(), 0);
-        sync_covered();
     }
 }
 
@@ -260,7 +260,10 @@ void Aim::sync_covered() {
         covered_bounds_[o] = now;
     }
     if (!first && boxes.empty()) return;
-    rays_->update(scene_);
+    if (!rays_)
+        rays_ = std::make_unique<RayTracer>(scene_);
+    else
+        rays_->update(scene_);
     // A cell's state is its ray's first hit: it can change only where the ray crosses a moved
     // object's old or new bounds, or where the cell itself moved.
     const size_t charts = scene_.atlas.charts.size();

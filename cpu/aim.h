@@ -71,7 +71,8 @@ public:
         uint64_t on = ~uint64_t(0);    // which of the disc's sample points count (bit i: point i)
     };
     // aim.covered_texels: per texel record, the share of its footprint (its parts on the chart,
-    // in kCoverageSubdivision² cells) that is not inside or under another object. Empty when off.
+    // in kCoverageSubdivision² cells) that is not inside or under another object, as of the last
+    // rebuild (1 before the first). Empty when off.
     const std::vector<float>& open_fraction() const { return open_fraction_; }
 
 private:
