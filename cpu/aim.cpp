@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <array>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -13,6 +14,7 @@
 #include "cpu/reference/reference.h"
 #include "cpu/sampling.h"
 #include "shared/charts.h"
+#include "shared/lightmap_sample.h"
 
 namespace ag::cpu {
 
@@ -28,6 +30,35 @@ constexpr int kDiscSamples = 64;
 // The least disc fraction an estimate is divided by (a quarter disc in a right-angled corner is
 // 0.25; sharper corners of a chart must not blow the estimate up).
 constexpr double kMinDiscFraction = 0.125;
+// A texel part is covered when the first face a ray along its normal meets is a back face (it lies
+// inside a solid: the floor under a box resting on it) or lies within this many texels (under an
+// open surface lying on it, or a solid a hair above it). Photons cannot land there.
+constexpr float kCoveredGap = 0.01f;
+
+double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
+
+// Whether the ray from `origin` along unit `dir` crosses box `b` (expanded by `pad`) at t ≥ 0.
+bool ray_crosses(const glm::vec3& origin, const glm::vec3& dir, const Bounds& b, float pad) {
+    float t0 = 0.0f, t1 = std::numeric_limits<float>::infinity();
+    for (int a = 0; a < 3; ++a) {
+        const float lo = b.min[a] - pad, hi = b.max[a] + pad;
+        if (std::abs(dir[a]) < 1e-12f) {
+            if (origin[a] < lo || origin[a] > hi) return false;
+            continue;
+        }
+        const float ta = (lo - origin[a]) / dir[a], tb = (hi - origin[a]) / dir[a];
+        t0 = std::max(t0, std::min(ta, tb));
+        t1 = std::min(t1, std::max(ta, tb));
+        if (t0 > t1) return false;
+    }
+    return true;
+}
+
+Bounds object_world_bounds(const Object& o) {
+    Bounds b;
+    for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+    return b;
+}
 
 const std::array<glm::vec2, kDiscSamples>& disc_pattern() {
     static const std::array<glm::vec2, kDiscSamples> pattern = [] {
@@ -89,7 +120,8 @@ glm::vec3 texel_texture_mean(const Scene& scene, const TexelRecord& t) {
 }  // namespace
 
 Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
-    if (scene_.settings.aim.boundary_correction) coverage_ = texel_coverage_masks(scene_);
+    if (scene_.settings.aim.boundary_correction || scene_.settings.aim.covered_texels)
+        coverage_ = texel_coverage_masks(scene_);
     surface_texels_.resize(scene_.surfaces.size());
     for (int i = 0; i < int(scene_.atlas.texels.size()); ++i)
         surface_texels_[size_t(scene_.atlas.texels[size_t(i)].surface)].push_back(i);
@@ -109,7 +141,142 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
         texture_mean_.size(),
         [&](size_t i) { texture_mean_[i] = texel_texture_mean(scene_, scene_.atlas.texels[i]); },
         256);
+    disc_on_.assign(scene_.atlas.texels.size(), ~uint64_t(0));
     if (scene_.settings.aim.exact_direct) rays_ = std::make_unique<RayTracer>(scene_);
+    // The covered cells are tested at the first rebuild (sync_covered), not here: a pipeline whose
+    // indirect method reads no photon maps never builds an AIM and pays nothing for them.
+    if (scene_.settings.aim.covered_texels) {
+        covered_.assign(n, 0);
+        open_ = coverage_;
+        open_fraction_.assign(scene_.atlas.texels.size(), 1.0f);
+        open_record_.assign(scene_.atlas.texels.size(), 1);
+        covered_changed_.assign(scene_.surfaces.size(), 0);
+    }
+}
+
+bool Aim::test_covered(int chart_id, const std::vector<Bounds>* boxes) {
+    const LightmapAtlas& atlas = scene_.atlas;
+    const Chart& chart = atlas.charts[size_t(chart_id)];
+    const Object& object = scene_.objects[size_t(chart.object)];
+    const Mesh& mesh = object.mesh;
+    const std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(chart.object)];
+    constexpr int n = kCoverageSubdivision;
+    const float gap = kCoveredGap * chart.texel_size;
+    const float pad = gap + 2.0f * rays_->epsilon();
+    // Per texel of the chart's rectangle: cells tested (the first triangle holding a cell's point
+    // places it, as texel_coverage_masks does), and covered among them.
+    const size_t w = size_t(chart.width);
+    std::vector<uint16_t> done(w * size_t(chart.height), 0), cover(done.size(), 0),
+        tested(done.size(), 0);
+    for (int tri : chart.triangles) {
+        const glm::dvec2 a(uvs[3 * size_t(tri)]), b(uvs[3 * size_t(tri) + 1]),
+            c(uvs[3 * size_t(tri) + 2]);
+        const double det = cross2(b - a, c - a);
+        if (std::abs(det) < 1e-12) continue;
+        const glm::uvec3 f = mesh.triangles[size_t(tri)];
+        const glm::vec3 p0 = mesh.positions[f.x], p1 = mesh.positions[f.y],
+                        p2 = mesh.positions[f.z];
+        const glm::vec3 face = glm::cross(p1 - p0, p2 - p0);
+        if (glm::dot(face, face) <= 0.0f) continue;
+        const glm::vec3 normal = glm::normalize(object.transform.apply_vector(face));
+        const glm::dvec2 lo = glm::min(glm::min(a, b), c), hi = glm::max(glm::max(a, b), c);
+        const int x0 = std::max(chart.x, int(std::floor(lo.x))),
+                  x1 = std::min(chart.x + chart.width - 1, int(std::floor(hi.x)));
+        const int y0 = std::max(chart.y, int(std::floor(lo.y))),
+                  y1 = std::min(chart.y + chart.height - 1, int(std::floor(hi.y)));
+        for (int y = y0; y <= y1; ++y)
+            for (int x = x0; x <= x1; ++x) {
+                const size_t local = size_t(y - chart.y) * w + size_t(x - chart.x);
+                for (int j = 0; j < n; ++j)
+                    for (int i = 0; i < n; ++i) {
+                        const uint16_t bit = uint16_t(1u << (n * j + i));
+                        if (done[local] & bit) continue;
+                        const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
+                        const double u = cross2(q - a, c - a) / det, v = cross2(b - a, q - a) / det;
+                        if (!(u >= 0.0 && v >= 0.0 && u + v <= 1.0)) continue;
+                        done[local] = uint16_t(done[local] | bit);
+                        const glm::vec3 p = object.transform.apply_point(p0 + float(u) * (p1 - p0) +
+                                                                         float(v) * (p2 - p0));
+                        const glm::vec3 origin = p + rays_->epsilon() * normal;
+                        if (boxes &&
+                            !std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
+                                return ray_crosses(origin, normal, bx, pad);
+                            }))
+                            continue;
+                        tested[local] = uint16_t(tested[local] | bit);
+                        const RayHit hit = rays_->intersect({origin, normal, 0.0f, 1e30f});
+                        if (!hit.hit) continue;
+                        // Glass lets photons through: it covers nothing.
+                        if (scene_.objects[size_t(hit.object)].material.type == MaterialType::glass)
+                            continue;
+                        if (glm::dot(hit.normal, normal) > 0.0f || hit.t < gap)
+                            cover[local] = uint16_t(cover[local] | bit);
+                    }
+            }
+    }
+    bool changed = false;
+    for (int y = 0; y < chart.height; ++y)
+        for (int x = 0; x < chart.width; ++x) {
+            const size_t local = size_t(y) * w + size_t(x);
+            if (!tested[local]) continue;
+            const size_t at = size_t(chart.y + y) * size_t(atlas.width) + size_t(chart.x + x);
+            const uint16_t now = uint16_t((covered_[at] & ~tested[local]) | cover[local]);
+            if (now == covered_[at]) continue;
+            changed = true;
+            covered_[at] = now;
+            open_[at] = uint16_t(coverage_[at] & ~now);
+            const int r = atlas.texel_at(chart.x + x, chart.y + y);
+            if (r < 0) continue;
+            const int on = std::popcount(unsigned(coverage_[at]));
+            open_fraction_[size_t(r)] =
+                on == 0 ? 1.0f : float(std::popcount(unsigned(open_[at]))) / float(on);
+            open_record_[size_t(r)] = on == 0 || open_[at] != 0 ? 1 : 0;
+        }
+    return changed;
+}
+
+void Aim::sync_covered() {
+    if (!scene_.settings.aim.covered_texels) return;
+    const size_t objects = scene_.objects.size();
+    const bool first = covered_transforms_.empty();
+    std::vector<Bounds> boxes;
+    std::vector<char> moved(objects, 0);
+    if (first) {
+        covered_transforms_.resize(objects);
+        covered_bounds_.resize(objects);
+    }
+    for (size_t o = 0; o < objects; ++o) {
+        const Transform& t = scene_.objects[o].transform;
+        if (!first && t.translation == covered_transforms_[o].translation &&
+            t.rotation == covered_transforms_[o].rotation)
+            continue;
+        const Bounds now = object_world_bounds(scene_.objects[o]);
+        if (!first) {
+            boxes.push_back(covered_bounds_[o]);
+            boxes.push_back(now);
+            moved[o] = 1;
+        }
+        covered_transforms_[o] = t;
+        covered_bounds_[o] = now;
+    }
+    if (!first && boxes.empty()) return;
+    if (!rays_)
+        rays_ = std::make_unique<RayTracer>(scene_);
+    else
+        rays_->update(scene_);
+    // A cell's state is its ray's first hit: it can change only where the ray crosses a moved
+    // object's old or new bounds, or where the cell itself moved.
+    const size_t charts = scene_.atlas.charts.size();
+    std::vector<char> changed(charts, 0);
+    pool_.parallel_for(
+        charts,
+        [&](size_t c) {
+            const bool all = first || moved[size_t(scene_.atlas.charts[c].object)];
+            changed[c] = test_covered(int(c), all ? nullptr : &boxes) ? 1 : 0;
+        },
+        1);
+    for (size_t c = 0; c < charts; ++c)
+        if (changed[c]) covered_changed_[size_t(scene_.atlas.charts[c].surface)] = 1;
 }
 
 glm::vec3 Aim::direct_over_texel(int record) const {
@@ -145,6 +312,7 @@ glm::vec3 Aim::direct_over_texel(int record) const {
 }
 
 int Aim::rebuild_surface(PhotonMaps& maps, int surface) {
+    sync_covered();
     return estimate_surface(maps, surface, nullptr);
 }
 
@@ -152,8 +320,11 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     SurfaceHits& s = maps.surface(surface);
     const std::vector<int>& texels = surface_texels_[size_t(surface)];
     const glm::vec3 albedo = albedo_of(surface);
+    const bool exact = scene_.settings.aim.exact_direct;
     // Exact direct light follows the geometry, not only the hits: every texel again.
-    if (rays_) changed = nullptr;
+    if (exact) changed = nullptr;
+    const bool covered = scene_.settings.aim.covered_texels;
+    const bool correct = scene_.settings.aim.boundary_correction;
 
     // The texels to estimate: all of them, or those whose kNN disc of the last build reaches a
     // changed hit. Another texel keeps its nearest hits, and so its estimate, bit for bit: a
@@ -185,10 +356,33 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         for (size_t i = 0; i < texels.size(); ++i)
             if (reached[i]) todo.push_back(int(i));
     }
+    // Covered cells changed (an object moved): a texel whose kNN disc now counts other sample
+    // points is estimated again, though its nearest hits are the same.
+    if (changed && covered && correct && scene_.settings.aim.covered_disc &&
+        covered_changed_[size_t(surface)]) {
+        std::vector<char> again(texels.size(), 0);
+        for (int i : todo) again[size_t(i)] = 2;
+        pool_.parallel_for(
+            texels.size(),
+            [&](size_t i) {
+                if (again[i]) return;
+                const int r = texels[i];
+                double r2 = double(reach2_[size_t(r)]);
+                if (r2 <= 0.0) {
+                    const double texel =
+                        scene_.atlas.charts[size_t(scene_.atlas.texels[size_t(r)].chart)]
+                            .texel_size;
+                    r2 = texel * texel / std::numbers::pi;
+                }
+                if (disc_on_surface(r, std::sqrt(r2)).on != disc_on_[size_t(r)]) again[i] = 1;
+            },
+            64);
+        for (size_t i = 0; i < texels.size(); ++i)
+            if (again[i] == 1) todo.push_back(int(i));
+    }
 
     // With exact direct light the kNN estimate is over the hits that bounced at least once (the
     // direct hits' light comes from shadow rays), and it is scaled to their flux alone.
-    const bool exact = rays_ != nullptr;
     if (exact) rays_->update(scene_);
     std::vector<int> used;  // indices into s.hits of the hits the estimate counts
     used.reserve(s.hits.size());
@@ -205,7 +399,6 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         index.build(points);
     }
     const int k = scene_.settings.aim.knn;
-    const bool correct = scene_.settings.aim.boundary_correction;
     const bool linear = correct && scene_.settings.aim.boundary_linear;
     std::vector<glm::vec3> direct(exact ? texels.size() : 0, glm::vec3(0.0f));
 
@@ -239,6 +432,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
             // Only the part of the disc on the surface holds photons: divide by its area.
             DiscPart part;
             if (correct) part = disc_on_surface(texels[i], std::sqrt(r2));
+            disc_on_[size_t(texels[i])] = part.on;
             const double disc = std::numbers::pi * r2;
             glm::dvec3 sum(0.0), bounced(0.0);
             // First moments of the flux about the texel centre, u in units of the radius.
@@ -279,6 +473,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     built_[size_t(surface)] = 1;
     s.changes.clear();
     s.changes_overflow = false;
+    if (covered) covered_changed_[size_t(surface)] = 0;
 
     // Scale the surface's estimates so that their integral, Σ E·area, equals the flux its photon
     // hits actually carry: the AIM conserves energy per surface. Without the boundary correction
@@ -286,9 +481,15 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     // an edge, ¼ in a corner), and this scale lifts the whole surface instead, leaving its edges
     // dark and its middle bright.
     // With exact direct light only the bounced hits' estimate is scaled, to their flux.
+    // Parts inside or under another object receive none of that flux (aim.covered_texels): only
+    // the open part of each texel counts, or the covered texels' estimates (the photons around
+    // them) would lower every visible texel of the surface.
     glm::dvec3 estimated(0.0);
-    for (size_t i = 0; i < texels.size(); ++i)
-        estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(texels[i])].area);
+    for (size_t i = 0; i < texels.size(); ++i) {
+        const int r = texels[i];
+        const double open = covered ? double(open_fraction_[size_t(r)]) : 1.0;
+        estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(r)].area) * open;
+    }
     const glm::dvec3 flux = exact ? used_flux : s.flux;
     for (int c = 0; c < 3; ++c) {
         const double scale = estimated[c] > 0.0 ? flux[c] / estimated[c] : 0.0;
@@ -311,6 +512,17 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         if (!dirty_flag_[a]) {
             dirty_flag_[a] = 1;
             dirty_.push_back(int(a));
+        }
+    }
+    // Wholly covered texels are seen by no one, but the gathers read the lightmap bilinearly beside
+    // the contact: they take the value of their open neighbours on the chart.
+    if (covered) {
+        std::vector<int> shut;
+        for (int r : texels)
+            if (!open_record_[size_t(r)]) shut.push_back(r);
+        if (!shut.empty()) {
+            repair_invalid_texels(scene_.atlas, radiance_, open_record_, shut);
+            repair_invalid_texels(scene_.atlas, irradiance_, open_record_, shut);
         }
     }
     s.delta_f = 0.0;
@@ -365,12 +577,15 @@ Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
                            return atlas.charts[size_t(c)].tile_group == chart.tile_group;
                        });
     if (surface_charts.size() != 1 && !tiled) return part;
+    // With aim.covered_disc the parts inside or under another object are off the surface too.
+    const std::vector<uint16_t>& masks =
+        scene_.settings.aim.covered_texels && scene_.settings.aim.covered_disc ? open_ : coverage_;
     const auto on_surface = [&](const glm::vec3& p) {
-        if (on_chart(atlas, coverage_, t.chart, chart_atlas_position(chart, p))) return true;
+        if (on_chart(atlas, masks, t.chart, chart_atlas_position(chart, p))) return true;
         if (!tiled) return false;
         for (int c : surface_charts)
             if (c != t.chart &&
-                on_chart(atlas, coverage_, c, chart_atlas_position(atlas.charts[size_t(c)], p)))
+                on_chart(atlas, masks, c, chart_atlas_position(atlas.charts[size_t(c)], p)))
                 return true;
         return false;
     };
@@ -381,9 +596,12 @@ Aim::DiscPart Aim::disc_on_surface(int record, double radius) const {
     int on = 0;
     glm::dvec2 first(0.0);
     glm::dmat2 second(0.0);
-    for (const glm::vec2& s : disc_pattern()) {
+    part.on = 0;
+    for (int i = 0; i < kDiscSamples; ++i) {
+        const glm::vec2& s = disc_pattern()[size_t(i)];
         const glm::vec3 p = t.position + float(radius) * (s.x * part.b1 + s.y * part.b2);
         if (!on_surface(p)) continue;
+        part.on |= uint64_t(1) << i;
         ++on;
         const glm::dvec2 u(s);
         first += u;
@@ -423,15 +641,18 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
         double delta;  // Σ |energy| of the net changes (or the gross Δf where not known)
         std::optional<std::vector<glm::vec3>> changed;
     };
+    sync_covered();
     std::vector<Candidate> candidates;
     for (int s = 0; s < int(maps.surface_count()); ++s) {
         SurfaceHits& h = maps.surface(s);
         const bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
-        if (h.delta_f <= 0.0 && !recoloured) continue;
+        // Its covered parts changed (an object moved onto it or away): scale and fill again.
+        const bool recovered = !covered_changed_.empty() && covered_changed_[size_t(s)];
+        if (h.delta_f <= 0.0 && !recoloured && !recovered) continue;
         Candidate c{s, h.delta_f, std::nullopt};
-        if (built_[size_t(s)] && !rays_) {
+        if (built_[size_t(s)] && !scene_.settings.aim.exact_direct) {
             c.changed = net_changes(h, &c.delta);
-            if (c.changed && c.changed->empty() && !recoloured) {
+            if (c.changed && c.changed->empty() && !recoloured && !recovered) {
                 h.changes.clear();
                 h.delta_f = 0.0;
                 h.signed_delta = glm::dvec3(0.0);
@@ -439,7 +660,7 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
             }
         }
         const double flux = std::abs(energy(h.flux));
-        if (!recoloured && flux > 0.0 &&
+        if (!recoloured && !recovered && flux > 0.0 &&
             c.delta / flux <= double(scene_.settings.aim.delta_threshold))
             continue;
         candidates.push_back(std::move(c));

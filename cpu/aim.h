@@ -5,8 +5,12 @@
 // halves the estimate along chart edges: the room's creases and corners). Surfaces are rebuilt
 // in order of Δf / area, above a threshold, under a per-frame budget. With aim.exact_direct the
 // direct part comes from shadow rays over each texel and the kNN estimate counts bounced hits only.
+// Texel parts inside or under another object (aim.covered_texels) hold no photons: they are left
+// out of the flux scale (and with aim.covered_disc out of the kNN disc), and wholly covered texels
+// take their neighbours' value.
 #pragma once
 
+#include <cstdint>
 #include <glm/glm.hpp>
 #include <memory>
 #include <optional>
@@ -14,6 +18,7 @@
 
 #include "cpu/photon_map.h"
 #include "cpu/ray_tracer.h"
+#include "shared/mesh.h"
 #include "shared/parallel.h"
 #include "shared/scene.h"
 
@@ -63,7 +68,12 @@ public:
         glm::dvec2 first{0.0};         // ∫ u du over that part
         glm::dmat2 second{0.0};        // ∫ u uᵀ du over that part
         glm::vec3 b1{0.0f}, b2{0.0f};  // tangent axes of u
+        uint64_t on = ~uint64_t(0);    // which of the disc's sample points count (bit i: point i)
     };
+    // aim.covered_texels: per texel record, the share of its footprint (its parts on the chart,
+    // in kCoverageSubdivision² cells) that is not inside or under another object, as of the last
+    // rebuild (1 before the first). Empty when off.
+    const std::vector<float>& open_fraction() const { return open_fraction_; }
 
 private:
     // Estimates the surface's texels from its hits (all of them without `changed`; with it, only
@@ -80,6 +90,14 @@ private:
     // `record`'s footprint (a 4 × 4 grid of its points on the chart; points inside another
     // solid, such as the floor under a box, are left out), with hard shadows from every object.
     glm::vec3 direct_over_texel(int record) const;
+    // aim.covered_texels: brings the covered cells up to date with the objects' placements (all
+    // of them on the first call; after a move, the cells of the moved objects and those whose
+    // normal ray crosses a moved object's old or new bounds) and marks the surfaces whose cells
+    // changed, to be estimated again. Called before every rebuild.
+    void sync_covered();
+    // Tests the cells of chart `chart` (all, or those whose ray crosses one of `boxes`); returns
+    // whether any changed.
+    bool test_covered(int chart, const std::vector<Bounds>* boxes);
 
     const Scene& scene_;
     ThreadPool& pool_;
@@ -101,7 +119,17 @@ private:
     std::vector<float> reach2_;
     std::vector<char> built_;
     std::vector<glm::vec3> built_albedo_;
-    std::unique_ptr<RayTracer> rays_;  // aim.exact_direct only: shadow rays for the direct part
+    // aim.exact_direct: shadow rays for the direct part; aim.covered_texels: the covered test.
+    std::unique_ptr<RayTracer> rays_;
+    // aim.covered_texels (empty when off). Atlas-sized: the cells of each texel that are covered,
+    // and those on the chart and not covered (what the kNN disc may count with covered_disc).
+    std::vector<uint16_t> covered_, open_;
+    std::vector<float> open_fraction_;   // per record, see open_fraction()
+    std::vector<char> open_record_;      // per record: some part of it is open
+    std::vector<char> covered_changed_;  // per surface: cells changed since its last estimate
+    std::vector<Transform> covered_transforms_;  // per object: placement the cells were tested at
+    std::vector<Bounds> covered_bounds_;         // per object: its world bounds then
+    std::vector<uint64_t> disc_on_;              // per record: DiscPart::on of its last estimate
 };
 
 }  // namespace ag::cpu

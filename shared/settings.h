@@ -129,6 +129,19 @@ struct AimSettings {
     // 1.3-3.9x the truth at the texel centres, and the lit floor beside it 0.5-0.9x
     // (docs/fidelity.md, "Exact direct light in the AIM").
     bool exact_direct = false;
+    // Texel parts inside or under another object (the floor under a box: a ray along the normal
+    // meets a back face first, or a face within kCoveredGap texels) receive no photons and no one
+    // sees them. They are left out of the per-surface flux scale (Σ E·area over the open parts
+    // equals the surface's photon flux) and wholly covered texels take their chart neighbours'
+    // radiance, so the gathers' bilinear lookups beside a contact read no dark texel
+    // (docs/fidelity.md, "Session 16").
+    bool covered_texels = true;
+    // With covered_texels and boundary_correction: the kNN disc is cut where it reaches covered
+    // parts too (no photon can land there), as it is at the chart's edges. Off by default: the mean
+    // over the cut disc is the density at its centroid, away from the contact, where the light
+    // near a contact falls towards it, so the texels beside a box read high (Cornell's floor within
+    // 28 mm of the cube 1.53 of pt, the cube 1.11; docs/fidelity.md, "Session 16").
+    bool covered_disc = false;
 };
 
 struct GatherSettings {
@@ -354,6 +367,10 @@ void visit_settings(Settings& s, Visitor& v) {
                         "at chart edges, a linear density fit read at the texel centre"});
     v.field(Field<bool>{"exact_direct", s.aim.exact_direct, 0, 1,
                         "direct light by shadow rays over each texel, photons for the rest"});
+    v.field(Field<bool>{"covered_texels", s.aim.covered_texels, 0, 1,
+                        "texel parts inside or under another object out of the flux scale"});
+    v.field(Field<bool>{"covered_disc", s.aim.covered_disc, 0, 1,
+                        "with covered_texels: the kNN disc cut at covered parts too"});
     v.end_section();
     v.section("gather", "hemi-plane final gathering into IIMs, Larsen ch. 11");
     v.field(EnumField<GatherBackend, 3>{"backend", s.gather.backend, kGatherBackendNames,
