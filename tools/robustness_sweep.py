@@ -9,7 +9,7 @@ on a missing image, and on an exit 1 where the case is expected to render (or an
 is expected to be refused). Standard library only; prints one line per run and a summary.
 
     tools/robustness_sweep.py [--afterglow build/afterglow] [--mode ci|methods|full] [-j 2]
-                              [--only REGEX] [--keep DIR] [--timeout S] [--list]
+                              [--only REGEX] [--every N] [--keep DIR] [--timeout S] [--list]
 
 Exit 0 when every run passed, 1 when one failed, 77 when no GL context can be made.
 """
@@ -1117,6 +1117,10 @@ def main(argv=None):
                     "media) and the slow cases")
     ap.add_argument("-j", "--jobs", type=int, default=2)
     ap.add_argument("--only", default="", help="regex on CASE/RUN")
+    ap.add_argument("--every", type=int, default=1,
+                    help="of each run (method) in the selection, only every Nth case, from the "
+                    "first: every run keeps at least one case (the sanitized suite runs --mode ci "
+                    "--every 2; the Release suite all of it)")
     ap.add_argument("--keep", default="", help="write scenes and images here and keep them")
     ap.add_argument("--timeout", type=float, default=120.0,
                     help="seconds a run may take (time it spent stopped not counted)")
@@ -1148,6 +1152,14 @@ def main(argv=None):
             if a.only and not re.search(a.only, case.name + "/" + run_name):
                 continue
             jobs.append((case, run_name, args, suffixes))
+    seen = {}
+    kept = []
+    for job in jobs:
+        nth = seen.get(job[1], 0)
+        seen[job[1]] = nth + 1
+        if nth % max(1, a.every) == 0:
+            kept.append(job)
+    jobs = kept
     start = time.monotonic()
     failures = 0
     with concurrent.futures.ThreadPoolExecutor(max_workers=max(1, a.jobs)) as pool:
