@@ -13,6 +13,7 @@
 #include "cpu/knn.h"
 #include "cpu/reference/reference.h"
 #include "cpu/sampling.h"
+#include "shared/chart_cells.h"
 #include "shared/charts.h"
 #include "shared/lightmap_sample.h"
 
@@ -34,8 +35,6 @@ constexpr double kMinDiscFraction = 0.125;
 // inside a solid: the floor under a box resting on it) or lies within this many texels (under an
 // open surface lying on it, or a solid a hair above it). Photons cannot land there.
 constexpr float kCoveredGap = 0.01f;
-
-double cross2(const glm::dvec2& a, const glm::dvec2& b) { return a.x * b.y - a.y * b.x; }
 
 // Whether the ray from `origin` along unit `dir` crosses box `b` (expanded by `pad`) at t ≥ 0.
 bool ray_crosses(const glm::vec3& origin, const glm::vec3& dir, const Bounds& b, float pad) {
@@ -169,50 +168,32 @@ bool Aim::test_covered(int chart_id, const std::vector<Bounds>* boxes) {
     std::vector<uint16_t> done(w * size_t(chart.height), 0), cover(done.size(), 0),
         tested(done.size(), 0);
     for (int tri : chart.triangles) {
-        const glm::dvec2 a(uvs[3 * size_t(tri)]), b(uvs[3 * size_t(tri) + 1]),
-            c(uvs[3 * size_t(tri) + 2]);
-        const double det = cross2(b - a, c - a);
-        if (std::abs(det) < 1e-12) continue;
         const glm::uvec3 f = mesh.triangles[size_t(tri)];
         const glm::vec3 p0 = mesh.positions[f.x], p1 = mesh.positions[f.y],
                         p2 = mesh.positions[f.z];
         const glm::vec3 face = glm::cross(p1 - p0, p2 - p0);
         if (glm::dot(face, face) <= 0.0f) continue;
         const glm::vec3 normal = glm::normalize(object.transform.apply_vector(face));
-        const glm::dvec2 lo = glm::min(glm::min(a, b), c), hi = glm::max(glm::max(a, b), c);
-        const int x0 = std::max(chart.x, int(std::floor(lo.x))),
-                  x1 = std::min(chart.x + chart.width - 1, int(std::floor(hi.x)));
-        const int y0 = std::max(chart.y, int(std::floor(lo.y))),
-                  y1 = std::min(chart.y + chart.height - 1, int(std::floor(hi.y)));
-        for (int y = y0; y <= y1; ++y)
-            for (int x = x0; x <= x1; ++x) {
-                const size_t local = size_t(y - chart.y) * w + size_t(x - chart.x);
-                for (int j = 0; j < n; ++j)
-                    for (int i = 0; i < n; ++i) {
-                        const uint16_t bit = uint16_t(1u << (n * j + i));
-                        if (done[local] & bit) continue;
-                        const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
-                        const double u = cross2(q - a, c - a) / det, v = cross2(b - a, q - a) / det;
-                        if (!(u >= 0.0 && v >= 0.0 && u + v <= 1.0)) continue;
-                        done[local] = uint16_t(done[local] | bit);
-                        const glm::vec3 p = object.transform.apply_point(p0 + float(u) * (p1 - p0) +
-                                                                         float(v) * (p2 - p0));
-                        const glm::vec3 origin = p + rays_->epsilon() * normal;
-                        if (boxes &&
-                            !std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
-                                return ray_crosses(origin, normal, bx, pad);
-                            }))
-                            continue;
-                        tested[local] = uint16_t(tested[local] | bit);
-                        const RayHit hit = rays_->intersect({origin, normal, 0.0f, 1e30f});
-                        if (!hit.hit) continue;
-                        // Glass lets photons through: it covers nothing.
-                        if (scene_.objects[size_t(hit.object)].material.type == MaterialType::glass)
-                            continue;
-                        if (glm::dot(hit.normal, normal) > 0.0f || hit.t < gap)
-                            cover[local] = uint16_t(cover[local] | bit);
-                    }
-            }
+        visit_triangle_cells(chart, uvs, tri, [&](int x, int y, int i, int j, double u, double v) {
+            const size_t local = size_t(y - chart.y) * w + size_t(x - chart.x);
+            const uint16_t bit = uint16_t(1u << (n * j + i));
+            if (done[local] & bit) return;
+            done[local] = uint16_t(done[local] | bit);
+            const glm::vec3 p =
+                object.transform.apply_point(p0 + float(u) * (p1 - p0) + float(v) * (p2 - p0));
+            const glm::vec3 origin = p + rays_->epsilon() * normal;
+            if (boxes && !std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
+                    return ray_crosses(origin, normal, bx, pad);
+                }))
+                return;
+            tested[local] = uint16_t(tested[local] | bit);
+            const RayHit hit = rays_->intersect({origin, normal, 0.0f, 1e30f});
+            if (!hit.hit) return;
+            // Glass lets photons through: it covers nothing.
+            if (scene_.objects[size_t(hit.object)].material.type == MaterialType::glass) return;
+            if (glm::dot(hit.normal, normal) > 0.0f || hit.t < gap)
+                cover[local] = uint16_t(cover[local] | bit);
+        });
     }
     bool changed = false;
     for (int y = 0; y < chart.height; ++y)

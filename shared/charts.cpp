@@ -19,6 +19,7 @@
 #include <unordered_map>
 #include <utility>
 
+#include "shared/chart_cells.h"
 #include "shared/input_error.h"
 #include "shared/texel_density.h"
 
@@ -1492,29 +1493,11 @@ std::vector<uint16_t> texel_coverage_masks(const Scene& scene) {
     std::vector<uint16_t> masks(size_t(atlas.width) * size_t(atlas.height), 0);
     for (const Chart& chart : atlas.charts) {
         const std::vector<glm::vec2>& uvs = atlas.corner_uvs[size_t(chart.object)];
-        for (int tri : chart.triangles) {
-            const glm::dvec2 a(uvs[3 * size_t(tri)]), b(uvs[3 * size_t(tri) + 1]),
-                c(uvs[3 * size_t(tri) + 2]);
-            const double det = cross2(b - a, c - a);
-            if (std::abs(det) < 1e-12) continue;
-            const glm::dvec2 lo = glm::min(glm::min(a, b), c), hi = glm::max(glm::max(a, b), c);
-            const int x0 = std::max(chart.x, int(std::floor(lo.x))),
-                      x1 = std::min(chart.x + chart.width - 1, int(std::floor(hi.x)));
-            const int y0 = std::max(chart.y, int(std::floor(lo.y))),
-                      y1 = std::min(chart.y + chart.height - 1, int(std::floor(hi.y)));
-            for (int y = y0; y <= y1; ++y)
-                for (int x = x0; x <= x1; ++x) {
-                    uint16_t& m = masks[size_t(y) * size_t(atlas.width) + size_t(x)];
-                    for (int j = 0; j < n; ++j)
-                        for (int i = 0; i < n; ++i) {
-                            const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
-                            const double u = cross2(q - a, c - a) / det,
-                                         v = cross2(b - a, q - a) / det;
-                            if (u >= 0.0 && v >= 0.0 && u + v <= 1.0)
-                                m = uint16_t(m | (1u << (n * j + i)));
-                        }
-                }
-        }
+        for (int tri : chart.triangles)
+            visit_triangle_cells(chart, uvs, tri, [&](int x, int y, int i, int j, double, double) {
+                uint16_t& m = masks[size_t(y) * size_t(atlas.width) + size_t(x)];
+                m = uint16_t(m | (1u << (n * j + i)));
+            });
     }
     return masks;
 }

@@ -16,6 +16,40 @@
 
 namespace ag::cpu {
 
+namespace {
+
+// A black plane (no bounces: the irradiance is the sun's) of side 2·half under a sun of
+// irradiance `sun` shining straight down, with photons dense enough for knn 200 at texel size
+// `texel`. Add objects and settings, then call prepare_sun_scene.
+Scene black_plane_under_sun(const char* path, float half, float texel, float sun) {
+    Scene s;
+    s.path = path;
+    Object plane;
+    plane.name = "plane";
+    plane.mesh = make_quad(2.0f * half, 2.0f * half);
+    plane.material.albedo = glm::vec3(0.0f);
+    s.objects.push_back(plane);
+    Light light;
+    light.name = "sun";
+    light.type = LightType::sun;
+    light.direction = glm::vec3(0.0f, -1.0f, 0.0f);
+    light.irradiance = glm::vec3(sun);
+    s.lights.push_back(light);
+    s.settings.photons.groups = 64;
+    s.settings.photons.photons_per_group = 1000;
+    s.settings.aim.knn = 200;
+    s.settings.lightmap.texel_size = texel;
+    return s;
+}
+
+void prepare_sun_scene(Scene& s) {
+    init_versions(s);
+    update_sun_discs(s);
+    make_surfaces_and_atlas(s);
+}
+
+}  // namespace
+
 TEST(Aim, PlaneUnderPointLightMatchesAnalyticRadiance) {
     const float half = 1000.0f, h = 400.0f, intensity = 5000.0f, albedo = 0.6f;
     Scene scene = test::plane_under_light(half, h, intensity, albedo);
@@ -184,27 +218,9 @@ PlaneMeans plane_means(const Scene& scene, int threads, float half, float texel,
 TEST(Aim, TexelsOnAPlanesEdgesAndCornersReadTheSunsIrradiance) {
     constexpr float kHalf = 1000.0f, kTexel = 100.0f, kSun = 2.0f;
     auto make = [&](bool correct) {
-        Scene s;
-        s.path = "plane_under_sun";
-        Object plane;
-        plane.name = "plane";
-        plane.mesh = make_quad(2.0f * kHalf, 2.0f * kHalf);
-        plane.material.albedo = glm::vec3(0.0f);  // no bounces: the irradiance is the sun's
-        s.objects.push_back(plane);
-        Light sun;
-        sun.name = "sun";
-        sun.type = LightType::sun;
-        sun.direction = glm::vec3(0.0f, -1.0f, 0.0f);
-        sun.irradiance = glm::vec3(kSun);
-        s.lights.push_back(sun);
-        s.settings.photons.groups = 64;
-        s.settings.photons.photons_per_group = 1000;
-        s.settings.aim.knn = 200;
+        Scene s = black_plane_under_sun("plane_under_sun", kHalf, kTexel, kSun);
         s.settings.aim.boundary_correction = correct;
-        s.settings.lightmap.texel_size = kTexel;
-        init_versions(s);
-        update_sun_discs(s);
-        make_surfaces_and_atlas(s);
+        prepare_sun_scene(s);
         return s;
     };
     auto measure = [&](const Scene& scene, int threads) {
@@ -512,13 +528,7 @@ TEST(AimCovered, APlaneUnderABoxReadsTheSunBesideIt) {
     const glm::vec3 centre(-150.0f, 0.5f * kBox, 100.0f);
     const float turn = glm::radians(30.0f);
     auto make = [&](bool covered, bool disc) {
-        Scene s;
-        s.path = "box_on_plane_under_sun";
-        Object plane;
-        plane.name = "plane";
-        plane.mesh = make_quad(2.0f * kHalf, 2.0f * kHalf);
-        plane.material.albedo = glm::vec3(0.0f);  // no bounces: the irradiance is the sun's
-        s.objects.push_back(plane);
+        Scene s = black_plane_under_sun("box_on_plane_under_sun", kHalf, kTexel, kSun);
         Object box;
         box.name = "box";
         box.dynamic = true;
@@ -527,21 +537,9 @@ TEST(AimCovered, APlaneUnderABoxReadsTheSunBesideIt) {
         box.transform.translation = centre;
         box.transform.rotation = glm::angleAxis(turn, glm::vec3(0.0f, 1.0f, 0.0f));
         s.objects.push_back(box);
-        Light sun;
-        sun.name = "sun";
-        sun.type = LightType::sun;
-        sun.direction = glm::vec3(0.0f, -1.0f, 0.0f);
-        sun.irradiance = glm::vec3(kSun);
-        s.lights.push_back(sun);
-        s.settings.photons.groups = 64;
-        s.settings.photons.photons_per_group = 1000;
-        s.settings.aim.knn = 200;
         s.settings.aim.covered_texels = covered;
         s.settings.aim.covered_disc = disc;
-        s.settings.lightmap.texel_size = kTexel;
-        init_versions(s);
-        update_sun_discs(s);
-        make_surfaces_and_atlas(s);
+        prepare_sun_scene(s);
         return s;
     };
     // Distance of plane point p outside the box's footprint (≤ 0 inside), in the box's frame.
