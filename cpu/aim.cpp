@@ -53,6 +53,37 @@ bool ray_crosses(const glm::vec3& origin, const glm::vec3& dir, const Bounds& b,
     return true;
 }
 
+// Whether a ray from some point of world triangle (p0, p1, p2) along its unit normal `normal`
+// may cross box `b` expanded by `pad`: false only when the box lies wholly behind the triangle's
+// plane or wholly beside the prism the triangle sweeps along its normal (a conservative filter
+// before the cells' own ray_crosses tests).
+bool prism_may_cross(const glm::vec3& p0, const glm::vec3& p1, const glm::vec3& p2,
+                     const glm::vec3& normal, const Bounds& b, float pad) {
+    const glm::vec3 side =
+        std::abs(normal.x) < 0.9f ? glm::vec3(1.0f, 0.0f, 0.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+    const glm::vec3 e1 = glm::normalize(glm::cross(normal, side)), e2 = glm::cross(normal, e1);
+    const glm::vec3 lo = b.min - pad, hi = b.max + pad;
+    // Rounding: the cells' origins and the boxes' slabs are floats; a margin well above it.
+    const float margin =
+        1e-4f * (glm::length(hi - lo) + glm::length(p1 - p0) + glm::length(p2 - p0)) + pad;
+    glm::vec3 box_lo(std::numeric_limits<float>::infinity()), box_hi(-box_lo);
+    for (int k = 0; k < 8; ++k) {
+        const glm::vec3 c((k & 1) ? hi.x : lo.x, (k & 2) ? hi.y : lo.y, (k & 4) ? hi.z : lo.z);
+        const glm::vec3 q(glm::dot(c, e1), glm::dot(c, e2), glm::dot(c, normal));
+        box_lo = glm::min(box_lo, q);
+        box_hi = glm::max(box_hi, q);
+    }
+    glm::vec3 tri_lo(std::numeric_limits<float>::infinity()), tri_hi(-tri_lo);
+    for (const glm::vec3& p : {p0, p1, p2}) {
+        const glm::vec3 q(glm::dot(p, e1), glm::dot(p, e2), glm::dot(p, normal));
+        tri_lo = glm::min(tri_lo, q);
+        tri_hi = glm::max(tri_hi, q);
+    }
+    if (box_hi.z < tri_lo.z - margin) return false;  // behind the triangle's plane
+    return !(box_hi.x < tri_lo.x - margin || box_lo.x > tri_hi.x + margin ||
+             box_hi.y < tri_lo.y - margin || box_lo.y > tri_hi.y + margin);
+}
+
 Bounds object_world_bounds(const Object& o) {
     Bounds b;
     for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
@@ -150,6 +181,8 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
         open_fraction_.assign(scene_.atlas.texels.size(), 1.0f);
         open_record_.assign(scene_.atlas.texels.size(), 1);
         covered_changed_.assign(scene_.surfaces.size(), 0);
+        cell_claims_.assign(scene_.atlas.charts.size(), {});
+        claim_begin_.assign(scene_.atlas.charts.size(), {});
     }
 }
 
@@ -162,38 +195,79 @@ bool Aim::test_covered(int chart_id, const std::vector<Bounds>* boxes) {
     constexpr int n = kCoverageSubdivision;
     const float gap = kCoveredGap * chart.texel_size;
     const float pad = gap + 2.0f * rays_->epsilon();
+    static_assert(n * n <= 16, "a texel's cells are the bits of a uint16_t");
+    std::vector<uint32_t>& claims = cell_claims_[size_t(chart_id)];
+    std::vector<uint32_t>& begin = claim_begin_[size_t(chart_id)];
+    const bool first = begin.empty();  // the first test walks the cells and notes who places them
     // Per texel of the chart's rectangle: cells tested (the first triangle holding a cell's point
     // places it, as texel_coverage_masks does), and covered among them.
     const size_t w = size_t(chart.width);
-    std::vector<uint16_t> done(w * size_t(chart.height), 0), cover(done.size(), 0),
-        tested(done.size(), 0);
-    for (int tri : chart.triangles) {
+    std::vector<uint16_t> cover(w * size_t(chart.height), 0), tested(cover.size(), 0),
+        done(first ? cover.size() : 0, 0);
+    // A cell's state is its ray's first hit along the normal of the triangle that places it.
+    const auto test_cell = [&](size_t local, uint16_t bit, const glm::vec3& p,
+                               const glm::vec3& normal) {
+        const glm::vec3 origin = p + rays_->epsilon() * normal;
+        if (boxes && !std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
+                return ray_crosses(origin, normal, bx, pad);
+            }))
+            return;
+        tested[local] = uint16_t(tested[local] | bit);
+        const RayHit hit = rays_->intersect({origin, normal, 0.0f, 1e30f});
+        if (!hit.hit) return;
+        // Glass lets photons through: it covers nothing.
+        if (scene_.objects[size_t(hit.object)].material.type == MaterialType::glass) return;
+        if (glm::dot(hit.normal, normal) > 0.0f || hit.t < gap)
+            cover[local] = uint16_t(cover[local] | bit);
+    };
+    if (first) begin.push_back(0);
+    for (size_t k = 0; k < chart.triangles.size(); ++k) {
+        const int tri = chart.triangles[k];
         const glm::uvec3 f = mesh.triangles[size_t(tri)];
         const glm::vec3 p0 = mesh.positions[f.x], p1 = mesh.positions[f.y],
                         p2 = mesh.positions[f.z];
         const glm::vec3 face = glm::cross(p1 - p0, p2 - p0);
-        if (glm::dot(face, face) <= 0.0f) continue;
-        const glm::vec3 normal = glm::normalize(object.transform.apply_vector(face));
-        visit_triangle_cells(chart, uvs, tri, [&](int x, int y, int i, int j, double u, double v) {
-            const size_t local = size_t(y - chart.y) * w + size_t(x - chart.x);
-            const uint16_t bit = uint16_t(1u << (n * j + i));
-            if (done[local] & bit) return;
-            done[local] = uint16_t(done[local] | bit);
-            const glm::vec3 p =
-                object.transform.apply_point(p0 + float(u) * (p1 - p0) + float(v) * (p2 - p0));
-            const glm::vec3 origin = p + rays_->epsilon() * normal;
-            if (boxes && !std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
-                    return ray_crosses(origin, normal, bx, pad);
+        const bool flat = glm::dot(face, face) <= 0.0f;
+        const glm::vec3 normal =
+            flat ? glm::vec3(0.0f) : glm::normalize(object.transform.apply_vector(face));
+        const auto point = [&](double u, double v) {
+            return object.transform.apply_point(p0 + float(u) * (p1 - p0) + float(v) * (p2 - p0));
+        };
+        if (first) {
+            if (!flat)
+                visit_triangle_cells(
+                    chart, uvs, tri, [&](int x, int y, int i, int j, double u, double v) {
+                        const size_t local = size_t(y - chart.y) * w + size_t(x - chart.x);
+                        const int cell = n * j + i;
+                        const uint16_t bit = uint16_t(1u << cell);
+                        if (done[local] & bit) return;
+                        done[local] = uint16_t(done[local] | bit);
+                        claims.push_back(uint32_t(local) * 16u + uint32_t(cell));
+                        test_cell(local, bit, point(u, v), normal);
+                    });
+            begin.push_back(uint32_t(claims.size()));
+            continue;
+        }
+        if (begin[k] == begin[k + 1]) continue;
+        if (boxes) {
+            const glm::vec3 w0 = object.transform.apply_point(p0),
+                            w1 = object.transform.apply_point(p1),
+                            w2 = object.transform.apply_point(p2);
+            if (!std::any_of(boxes->begin(), boxes->end(), [&](const Bounds& bx) {
+                    return prism_may_cross(w0, w1, w2, normal, bx, pad);
                 }))
-                return;
-            tested[local] = uint16_t(tested[local] | bit);
-            const RayHit hit = rays_->intersect({origin, normal, 0.0f, 1e30f});
-            if (!hit.hit) return;
-            // Glass lets photons through: it covers nothing.
-            if (scene_.objects[size_t(hit.object)].material.type == MaterialType::glass) return;
-            if (glm::dot(hit.normal, normal) > 0.0f || hit.t < gap)
-                cover[local] = uint16_t(cover[local] | bit);
-        });
+                continue;
+        }
+        const glm::dvec2 a(uvs[3 * size_t(tri)]), b(uvs[3 * size_t(tri) + 1]),
+            c(uvs[3 * size_t(tri) + 2]);
+        const double det = (b - a).x * (c - a).y - (b - a).y * (c - a).x;
+        for (uint32_t at = begin[k]; at < begin[k + 1]; ++at) {
+            const size_t local = claims[at] / 16u;
+            const int cell = int(claims[at] % 16u);
+            const int x = chart.x + int(local % w), y = chart.y + int(local / w);
+            const glm::dvec2 uv = cell_barycentrics(a, b, c, det, x, y, cell % n, cell / n);
+            test_cell(local, uint16_t(1u << cell), point(uv.x, uv.y), normal);
+        }
     }
     bool changed = false;
     for (int y = 0; y < chart.height; ++y)

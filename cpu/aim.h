@@ -129,7 +129,12 @@ private:
     std::vector<char> covered_changed_;  // per surface: cells changed since its last estimate
     std::vector<Transform> covered_transforms_;  // per object: placement the cells were tested at
     std::vector<Bounds> covered_bounds_;         // per object: its world bounds then
-    std::vector<uint64_t> disc_on_;              // per record: DiscPart::on of its last estimate
+    // Per chart, from the first test: the cells each of its triangles places (the first triangle
+    // holding a cell's centre, in chart order), packed as (texel within the chart's rectangle)·16
+    // + cell, and where each triangle's run starts. A re-test after a move skips the triangles
+    // whose rays cannot reach a moved object's bounds without walking their cells again.
+    std::vector<std::vector<uint32_t>> cell_claims_, claim_begin_;
+    std::vector<uint64_t> disc_on_;  // per record: DiscPart::on of its last estimate
 };
 
 }  // namespace ag::cpu

@@ -17,6 +17,19 @@ namespace ag {
 // (x + (i + ½)/n, y + (j + ½)/n) lies on triangle `tri`'s UV image `uvs[3·tri ..]`. (u, v) are the
 // centre's barycentric coordinates: corner 0 + u·(corner 1 − corner 0) + v·(corner 2 − corner 0).
 // A triangle of (nearly) zero UV area visits nothing and returns false.
+// The barycentric coordinates (u, v) of the centre of cell (i, j) of atlas texel (x, y) on the
+// triangle with UV corners a, b, c and det = cross(b − a, c − a): the arithmetic
+// visit_triangle_cells uses, so that a cell visited again later gets the same point to the bit.
+inline glm::dvec2 cell_barycentrics(const glm::dvec2& a, const glm::dvec2& b, const glm::dvec2& c,
+                                    double det, int x, int y, int i, int j) {
+    const auto cross = [](const glm::dvec2& p, const glm::dvec2& q) {
+        return p.x * q.y - p.y * q.x;
+    };
+    constexpr int n = kCoverageSubdivision;
+    const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
+    return {cross(q - a, c - a) / det, cross(b - a, q - a) / det};
+}
+
 template <class Visit>
 bool visit_triangle_cells(const Chart& chart, const std::vector<glm::vec2>& uvs, int tri,
                           Visit&& visit) {
@@ -37,9 +50,9 @@ bool visit_triangle_cells(const Chart& chart, const std::vector<glm::vec2>& uvs,
         for (int x = x0; x <= x1; ++x)
             for (int j = 0; j < n; ++j)
                 for (int i = 0; i < n; ++i) {
-                    const glm::dvec2 q(x + (i + 0.5) / n, y + (j + 0.5) / n);
-                    const double u = cross(q - a, c - a) / det, v = cross(b - a, q - a) / det;
-                    if (u >= 0.0 && v >= 0.0 && u + v <= 1.0) visit(x, y, i, j, u, v);
+                    const glm::dvec2 uv = cell_barycentrics(a, b, c, det, x, y, i, j);
+                    if (uv.x >= 0.0 && uv.y >= 0.0 && uv.x + uv.y <= 1.0)
+                        visit(x, y, i, j, uv.x, uv.y);
                 }
     return true;
 }

@@ -639,4 +639,60 @@ TEST(AimCovered, APlaneUnderABoxReadsTheSunBesideIt) {
     EXPECT_TRUE(after.same_as_fresh) << "the updated AIM differs from a fresh one";
 }
 
+// The re-test after a move skips the triangles whose normal rays cannot reach the moved box's old
+// or new bounds and reads the cells each triangle placed at the first test from a list. On a
+// bumpy floor (thousands of tilted triangles, cells on shared edges) with a box sunk into it,
+// moved and turned again and again, the covered parts after every update must equal those of an
+// AIM tested afresh on the moved scene, bit for bit; the moves must change some of them.
+TEST(AimCovered, ARetestAfterMovesEqualsAFreshTestOnABumpyFloor) {
+    constexpr float kHalf = 1000.0f, kTexel = 50.0f, kSun = 2.0f, kBox = 300.0f;
+    Scene scene = black_plane_under_sun("box_in_bumpy_floor", kHalf, kTexel, kSun);
+    scene.objects[0].mesh = make_bumpy_plane(2.0f * kHalf, 2.0f * kHalf, 48, 60.0f, 7u);
+    scene.settings.photons.groups = 16;
+    scene.settings.photons.photons_per_group = 100;
+    scene.settings.aim.knn = 25;
+    Object box;
+    box.name = "box";
+    box.dynamic = true;
+    box.mesh = make_box(glm::vec3(kBox));
+    box.material.albedo = glm::vec3(0.0f);
+    box.transform.translation = glm::vec3(-200.0f, 0.4f * kBox, 150.0f);
+    scene.objects.push_back(box);
+    scene.settings.aim.covered_texels = true;
+    prepare_sun_scene(scene);
+
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    sim.trace_all();
+    Aim aim(scene, pool);
+    aim.rebuild_all(sim.maps());
+    const auto shut = [](const std::vector<float>& open) {
+        return std::count_if(open.begin(), open.end(), [](float f) { return f < 1.0f; });
+    };
+    const long shut_first = long(shut(aim.open_fraction()));
+    EXPECT_GT(shut_first, 20) << "the box covers part of the floor";
+    const struct {
+        glm::vec3 offset;
+        float degrees;
+    } moves[] = {{{230.0f, 0.0f, -170.0f}, 0.0f},
+                 {{0.0f, -40.0f, 0.0f}, 25.0f},
+                 {{-500.0f, 30.0f, 260.0f}, -60.0f},
+                 {{37.0f, 0.0f, 11.0f}, 3.0f}};
+    std::vector<float> before = aim.open_fraction();
+    int changed_moves = 0;
+    for (const auto& m : moves) {
+        translate_object(scene, 1, m.offset);
+        if (m.degrees != 0.0f) rotate_object(scene, 1, glm::vec3(0.3f, 1.0f, 0.1f), m.degrees);
+        for (int i = 0; i < 1000 && (i == 0 || !sim.settled()); ++i) sim.frame(1 << 30);
+        ASSERT_TRUE(sim.settled());
+        aim.update(sim.maps(), 1 << 30, 1 << 30, nullptr);
+        Aim fresh(scene, pool);
+        fresh.rebuild_all(sim.maps());
+        EXPECT_EQ(aim.open_fraction(), fresh.open_fraction()) << "after a move";
+        EXPECT_EQ(aim.irradiance(), fresh.irradiance()) << "after a move";
+        if (aim.open_fraction() != before) ++changed_moves;
+        before = aim.open_fraction();
+    }
+    EXPECT_EQ(changed_moves, 4) << "every move changes which parts of the floor are covered";
+}
 }  // namespace ag::cpu
