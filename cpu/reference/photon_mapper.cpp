@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "cpu/reference/light_tracer.h"
 #include "shared/camera.h"
 #include "shared/metrics.h"
 
@@ -55,16 +56,7 @@ PhotonMapper::PhotonMapper(const Scene& scene, const RayTracer& rays,
     const float r =
         settings.caustic_radius > 0.0f ? settings.caustic_radius : 0.01f * scene_diagonal(scene);
     caustic_r2_ = r * r;
-    for (const Object& o : scene.objects) {
-        if (o.material.type == MaterialType::diffuse || o.mesh.positions.empty()) continue;
-        Bounds b;
-        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
-        Sphere s{b.center(), 0.0f};
-        for (const glm::vec3& p : o.mesh.positions)
-            s.radius = std::max(s.radius, glm::length(o.transform.apply_point(p) - s.center));
-        s.radius *= 1.0f + 1e-4f;
-        specular_bounds_.push_back(s);
-    }
+    specular_bounds_ = specular_bounding_spheres(scene);
 
     // Work items: (map, light, first photon, count), traced in parallel into their own slots
     // and appended in item order, so the maps are the same for any thread count.
@@ -183,83 +175,16 @@ void PhotonMapper::emit_global(int light, int count, int first, int n,
 
 void PhotonMapper::emit_caustic(int light, int count, int first, int n,
                                 std::vector<Photon>& out) const {
-    // Directions are drawn from the union of the cones around the specular objects' bounding
-    // spheres: pick a cone by solid angle, then uniformly inside it. The density of that choice
-    // is (cones containing the direction) / ΣΩ, so overlapping cones count once.
+    // Directions from the union of the cones around the specular objects' bounding spheres,
+    // weighted exactly where they overlap (aimed_emission, shared with the light tracer).
     const Light& l = scene_.lights[size_t(light)];
     const uint64_t key =
         mix64(uint64_t(settings_.seed) * 0x100000001b3ull + uint64_t(light) + 0x51ed27ull);
-    std::vector<glm::vec3> axis(specular_bounds_.size());
-    std::vector<float> cos_max(specular_bounds_.size()), cumulative(specular_bounds_.size());
     for (int i = first; i < first + n; ++i) {
         const Sampler s(photon_halton_, key, uint64_t(i));
-        if (l.type == LightType::sun) {
-            // Parallel light: the union of the bounding spheres' discs across the sun's
-            // direction; a point uniform on a disc picked by area, the density divided by the
-            // discs containing it (overlaps count once), started outside the scene.
-            glm::vec3 u, v;
-            orthonormal_basis(l.direction, u, v);
-            float area = 0.0f;
-            for (size_t k = 0; k < specular_bounds_.size(); ++k) {
-                area += std::numbers::pi_v<float> * specular_bounds_[k].radius *
-                        specular_bounds_[k].radius;
-                cumulative[k] = area;
-            }
-            if (!(area > 0.0f)) return;
-            const float pick = s.get(0) * area;
-            size_t chosen = 0;
-            while (chosen + 1 < cumulative.size() && pick >= cumulative[chosen]) ++chosen;
-            const Sphere& b = specular_bounds_[chosen];
-            const float r = b.radius * std::sqrt(s.get(1));
-            const float phi = 2.0f * std::numbers::pi_v<float> * s.get(2);
-            const glm::vec3 p = b.center + r * (std::cos(phi) * u + std::sin(phi) * v);
-            int containing = 0;
-            for (const Sphere& c : specular_bounds_) {
-                const glm::vec3 d = p - c.center;
-                const glm::vec3 across = d - glm::dot(d, l.direction) * l.direction;
-                containing += glm::dot(across, across) <= c.radius * c.radius ? 1 : 0;
-            }
-            const glm::vec3 origin =
-                p - (glm::dot(p - l.sun_center, l.direction) + 1.01f * l.sun_radius) * l.direction;
-            const glm::vec3 power =
-                l.irradiance * area / float(std::max(containing, 1)) / float(count);
-            trace({origin, l.direction}, power, s, kCausticEmitDims, true, out);
-            continue;
-        }
-        glm::vec3 origin = l.position, nl(0.0f);
-        if (l.is_area()) {
-            const LightPoint at = sample_area_light(scene_, l, s.get(3), s.get(4));
-            nl = at.normal;
-            origin = at.position + rays_.epsilon() * nl;
-        }
-        float total = 0.0f;
-        for (size_t k = 0; k < specular_bounds_.size(); ++k) {
-            const glm::vec3 to = specular_bounds_[k].center - origin;
-            const float d = glm::length(to), r = specular_bounds_[k].radius;
-            axis[k] = d > 0.0f ? to / d : glm::vec3(0.0f, 0.0f, 1.0f);
-            cos_max[k] = d <= r ? -1.0f : std::sqrt(std::max(0.0f, 1.0f - (r * r) / (d * d)));
-            total += 2.0f * std::numbers::pi_v<float> * (1.0f - cos_max[k]);
-            cumulative[k] = total;
-        }
-        const float pick = s.get(0) * total;
-        size_t chosen = 0;
-        while (chosen + 1 < cumulative.size() && pick >= cumulative[chosen]) ++chosen;
-        const glm::vec3 dir = cone_direction(axis[chosen], cos_max[chosen], s.get(1), s.get(2));
-        int containing = 0;
-        for (size_t k = 0; k < axis.size(); ++k)
-            containing += glm::dot(dir, axis[k]) >= cos_max[k] ? 1 : 0;
-        const float inv_pdf = total / float(std::max(containing, 1));
-        glm::vec3 power;
-        if (l.type == LightType::point || l.type == LightType::spot) {
-            power =
-                l.intensity * l.spot_factor(glm::dot(dir, l.direction)) * inv_pdf / float(count);
-        } else {
-            // dΦ = L cos θ dω dA; the point is uniform on the quad (pdf 1/A).
-            const float cos_l = glm::dot(dir, nl);
-            if (!(cos_l > 0.0f)) continue;
-            power = l.radiance * cos_l * l.area() * inv_pdf / float(count);
-        }
-        trace({origin, dir}, power, s, kCausticEmitDims, true, out);
+        const float u[5] = {s.get(0), s.get(1), s.get(2), s.get(3), s.get(4)};
+        const AimedRay a = aimed_emission(scene_, l, specular_bounds_, u, rays_.epsilon());
+        if (a.valid) trace(a.ray, a.power / float(count), s, kCausticEmitDims, true, out);
     }
 }
 

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "cpu/knn.h"
+#include "cpu/reference/light_tracer.h"
 #include "cpu/reference/reference.h"
 
 namespace ag::cpu {
@@ -69,18 +70,13 @@ private:
     // Radiance arriving along `ray` from the first diffuse surface, through mirrors and glass.
     glm::vec3 gather_ray(Ray ray, uint64_t key) const;
 
-    struct Sphere {
-        glm::vec3 center;
-        float radius;
-    };
-
     const Scene& scene_;
     const RayTracer& rays_;
     ReferenceSettings settings_;
     float caustic_r2_;
     Halton camera_halton_, gather_halton_, photon_halton_;
-    std::vector<Sphere> specular_bounds_;  // world bounding spheres of mirrors and glass
-    std::vector<int> object_lights_;       // per object: its mesh light, or -1
+    std::vector<BoundingSphere> specular_bounds_;  // world bounding spheres of mirrors and glass
+    std::vector<int> object_lights_;               // per object: its mesh light, or -1
     PhotonMap global_, caustic_;
     IrradianceCache cache_;
 };

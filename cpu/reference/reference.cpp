@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "cpu/reference/light_tracer.h"
 #include "cpu/reference/path_tracer.h"
 #include "cpu/reference/photon_mapper.h"
 #include "shared/media.h"
@@ -172,8 +173,12 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     const RayTracer rays(scene);
     std::unique_ptr<PathTracer> path_tracer;
     std::unique_ptr<PhotonMapper> photon_mapper;
+    std::unique_ptr<LightTracer> light_tracer;
     if (settings.method == ReferenceMethod::path_tracing) {
         path_tracer = std::make_unique<PathTracer>(scene, rays, settings);
+        light_tracer = std::make_unique<LightTracer>(scene, rays, settings, region);
+        result.light_tracing_skipped = light_tracer->skipped();
+        if (!light_tracer->active()) light_tracer.reset();
     } else {
         photon_mapper = std::make_unique<PhotonMapper>(scene, rays, settings, pool, [&](double f) {
             report({"photons", f, 0, 0.0, -1.0}, false);
@@ -194,6 +199,10 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
     const int spp_limit = settings.spp > 0 ? settings.spp : (time_limit > 0.0 ? INT_MAX : 1);
     std::vector<std::array<glm::dvec3, kFrameTermCount>> sum(pixels);
     std::vector<ComponentRadiance> pass(pixels);
+    // Light tracing: per pass, fixed work items after the tiles, each with its own splat list,
+    // added in item order (so the image does not depend on the thread count).
+    const size_t chunks = light_tracer ? light_tracer->chunks() : 0;
+    std::vector<std::vector<LightSplat>> splats(chunks);
     const double render_start = elapsed();
 
     int done = 0;
@@ -201,8 +210,15 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
         if (done > 0 && time_limit > 0.0 && elapsed() >= time_limit) break;
         std::atomic<bool> interrupted{false};
         std::atomic<size_t> tiles_done{0};
-        pool.parallel_for(tiles, [&](size_t tile) {
+        pool.parallel_for(tiles + chunks, [&](size_t item) {
             if (interrupted.load(std::memory_order_relaxed)) return;
+            if (item >= tiles) {
+                splats[item - tiles].clear();
+                light_tracer->trace(done, item - tiles, splats[item - tiles]);
+                if (done > 0 && time_limit > 0.0 && elapsed() >= time_limit) interrupted = true;
+                return;
+            }
+            const size_t tile = item;
             const int x0 = int(tile % size_t(tiles_x)) * kTileSize;
             const int y0 = int(tile / size_t(tiles_x)) * kTileSize;
             for (int y = y0; y < std::min(height, y0 + kTileSize); ++y)
@@ -228,6 +244,10 @@ ReferenceResult render_reference(const Scene& scene, const ReferenceSettings& se
         if (interrupted) break;
         for (size_t i = 0; i < pixels; ++i)
             for (int c = 0; c < kFrameTermCount; ++c) sum[i][size_t(c)] += pass[i].value[size_t(c)];
+        for (const std::vector<LightSplat>& list : splats)
+            for (const LightSplat& splat : list)
+                sum[splat.pixel][size_t(splat.term)] += glm::dvec3(splat.value);
+        if (light_tracer) result.light_paths += light_tracer->paths_per_pass();
         ++done;
     }
 

@@ -58,6 +58,11 @@ struct ReferenceSettings {
     // its place in the whole image only, so tiles merge into exactly the whole image.
     PixelRegion region;
     int volume_bounces = 256;  // pt: scattering events in media per path (1: single scattering)
+    // pt: light tracing from point, spot and sun lights through mirrors and glass (paths
+    // L S+ D ... that next-event estimation cannot sample; light_tracer.h). Active when the scene
+    // has such a light, a mirror or glass object and no media.
+    bool light_tracing = true;
+    int64_t light_paths = 0;  // light paths per pass; 0 = one per pixel of the whole image
 
     // Photon mapping only.
     int photons = 1000000;          // global map: photons emitted from all lights together
@@ -86,6 +91,8 @@ struct ReferenceResult {
     double seconds = 0.0;                            // wall clock, photon maps included
     double photon_seconds = 0.0;                     // photon tracing and map building (pm)
     size_t global_photons = 0, caustic_photons = 0;  // stored photons (pm)
+    uint64_t light_paths = 0;                        // pt: light paths traced (all passes)
+    std::string light_tracing_skipped;  // pt: why there was no light tracing ("" = there was)
 };
 
 // Renders scene.camera at its resolution (or settings.region of it; std::invalid_argument if the

@@ -60,6 +60,13 @@ const Command kReferenceCommand{
                 "pt: scattering events in media per path (0: media only attenuate; 1: single "
                 "scattering)",
                 0, 1 << 20, cpu::ReferenceSettings{}.volume_bounces),
+        integer("light-paths", "N",
+                "pt: light paths per pass from point, spot and sun lights through mirrors and "
+                "glass (default: one per pixel)",
+                1, 1 << 30),
+        flag("no-light-tracing",
+             "pt: leave out light from point, spot and sun lights through mirrors and glass "
+             "(L S+ D paths; the references before session 17)"),
         flag("quiet,q", "no progress bar (there is none unless stderr is a terminal)"),
     },
     1,
@@ -124,6 +131,8 @@ int run_reference(const Args& args) {
     settings.area_light_samples = args.get_int("area-samples");
     settings.indirect_bounces = args.get_int("indirect-bounces", -1);
     settings.volume_bounces = args.get_int("volume-bounces");
+    settings.light_paths = args.get_int("light-paths", 0);
+    settings.light_tracing = !args.has("no-light-tracing");
     ThreadPool pool(args.get_int("threads", scene.settings.threads));
 
     // The bar only where someone watches: a terminal, as `afterglow render` does.
@@ -145,7 +154,14 @@ int run_reference(const Args& args) {
         std::cout << " (photon maps " << format_seconds(result.photon_seconds) << ": "
                   << result.global_photons << " global, " << result.caustic_photons
                   << " caustic photons; " << settings.gather_rays << " gather rays per sample)";
+    else if (result.light_paths > 0)
+        std::cout << " (+ " << result.light_paths << " light paths through mirrors and glass)";
     std::cout << "\n";
+    if (!pm && settings.light_tracing && result.light_paths == 0 &&
+        result.light_tracing_skipped.rfind("participating media", 0) == 0)
+        std::cerr << where << ": " << scene.path
+                  << ": no light tracing through mirrors and glass with participating media; "
+                     "light from point, spot and sun lights through them is missing\n";
     std::cerr << where << ": wrote " << out << ", " << stem
               << ".{direct,indirect,caustics,specular,volume}.exr and " << stem << ".png\n";
     return 0;
