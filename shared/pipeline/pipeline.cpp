@@ -30,6 +30,8 @@ void add(cpu::PhotonFrameStats& a, const cpu::PhotonFrameStats& b) {
     a.photons_retraced += b.photons_retraced;
     a.groups_retraced += b.groups_retraced;
     a.groups_queued = b.groups_queued;
+    a.photons_grown += b.photons_grown;
+    a.layers = b.layers;
     a.aim_texels_rebuilt += b.aim_texels_rebuilt;
     a.aim_surfaces_rebuilt += b.aim_surfaces_rebuilt;
 }
