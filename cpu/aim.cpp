@@ -165,6 +165,7 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     reach2_.assign(scene_.atlas.texels.size(), std::numeric_limits<float>::infinity());
     built_.assign(scene_.surfaces.size(), 0);
     built_albedo_.assign(scene_.surfaces.size(), glm::vec3(0.0f));
+    built_layers_.assign(scene_.surfaces.size(), 1);
     indirect_floor_.assign(scene_.atlas.texels.size(), 0.0f);
     texture_mean_.resize(scene_.atlas.texels.size());
     pool_.parallel_for(
@@ -526,6 +527,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     }
     built_albedo_[size_t(surface)] = albedo;
     built_[size_t(surface)] = 1;
+    built_layers_[size_t(surface)] = maps.layers();
     s.changes.clear();
     s.changes_overflow = false;
     if (covered) covered_changed_[size_t(surface)] = 0;
@@ -545,7 +547,8 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         const double open = covered ? double(open_fraction_[size_t(r)]) : 1.0;
         estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(r)].area) * open;
     }
-    const glm::dvec3 flux = exact ? used_flux : s.flux;
+    // Each of the maps' photon sets carries the whole flux (photons.refine_layers).
+    const glm::dvec3 flux = (exact ? used_flux : s.flux) / double(maps.layers());
     for (int c = 0; c < 3; ++c) {
         const double scale = estimated[c] > 0.0 ? flux[c] / estimated[c] : 0.0;
         for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
@@ -700,9 +703,12 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
     std::vector<Candidate> candidates;
     for (int s = 0; s < int(maps.surface_count()); ++s) {
         SurfaceHits& h = maps.surface(s);
-        const bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
+        bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
         // Its covered parts changed (an object moved onto it or away): scale and fill again.
         const bool recovered = !covered_changed_.empty() && covered_changed_[size_t(s)];
+        // Built from another number of photon sets (photons.refine_layers): its scale changed.
+        const bool rescaled = built_[size_t(s)] && built_layers_[size_t(s)] != maps.layers();
+        if (rescaled) recoloured = true;
         if (h.delta_f <= 0.0 && !recoloured && !recovered) continue;
         Candidate c{s, h.delta_f, std::nullopt};
         if (built_[size_t(s)] && !scene_.settings.aim.exact_direct) {

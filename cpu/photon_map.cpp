@@ -7,6 +7,7 @@ namespace ag::cpu {
 
 void PhotonMaps::resize(size_t surfaces, size_t lights, int groups_per_light) {
     surfaces_.assign(surfaces, SurfaceHits{});
+    layers_ = 1;
     groups_.assign(lights, std::vector<PhotonGroup>(size_t(groups_per_light)));
 }
 
@@ -82,6 +83,26 @@ void PhotonMaps::rescale_group(int light, int g, const glm::vec3& ratio) {
         hit.power *= ratio;
         add_energy(s, hit.position, hit.power, hit.bounce, +1.0);
     }
+}
+
+void PhotonMaps::set_layers(int layers) {
+    if (layers == layers_) return;
+    layers_ = layers;
+    for (SurfaceHits& s : surfaces_) {
+        if (s.hits.empty()) continue;
+        const double e = std::abs(energy(s.flux));
+        s.delta_f += e;
+        s.delta_i += e;
+    }
+}
+
+size_t PhotonMaps::stored_bytes() const {
+    size_t n = 0;
+    for (const SurfaceHits& s : surfaces_) n += s.hits.size() * sizeof(PhotonHit);
+    for (const std::vector<PhotonGroup>& light : groups_)
+        for (const PhotonGroup& g : light)
+            n += g.vertices.size() * sizeof(PathVertex) + g.photon_begin.size() * sizeof(uint32_t);
+    return n;
 }
 
 size_t PhotonMaps::hit_count() const {

@@ -81,6 +81,14 @@ public:
     void rescale_group(int light, int g, const glm::vec3& ratio);
 
     size_t hit_count() const;
+    // Bytes of the stored paths and hits (vertices, offsets, hits; not the change logs).
+    size_t stored_bytes() const;
+
+    // Complete photon sets the hits hold (photons.refine_layers): every hit carries the flux of
+    // one photon of one set, Φ / (G·P), and a surface's estimate is scaled by 1 / layers. Changing
+    // it marks every surface with hits as changed (its whole estimate scales).
+    int layers() const { return layers_; }
+    void set_layers(int layers);
 
 private:
     void add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& power,
@@ -88,6 +96,7 @@ private:
 
     std::vector<SurfaceHits> surfaces_;
     std::vector<std::vector<PhotonGroup>> groups_;  // [light][group]
+    int layers_ = 1;
 };
 
 }  // namespace ag::cpu

@@ -11,6 +11,9 @@ namespace ag::cpu {
 
 namespace {
 
+// photons.refine_layers' upper bound (shared/settings.h).
+constexpr int kMaxRefineLayers = 64;
+
 // Does the segment a + t·d, t ∈ [0, 1] (or [0, ∞) for a ray), meet the box? Slab test, closed
 // box: a segment that only touches a face counts.
 bool segment_meets_box(const glm::vec3& a, const glm::vec3& d, bool ray, const Bounds& box) {
@@ -62,7 +65,8 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool)
     rays_ = std::make_unique<RayTracer>(scene_);
     tracer_ = std::make_unique<PhotonTracer>(scene_, *rays_);
     const int groups = scene_.settings.photons.groups;
-    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups);
+    // Room for every refinement layer the setting allows (an empty group costs a few bytes).
+    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups * kMaxRefineLayers);
     tolerance_ = scene_.settings.photons.path_tolerance * scene_.diagonal();
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());
@@ -108,7 +112,9 @@ void PhotonSimulation::invalidate(int light, int group, PhotonFrameStats& stats)
 void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
     const int groups = scene_.settings.photons.groups;
     std::vector<bool> moved(scene_.objects.size(), false);
+    changed_ = false;
     for (const SceneChange& c : changes_since(scene_, seen_sequence_)) {
+        if (c.kind != ChangeKind::camera) changed_ = true;
         switch (c.kind) {
             case ChangeKind::object_transform:
                 moved[size_t(c.index)] = true;  // queried below, once per object
@@ -120,7 +126,8 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                 for (int s = 0; s < int(scene_.surfaces.size()); ++s) {
                     if (scene_.surfaces[size_t(s)].object != c.index) continue;
                     for (const PhotonHit& h : maps_.surface(s).hits)
-                        touched.emplace(int(h.light), int(h.group));
+                        if (int(h.group) < groups)  // refinement layers are dropped below
+                            touched.emplace(int(h.light), int(h.group));
                 }
                 for (const auto& [l, g] : touched) invalidate(l, g, stats);
                 break;
@@ -280,6 +287,50 @@ bool PhotonSimulation::same_path(const PhotonGroup& group, int photon,
     return true;
 }
 
+void PhotonSimulation::grow_groups(const std::vector<std::pair<int, int>>& groups) {
+    const int per_group = scene_.settings.photons.photons_per_group;
+    const int layer = layers();
+    const size_t first = grow_paths_.size(), jobs = groups.size() * size_t(per_group);
+    grow_paths_.resize(first + jobs);
+    grow_ends_.resize(first + jobs);
+    pool_.parallel_for(
+        jobs,
+        [&](size_t job) {
+            const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
+            grow_ends_[first + job] = tracer_->trace(groups[gi].first, groups[gi].second, int(p),
+                                                     grow_paths_[first + job], layer);
+        },
+        8);
+    grow_done_.insert(grow_done_.end(), groups.begin(), groups.end());
+}
+
+void PhotonSimulation::commit_layer() {
+    const int per_group = scene_.settings.photons.photons_per_group;
+    const int base = layers() * scene_.settings.photons.groups;
+    for (size_t i = 0; i < grow_done_.size(); ++i) {
+        const auto [l, g] = grow_done_[i];
+        maps_.set_group(l, base + g, &grow_paths_[i * size_t(per_group)], size_t(per_group));
+    }
+    maps_.set_layers(layers() + 1);
+    grow_done_.clear();
+    grow_paths_.clear();
+    grow_ends_.clear();
+}
+
+void PhotonSimulation::drop_layers() {
+    grow_todo_.clear();
+    grow_done_.clear();
+    grow_paths_.clear();
+    grow_ends_.clear();
+    if (layers() == 1) return;
+    const int groups = scene_.settings.photons.groups;
+    // Last layer first, in a fixed order (the maps are the same on any thread count).
+    for (int g = layers() * groups - 1; g >= groups; --g)
+        for (int l = int(scene_.lights.size()) - 1; l >= 0; --l)
+            if (maps_.group(l, g).traced) maps_.clear_group(l, g);
+    maps_.set_layers(1);
+}
+
 void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& groups) {
     const int per_group = scene_.settings.photons.photons_per_group;
     const size_t jobs = groups.size() * size_t(per_group);
@@ -321,7 +372,7 @@ int PhotonSimulation::invalidate_all() {
     return stats.groups_invalidated;
 }
 
-PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
+PhotonFrameStats PhotonSimulation::frame(int retrace_budget, bool grow) {
     PhotonFrameStats stats;
     stats.frame = ++frame_;
     invalidated_.clear();
@@ -354,6 +405,11 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     for (size_t i = 0; i < jobs.size(); ++i)
         if (!same_path(maps_.group(jobs[i].light, jobs[i].group), jobs[i].photon, paths[i]))
             invalidate(jobs[i].light, jobs[i].group, stats);
+    // Refinement layers hold the scene as it was: any edit (or a path found changed) drops them,
+    // so an edit costs what it costs without refinement, and growth starts again once settled.
+    if (changed_ || stats.groups_invalidated > 0 || !growth_on_ || layers() > target_layers() ||
+        !queue_.empty())
+        drop_layers();
 
     // Work off the queue under the budget (whole groups; at least one per frame).
     std::vector<std::pair<int, int>> batch;
@@ -367,6 +423,27 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget) {
     stats.groups_retraced = int(batch.size());
     stats.photons_retraced = int(batch.size()) * settings.photons_per_group;
     stats.groups_queued = int(queue_.size());
+
+    // Refinement with what the budget has left (whole groups; one if no repair ran this frame).
+    // Not in a frame that saw an edit: the scene must have held still for a whole frame.
+    if (grow && queue_.empty() && growth_pending() && !changed_ && stats.groups_invalidated == 0) {
+        if (grow_todo_.empty() && grow_done_.empty())
+            for (int l = 0; l < int(scene_.lights.size()); ++l)
+                if (scene_.lights[size_t(l)].enabled)
+                    for (int g = 0; g < settings.groups; ++g) grow_todo_.emplace_back(l, g);
+        std::vector<std::pair<int, int>> more;
+        size_t next = 0;
+        while (next < grow_todo_.size() &&
+               ((batch.empty() && more.empty()) || budget >= settings.photons_per_group)) {
+            more.push_back(grow_todo_[next++]);
+            budget -= settings.photons_per_group;
+        }
+        grow_todo_.erase(grow_todo_.begin(), grow_todo_.begin() + std::ptrdiff_t(next));
+        grow_groups(more);
+        stats.photons_grown = int(more.size()) * settings.photons_per_group;
+        if (grow_todo_.empty()) commit_layer();
+    }
+    stats.layers = layers();
     return stats;
 }
 
@@ -383,7 +460,18 @@ void PhotonSimulation::trace_all() {
                 maps_.clear_group(l, g);
             maps_.group(l, g).queued = false;
         }
+    drop_layers();
     retrace_groups(all);
+    // Every refinement layer at once, as growth would add them one by one.
+    while (growth_pending()) {
+        for (int l = 0; l < int(scene_.lights.size()); ++l)
+            if (scene_.lights[size_t(l)].enabled)
+                for (int g = 0; g < scene_.settings.photons.groups; ++g)
+                    grow_todo_.emplace_back(l, g);
+        grow_groups(grow_todo_);
+        grow_todo_.clear();
+        commit_layer();
+    }
 }
 
 LightGroupState PhotonSimulation::light_state(int light) const {

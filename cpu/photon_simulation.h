@@ -5,6 +5,7 @@
 // largest flux first, worked off under a per-frame photon budget.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <memory>
 #include <set>
@@ -31,6 +32,8 @@ struct PhotonFrameStats {
     int photons_retraced = 0;
     int groups_retraced = 0;
     int groups_queued = 0;       // still waiting after this frame
+    int photons_grown = 0;       // photons traced for the next refinement layer
+    int layers = 1;              // complete photon sets the maps hold after this frame
     int aim_texels_rebuilt = 0;  // filled in by the AIM stage
     int aim_surfaces_rebuilt = 0;
 };
@@ -50,16 +53,26 @@ public:
     // One frame of photon work on the pool's worker threads: applies the scene's edits since the
     // last frame, verifies one photon per group, re-traces queued groups within the budget.
     PhotonFrameStats frame();
-    // The same with another retrace budget (photons) than settings.photons.retrace_budget.
-    PhotonFrameStats frame(int retrace_budget);
+    // The same with another retrace budget (photons) than settings.photons.retrace_budget. With
+    // `grow`, a settled simulation spends what the budget has left on the next refinement layer
+    // (photons.refine_layers), committed to the maps when all its groups are traced.
+    PhotonFrameStats frame(int retrace_budget, bool grow = true);
     // Queues every group of every enabled light for a retrace (brute force: nothing is trusted);
     // returns how many were queued.
     int invalidate_all();
 
-    // Traces every group from scratch in the current scene (a fresh simulation's state).
+    // Traces every group from scratch in the current scene (a fresh simulation's state), grown to
+    // every refinement layer when growth is on.
     void trace_all();
 
-    bool settled() const { return queue_.empty(); }
+    // Nothing queued and, with growth on, every refinement layer in the maps.
+    bool settled() const { return queue_.empty() && !growth_pending(); }
+    // Progressive photon refinement on or off (on by construction; it does nothing while
+    // photons.refine_layers is 1). Off drops the extra layers at the next frame.
+    void set_growth(bool on) { growth_on_ = on; }
+    bool growth_pending() const { return growth_on_ && layers() < target_layers(); }
+    int layers() const { return maps_.layers(); }
+    int target_layers() const { return std::max(1, scene_.settings.photons.refine_layers); }
     // Off: moved objects are found only by round-robin verification (for measurements and tests).
     void set_query_invalidation(bool on) { query_on_ = on; }
     // Off: no round-robin verification either (a brute-force baseline that trusts nothing and
@@ -108,6 +121,14 @@ private:
     double group_flux(int light, int group) const;
     void invalidate(int light, int group, PhotonFrameStats& stats);
     void retrace_groups(const std::vector<std::pair<int, int>>& groups);
+    // Traces groups of the layer being grown into the staging paths.
+    void grow_groups(const std::vector<std::pair<int, int>>& groups);
+    // Moves the staged layer into the maps (all its groups at once: the flux per photon changes).
+    void commit_layer();
+    // Back to the one-layer state: the extra layers' hits leave the maps, staging is forgotten.
+    void drop_layers();
+    // Stores traced paths as group g of light l (its segments for the edit queries too).
+    void store_group(int l, int g, const std::vector<TracedVertex>* paths, const PathEnds* ends);
     bool same_path(const PhotonGroup& group, int photon,
                    const std::vector<TracedVertex>& path) const;
 
@@ -123,6 +144,7 @@ private:
     std::vector<Bounds> object_bounds_;  // per object, in its own frame
     bool query_on_ = true;
     bool verify_on_ = true;
+    bool changed_ = false;  // the last apply_changes() saw an edit other than the camera's
     uint64_t seen_sequence_ = 0;
     uint64_t frame_ = 0;
     float tolerance_ = 0.0f;               // world units
@@ -130,6 +152,13 @@ private:
     std::vector<uint64_t> invalidations_;  // per light
     std::vector<std::vector<TracedVertex>> traced_;  // re-used path buffers, one per photon job
     std::vector<PathEnds> traced_ends_;              // their ends
+    // Refinement: the layer being grown (groups of every enabled light not yet traced, in
+    // order), and its traced paths until it is committed.
+    bool growth_on_ = true;
+    std::vector<std::pair<int, int>> grow_todo_;
+    std::vector<std::pair<int, int>> grow_done_;
+    std::vector<std::vector<TracedVertex>> grow_paths_;  // [index in grow_done_ · P + photon]
+    std::vector<PathEnds> grow_ends_;
 };
 
 }  // namespace ag::cpu

@@ -86,7 +86,7 @@ glm::vec3 PhotonTracer::photon_power(int light) const {
 }
 
 float PhotonTracer::sample(int light, uint64_t k, int dim) const {
-    if (dim + 1 < kTabulated && dim < dimensions_)
+    if (dim + 1 < kTabulated && dim < dimensions_ && k < uint64_t(groups_) * uint64_t(per_group_))
         return tables_[size_t(light)][k * kTabulated + size_t(dim) + 1];
     if (dim < dimensions_) return float(halton_[size_t(light)].sample(k, dim));
     const uint32_t h = hash_u32(hash_u32(uint32_t(k) ^ hash_u32(uint32_t(k >> 32) + 0x9e3779b9u)) +
@@ -95,14 +95,23 @@ float PhotonTracer::sample(int light, uint64_t k, int dim) const {
     return to_unit_float(h);
 }
 
-PathEnds PhotonTracer::trace(int light, int group, int index,
-                             std::vector<TracedVertex>& out) const {
+PathEnds PhotonTracer::trace(int light, int group, int index, std::vector<TracedVertex>& out,
+                             int layer) const {
     const Light& l = scene_.lights[size_t(light)];
-    const uint64_t k = uint64_t(group) * uint64_t(per_group_) + uint64_t(index);
+    const uint64_t k =
+        (uint64_t(layer) * uint64_t(groups_) + uint64_t(group)) * uint64_t(per_group_) +
+        uint64_t(index);
     // Group g owns stratum [g/G, (g+1)/G) of the Hilbert parameter; photon i takes the i-th
-    // point of a 1D QMC sequence inside it, so a group's photons leave in similar directions.
-    const float* row = &tables_[size_t(light)][k * kTabulated];
-    const glm::vec2 s(row[0], row[1]);
+    // point of a 1D QMC sequence inside it, so a group's photons leave in similar directions
+    // (layer L: the points L·P.. of that sequence).
+    glm::vec2 s;
+    if (layer == 0) {
+        const float* row = &tables_[size_t(light)][k * kTabulated];
+        s = glm::vec2(row[0], row[1]);
+    } else {
+        const uint64_t i = uint64_t(layer) * uint64_t(per_group_) + uint64_t(index);
+        s = hilbert_point((double(group) + halton_[size_t(light)].sample(i, 0)) / double(groups_));
+    }
 
     // A sun's group strata lie on its disc (the Hilbert point), its direction is fixed.
     const glm::vec2 other(sample(light, k, 1), sample(light, k, 2));

@@ -51,14 +51,19 @@ public:
     void refresh();
 
     // Traces photon `index` of group `group` of light `light`, appending its vertices to `out`.
-    PathEnds trace(int light, int group, int index, std::vector<TracedVertex>& out) const;
+    // Layer L ≥ 1 (photons.refine_layers) is another complete set of G × P photons: its group g
+    // takes the next P points of the same 1D sequence inside stratum g, and the light's Halton
+    // points L·G·P.. for its other numbers, so the layers together are the first (L+1)·G·P
+    // points of one QMC set. Layer 0 is the set without refinement, unchanged by it.
+    PathEnds trace(int light, int group, int index, std::vector<TracedVertex>& out,
+                   int layer = 0) const;
 
     // Flux of one photon of `light` as emitted (Φ / (G·P)); zero for a switched-off light.
     glm::vec3 photon_power(int light) const;
     int dimensions() const { return dimensions_; }
 
 private:
-    // QMC number `dim` of photon k (global index within the light), in [0, 1).
+    // QMC number `dim` of photon k (global index within the light, over all layers), in [0, 1).
     float sample(int light, uint64_t k, int dim) const;
 
     const Scene& scene_;

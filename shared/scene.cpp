@@ -245,13 +245,18 @@ void check_light_samples(const Scene& scene) {
 void check_photon_budget(const Scene& scene) {
     const int64_t lights = std::max<int64_t>(1, int64_t(scene.lights.size()));
     const PhotonSettings& p = scene.settings.photons;
-    const int64_t photons = int64_t(p.groups) * p.photons_per_group * lights;
+    const int64_t photons =
+        int64_t(p.groups) * p.photons_per_group * lights * std::max(1, p.refine_layers);
     if (photons > kMaxScenePhotons)
-        throw_input_error(scene.path, "/settings/photons",
-                          "groups (" + std::to_string(p.groups) + ") × photons_per_group (" +
-                              std::to_string(p.photons_per_group) + ") × lights (" +
-                              std::to_string(lights) + ") = " + std::to_string(photons) +
-                              " photons; expected at most " + std::to_string(kMaxScenePhotons));
+        throw_input_error(
+            scene.path, "/settings/photons",
+            "groups (" + std::to_string(p.groups) + ") × photons_per_group (" +
+                std::to_string(p.photons_per_group) + ") × lights (" + std::to_string(lights) +
+                ")" +
+                (p.refine_layers > 1 ? " × refine_layers (" + std::to_string(p.refine_layers) + ")"
+                                     : std::string()) +
+                " = " + std::to_string(photons) + " photons; expected at most " +
+                std::to_string(kMaxScenePhotons));
     const int64_t caustic = int64_t(scene.settings.caustics.photons) * lights;
     if (caustic > kMaxScenePhotons)
         throw_input_error(scene.path, "/settings/caustics/photons",

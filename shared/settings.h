@@ -81,6 +81,13 @@ struct PhotonSettings {
     int verify_per_frame = 1;      // photons per group re-traced and compared each frame
     int retrace_budget = 4000;     // photons re-traced for invalid groups per frame
     float path_tolerance = 1e-4f;  // hit positions agree within this fraction of the scene diagonal
+    // Progressive photon refinement (docs/fidelity.md, session 17): once the scene is static and
+    // every group is traced, the simulation grows to this many complete photon sets (layers of
+    // groups × photons_per_group photons per light, each its own QMC points), one layer at a time
+    // with the retrace budget repairs leave; each photon then carries Φ / (G·P·layers). An edit
+    // drops the extra layers (the state of a fresh simulation) and growth starts again once
+    // settled. 1 = off.
+    int refine_layers = 1;
 };
 
 struct LightmapSettings {
@@ -333,6 +340,8 @@ void visit_settings(Settings& s, Visitor& v) {
                        "photons re-traced per frame for invalid groups"});
     v.field(Field<float>{"path_tolerance", s.photons.path_tolerance, 0, 1,
                          "path agreement, fraction of scene diagonal"});
+    v.field(Field<int>{"refine_layers", s.photons.refine_layers, 1, 64,
+                       "photon sets a static, settled scene grows to (1 = off)"});
     v.end_section();
     v.section("lightmap", "surfaces and charts, Larsen ch. 8");
     v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30,

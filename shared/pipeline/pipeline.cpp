@@ -30,6 +30,8 @@ void add(cpu::PhotonFrameStats& a, const cpu::PhotonFrameStats& b) {
     a.photons_retraced += b.photons_retraced;
     a.groups_retraced += b.groups_retraced;
     a.groups_queued = b.groups_queued;
+    a.photons_grown += b.photons_grown;
+    a.layers = b.layers;
     a.aim_texels_rebuilt += b.aim_texels_rebuilt;
     a.aim_surfaces_rebuilt += b.aim_surfaces_rebuilt;
 }
@@ -91,6 +93,9 @@ Pipeline::Pipeline(Scene& scene, const PipelineOptions& options)
     indirect_ = make_indirect_method(scene_, *meshes_, aim_texture_, staged_aim_, width, height,
                                      pool_.size());
     uses_photon_maps_ = indirect_->uses_photon_maps();
+    // Progressive photon refinement feeds the AIMs, which the IIM method gathers; the baselines
+    // (full, full_budget) keep the photon budget they are measured with.
+    photons_->set_growth(mode_ == PipelineMode::selective && iim_method() != nullptr);
     if (mode_ == PipelineMode::full_budget) {
         // The baseline knows nothing of what changed: no verification, no moved-object query.
         photons_->set_verification(false);
@@ -185,6 +190,7 @@ void Pipeline::start_cpu_work(const FrameBudgets& budgets) {
                     w.photons = photons_->frame(budgets.retrace_photons);
                     break;
                 case PipelineMode::selective:
+                    // Refinement layers grow with what the repairs leave of the budget.
                     w.photons = photons_->frame(budgets.retrace_photons);
                     break;
             }

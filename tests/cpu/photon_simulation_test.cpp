@@ -189,8 +189,9 @@ bool same_paths(const PhotonGroup& a, const PhotonGroup& b, float tolerance) {
 void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b,
                         const std::string& what) {
     const Scene& scene = b.scene();
+    ASSERT_EQ(a.layers(), b.layers()) << what;
     for (int l = 0; l < int(scene.lights.size()); ++l)
-        for (int g = 0; g < scene.settings.photons.groups; ++g) {
+        for (int g = 0; g < scene.settings.photons.groups * b.layers(); ++g) {
             const PhotonGroup &x = a.maps().group(l, g), &y = b.maps().group(l, g);
             ASSERT_EQ(x.traced, y.traced) << what << ": light " << l << " group " << g;
             ASSERT_EQ(x.photon_begin, y.photon_begin) << what << ": light " << l << " group " << g;
@@ -229,9 +230,10 @@ int settle(PhotonSimulation& sim) {
 // With `verify` off the round-robin safety net is switched off: the edits' own invalidation (the
 // moved-object query, light and albedo edits) must then find every group alone.
 void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits,
-                           bool verify = true) {
+                           bool verify = true, int layers = 1) {
     Scene scene = load_scene(test::scene_path(scene_file));
     if (!verify) scene.settings.photons.verify_per_frame = 0;
+    scene.settings.photons.refine_layers = layers;
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     settle(sim);
@@ -247,6 +249,8 @@ void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edi
 
     PhotonSimulation fresh(scene, pool);
     fresh.trace_all();
+    EXPECT_EQ(sim.layers(), layers);
+    EXPECT_EQ(fresh.layers(), layers);
     expect_same_hits(sim, fresh, scene.settings.photons.path_tolerance * scene.diagonal(),
                      scene_file + " seed " + std::to_string(seed));
     expect_exact_paths(sim, fresh, scene_file + " seed " + std::to_string(seed));
@@ -267,6 +271,52 @@ TEST(SelectiveTracing, RepairEqualsRebuildWithoutVerification) {
         repair_equals_rebuild("cornell.json", seed, 8, false);
     for (uint32_t seed = 400; seed <= 408; ++seed)
         repair_equals_rebuild("two_rooms.json", seed, 8, false);
+}
+
+// Progressive photon refinement: a grown simulation, edited (which drops its extra photon sets)
+// and grown again once settled, holds the photons of a fresh simulation grown to as many sets.
+TEST(SelectiveTracing, RepairEqualsRebuildWithRefinementLayers) {
+    for (uint32_t seed = 500; seed <= 503; ++seed)
+        repair_equals_rebuild("cornell.json", seed, 4, true, 3);
+    repair_equals_rebuild("two_rooms.json", 510, 4, false, 3);
+}
+
+// Growth: one layer at a time once settled, each photon's flux Φ / (G·P·layers) in the AIM; an
+// edit drops the extra layers at once.
+TEST(SelectiveTracing, RefinementGrowsWhenSettledAndAnEditDropsIt) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.settings.photons.refine_layers = 4;
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    EXPECT_FALSE(sim.settled());
+    const size_t base_hits = [&] {
+        Scene s1 = load_scene(test::scene_path("cornell.json"));
+        PhotonSimulation one(s1, pool);
+        one.trace_all();
+        return one.maps().hit_count();
+    }();
+    int frames = 0, grown = 0;
+    while (!sim.settled() && frames < 1000) {
+        const PhotonFrameStats st = sim.frame();
+        // Growth only with the queue empty: never in a frame that still had repairs queued.
+        if (st.photons_grown > 0) {
+            EXPECT_EQ(st.groups_queued, 0);
+        }
+        grown += st.photons_grown;
+        ++frames;
+    }
+    ASSERT_TRUE(sim.settled());
+    EXPECT_EQ(sim.layers(), 4);
+    const PhotonSettings& p = scene.settings.photons;
+    EXPECT_EQ(grown, 3 * p.groups * p.photons_per_group);
+    EXPECT_GT(sim.maps().hit_count(), 3 * base_hits);
+    const int cube = scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    translate_object(scene, cube, {10.0f, 0.0f, 0.0f});
+    const PhotonFrameStats st = sim.frame();
+    EXPECT_EQ(st.layers, 1);
+    EXPECT_EQ(st.photons_grown, 0);
+    EXPECT_FALSE(sim.settled());
 }
 
 TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
@@ -313,6 +363,17 @@ TEST(SelectiveTracing, FreshTraceIsIndependentOfThreadCount) {
     PhotonSimulation a(scene, one), b(scene, three);
     a.trace_all();
     b.trace_all();
+    expect_identical_maps(a.maps(), b.maps());
+}
+
+TEST(SelectiveTracing, GrownTraceIsIndependentOfThreadCount) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.settings.photons.refine_layers = 3;
+    ThreadPool one(1), three(3);
+    PhotonSimulation a(scene, one), b(scene, three);
+    a.trace_all();
+    b.trace_all();
+    EXPECT_EQ(a.layers(), 3);
     expect_identical_maps(a.maps(), b.maps());
 }
 

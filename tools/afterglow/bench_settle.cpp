@@ -261,6 +261,9 @@ int bench_settle(const Args& args, int width, int height) {
         // cornell) would move the target the baselines are measured against. --set
         // gather.refine_passes=N turns it back on.
         scene.settings.gather.refine_passes = 1;
+        // Progressive photon refinement likewise (photons.refine_layers, docs/fidelity.md):
+        // settling is measured with the photon budget of a fresh pipeline; --set turns it on.
+        scene.settings.photons.refine_layers = 1;
         args.apply_settings(scene);
         scene.settings.schedule.frame_ms = float(frame_ms);
         scene.camera.width = width;

@@ -194,6 +194,7 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         // Metrics are taken outside the timed part. Photon work that runs on past the frame
         // (a frame-time target) goes on meanwhile: that time is counted, or it would be free.
         const bool busy = pipeline.workers_busy();
+        const bool pipeline_converged = pipeline.converged();
         const gpu::FrameImages images = pipeline.images();
         const Image& test = term ? images.aov[size_t(*term)] : images.frame;
         const ImageMetrics m = compare_images(test, reference_at(f));
@@ -217,6 +218,9 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.gather_plan_ms = st.budget_gather_ms;
         r.photon_ms = st.photon_ms, r.aim_ms = st.aim_ms;
         r.early_hand_over = st.early_hand_over;
+        r.photons_grown = uint64_t(st.photons.photons_grown);
+        r.layers = st.photons.layers;
+        r.converged = pipeline_converged;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
         if (on_frame) on_frame(f + 1);
@@ -294,7 +298,7 @@ std::string convergence_csv(const ConvergenceRun& run) {
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
            "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused,workers_behind,"
            "gather_ms,draw_ms,wait_ms,"
-           "gather_plan_ms,photon_ms,aim_ms,early_hand_over\n";
+           "gather_plan_ms,photon_ms,aim_ms,early_hand_over,photons_grown,layers,converged\n";
     // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
     // (and its mode, unless selective) so both join one methods plot.
     std::string method = kPipelineModeNames[size_t(run.mode)];
@@ -308,7 +312,8 @@ std::string convergence_csv(const ConvergenceRun& run) {
             << r.iim_texels << ',' << r.iim_pending << ',' << r.rays_traced << ',' << r.rays_reused
             << ',' << (r.workers_behind ? 1 : 0) << ',' << r.gather_ms << ',' << r.draw_ms << ','
             << r.wait_ms << ',' << r.gather_plan_ms << ',' << r.photon_ms << ',' << r.aim_ms << ','
-            << (r.early_hand_over ? 1 : 0) << "\n";
+            << (r.early_hand_over ? 1 : 0) << ',' << r.photons_grown << ',' << r.layers << ','
+            << (r.converged ? 1 : 0) << "\n";
     return csv.str();
 }
 

@@ -60,6 +60,9 @@ struct FrameRecord {
     // taken over during the gather (selective) rather than at the frame's end.
     double photon_ms = 0.0, aim_ms = 0.0;
     bool early_hand_over = false;
+    uint64_t photons_grown = 0;  // photons traced for the next refinement layer
+    int layers = 1;              // photon sets in the maps (photons.refine_layers)
+    bool converged = false;      // Pipeline::converged() after the frame
 };
 
 struct SettleAnalysis {

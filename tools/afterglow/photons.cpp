@@ -110,6 +110,9 @@ int run_photons(const Args& args) {
     std::cout << "frames " << frames << " in " << total_s << " s, " << sim.maps().hit_count()
               << " photon hits on " << scene.surfaces.size() << " surfaces, " << pool.size()
               << " worker threads\n";
+    std::cout << "photon sets (photons.refine_layers) " << sim.layers() << " of "
+              << sim.target_layers() << ", stored paths and hits "
+              << double(sim.maps().stored_bytes()) / (1024.0 * 1024.0) << " MiB\n";
 
     if (args.has("aim")) {
         // Rebuild every surface so the picture shows the current state, then write it scaled up.
