@@ -11,9 +11,6 @@ namespace ag::cpu {
 
 namespace {
 
-// photons.refine_layers' upper bound (shared/settings.h).
-constexpr int kMaxRefineLayers = 64;
-
 // Does the segment a + t·d, t ∈ [0, 1] (or [0, ∞) for a ray), meet the box? Slab test, closed
 // box: a segment that only touches a face counts.
 bool segment_meets_box(const glm::vec3& a, const glm::vec3& d, bool ray, const Bounds& box) {
@@ -65,8 +62,9 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool)
     rays_ = std::make_unique<RayTracer>(scene_);
     tracer_ = std::make_unique<PhotonTracer>(scene_, *rays_);
     const int groups = scene_.settings.photons.groups;
-    // Room for every refinement layer the setting allows (an empty group costs a few bytes).
-    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups * kMaxRefineLayers);
+    // Room for the refinement layers the scene asks for, and no more (56 bytes an empty group).
+    max_layers_ = std::max(1, scene_.settings.photons.refine_layers);
+    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups * max_layers_);
     tolerance_ = scene_.settings.photons.path_tolerance * scene_.diagonal();
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());

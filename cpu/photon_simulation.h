@@ -72,7 +72,10 @@ public:
     void set_growth(bool on) { growth_on_ = on; }
     bool growth_pending() const { return growth_on_ && layers() < target_layers(); }
     int layers() const { return maps_.layers(); }
-    int target_layers() const { return std::max(1, scene_.settings.photons.refine_layers); }
+    // photons.refine_layers, at most what the maps were made for (the setting at construction).
+    int target_layers() const {
+        return std::clamp(scene_.settings.photons.refine_layers, 1, max_layers_);
+    }
     // Off: moved objects are found only by round-robin verification (for measurements and tests).
     void set_query_invalidation(bool on) { query_on_ = on; }
     // Off: no round-robin verification either (a brute-force baseline that trusts nothing and
@@ -155,6 +158,8 @@ private:
     // Refinement: the layer being grown (groups of every enabled light not yet traced, in
     // order), and its traced paths until it is committed.
     bool growth_on_ = true;
+    int max_layers_ =
+        1;  // photon sets the maps have room for (photons.refine_layers at construction)
     std::vector<std::pair<int, int>> grow_todo_;
     std::vector<std::pair<int, int>> grow_done_;
     std::vector<std::vector<TracedVertex>> grow_paths_;  // [index in grow_done_ · P + photon]
