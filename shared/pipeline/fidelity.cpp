@@ -415,7 +415,7 @@ std::string fidelity_csv(const Scene& scene, const FidelityReport& report) {
             << ',' << r.mean_ratio << ',' << r.rms << ',' << r.rel_mse << ',' << r.test_mean.r
             << ',' << r.test_mean.g << ',' << r.test_mean.b << ',' << r.reference_mean.r << ','
             << r.reference_mean.g << ',' << r.reference_mean.b << '\n';
-    out << "\nrecord,object,x,y,z,nx,ny,nz,valid";
+    out << "\nrecord,object,x,y,z,nx,ny,nz,valid,area";
     for (const auto& [name, v] : report.texel_values)
         out << ',' << name << "_r," << name << "_g," << name << "_b";
     out << '\n';
@@ -425,7 +425,7 @@ std::string fidelity_csv(const Scene& scene, const FidelityReport& report) {
         const glm::vec3 p = o.transform.apply_point(t.position);
         const glm::vec3 n = glm::normalize(o.transform.apply_vector(t.normal));
         out << r << ',' << o.name << ',' << p.x << ',' << p.y << ',' << p.z << ',' << n.x << ','
-            << n.y << ',' << n.z << ',' << int(report.texel_valid[r]);
+            << n.y << ',' << n.z << ',' << int(report.texel_valid[r]) << ',' << t.area;
         for (const auto& [name, v] : report.texel_values)
             out << ',' << v[r].r << ',' << v[r].g << ',' << v[r].b;
         out << '\n';
