@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <functional>
+#include <memory>
 #include <numeric>
+#include <unordered_map>
 
 namespace ag {
 namespace {
@@ -32,8 +34,60 @@ glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const g
 }
 
 struct WorldTriangle {
-    glm::dvec3 a, b, c, lo, hi;
-    int partner = 0;  // index into the partners' vertex lists
+    glm::dvec3 a, b, c, lo, hi;  // bounds without margin
+    int partner = 0;             // index into the partners' vertex lists
+};
+
+bool outside(const glm::dvec3& p, const WorldTriangle& t, double margin) {
+    return glm::any(glm::lessThan(p, t.lo - margin)) ||
+           glm::any(glm::greaterThan(p, t.hi + margin));
+}
+
+// Partner triangles by the cells of a uniform grid their bounds (grown by `margin`) overlap, so a
+// sample tests the few that can lie within `margin` of it, not every triangle of a large mesh (a
+// dynamic box's charts against a 133k-triangle room: minutes before).
+class TriangleGrid {
+public:
+    TriangleGrid(const std::vector<WorldTriangle>& triangles, double margin) {
+        glm::dvec3 lo(1e300), hi(-1e300);
+        double extent = 0.0;
+        for (const WorldTriangle& t : triangles) {
+            lo = glm::min(lo, t.lo);
+            hi = glm::max(hi, t.hi);
+            extent += glm::length(t.hi - t.lo);
+        }
+        // Cells about the size of a triangle plus the margin: a few triangles per cell.
+        cell_ = std::max(2.0 * margin + extent / double(std::max<size_t>(1, triangles.size())),
+                         1e-9 * std::max(1.0, glm::length(hi - lo)));
+        origin_ = lo - margin;
+        for (size_t i = 0; i < triangles.size(); ++i) {
+            const glm::ivec3 a = cell_of(triangles[i].lo - margin),
+                             b = cell_of(triangles[i].hi + margin);
+            for (int z = a.z; z <= b.z; ++z)
+                for (int y = a.y; y <= b.y; ++y)
+                    for (int x = a.x; x <= b.x; ++x)
+                        cells_[key(glm::ivec3(x, y, z))].push_back(int(i));
+        }
+    }
+    // The triangles whose grown bounds may hold p (in increasing index order), or none.
+    const std::vector<int>& near(const glm::dvec3& p) const {
+        const auto it = cells_.find(key(cell_of(p)));
+        return it == cells_.end() ? empty_ : it->second;
+    }
+
+private:
+    glm::ivec3 cell_of(const glm::dvec3& p) const {
+        const glm::dvec3 c = glm::floor((p - origin_) / cell_);
+        return glm::ivec3(glm::clamp(c, glm::dvec3(-1e6), glm::dvec3(1e6)));
+    }
+    static uint64_t key(const glm::ivec3& c) {
+        const auto u = [](int v) { return uint64_t(uint32_t(v + (1 << 20))) & 0x1fffffull; };
+        return u(c.x) | (u(c.y) << 21) | (u(c.z) << 42);
+    }
+    double cell_ = 1.0;
+    glm::dvec3 origin_{0.0};
+    std::unordered_map<uint64_t, std::vector<int>> cells_;
+    std::vector<int> empty_;
 };
 
 }  // namespace
@@ -54,10 +108,11 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
                              const std::function<void(const glm::dvec3& object_point, double area,
                                                       const ContactSample&)>& visit) {
     const Object& own = scene.objects[size_t(chart.object)];
-    // The partners' triangles in world space, with bounds grown by the farthest distance that
-    // can count (`distance`, or `reach` × the partner's size) for a quick reject.
+    // The partners' triangles in world space, with their bounds for a quick reject.
     std::vector<WorldTriangle> partners;
     std::vector<std::vector<glm::dvec3>> partner_vertices;
+    std::vector<int> partner_begin;  // per partner, its first triangle in `partners`; then the end
+    std::vector<double> partner_grow;
     for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
         const Object& o = scene.objects[size_t(oi)];
         if (oi == chart.object || !(own.dynamic || o.dynamic)) continue;
@@ -68,25 +123,38 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             lo = glm::min(lo, vertices.back());
             hi = glm::max(hi, vertices.back());
         }
-        const double grow = std::max(
-            distance, reach > 0.0 && !vertices.empty() ? reach * glm::length(hi - lo) : 0.0);
+        // A sample is within reach of a partner's triangle only within `reach` × the partner's
+        // size of it (and within `reach` × the partner's height above the sample's plane).
+        partner_grow.push_back(std::max(
+            distance, reach > 0.0 && !vertices.empty() ? reach * glm::length(hi - lo) : 0.0));
+        partner_begin.push_back(int(partners.size()));
         for (const glm::uvec3& f : o.mesh.triangles) {
             WorldTriangle t;
             t.a = vertices[f.x];
             t.b = vertices[f.y];
             t.c = vertices[f.z];
-            t.lo = glm::min(glm::min(t.a, t.b), t.c) - grow;
-            t.hi = glm::max(glm::max(t.a, t.b), t.c) + grow;
+            t.lo = glm::min(glm::min(t.a, t.b), t.c);
+            t.hi = glm::max(glm::max(t.a, t.b), t.c);
             t.partner = int(partner_vertices.size());
             partners.push_back(t);
         }
         partner_vertices.push_back(std::move(vertices));
     }
     if (partners.empty()) return;
+    partner_begin.push_back(int(partners.size()));
+    // Few partner triangles (a box): test them all; many (a room's mesh): through a grid.
+    constexpr size_t kGridFrom = 256;
+    std::unique_ptr<TriangleGrid> grid;
+    if (partners.size() >= kGridFrom) grid = std::make_unique<TriangleGrid>(partners, distance);
+    std::vector<int> all;
+    if (!grid) {
+        all.resize(partners.size());
+        std::iota(all.begin(), all.end(), 0);
+    }
 
     // Sample each chart triangle at the centroids of an n×n split into equal sub-triangles.
     const double d2 = distance * distance;
-    std::vector<double> reach2(partner_vertices.size());
+    std::vector<double> reach2(partner_vertices.size()), partner_top(partner_vertices.size());
     for (int tri : chart.triangles) {
         const glm::uvec3 f = own.mesh.triangles[size_t(tri)];
         const glm::dvec3 oa(own.mesh.positions[f.x]), ob(own.mesh.positions[f.y]),
@@ -102,27 +170,48 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
         const int n = std::clamp(int(std::ceil(longest / spacing)), 1, 64);
         const double piece = area / double(n * n);
+        // A partner's height above a sample's plane is max_w (w · normal) − p · normal: the
+        // maximum over its vertices is the triangle's, once (not once per sample).
+        if (reach > 0.0)
+            for (size_t k = 0; k < partner_vertices.size(); ++k) {
+                double top = -1e300;
+                for (const glm::dvec3& w : partner_vertices[k])
+                    top = std::max(top, glm::dot(w, normal));
+                partner_top[k] = top;
+            }
         const auto sample = [&](double u, double v) {
             const glm::dvec3 p = a + (b - a) * (u / n) + (c - a) * (v / n);
             const glm::dvec3 q_object = oa + (ob - oa) * (u / n) + (oc - oa) * (v / n);
             if (reach > 0.0)
                 for (size_t k = 0; k < partner_vertices.size(); ++k) {
                     // The partner's height above the sample's plane.
-                    double height = 0.0;
-                    for (const glm::dvec3& w : partner_vertices[k])
-                        height = std::max(height, glm::dot(w - p, normal));
+                    const double height = std::max(0.0, partner_top[k] - glm::dot(p, normal));
                     reach2[k] = reach * reach * height * height;
                 }
             ContactSample s;
-            for (const WorldTriangle& t : partners) {
-                if (glm::any(glm::lessThan(p, t.lo)) || glm::any(glm::greaterThan(p, t.hi)))
-                    continue;
+            for (int i : grid ? grid->near(p) : all) {
+                const WorldTriangle& t = partners[size_t(i)];
+                if (outside(p, t, distance)) continue;
                 const glm::dvec3 q = closest_on_triangle(p, t.a, t.b, t.c);
                 const double e2 = glm::dot(q - p, q - p);
                 s.near = s.near || e2 <= d2;
                 s.covered = s.covered || e2 <= 1e-12 * d2;
-                s.within_reach = s.within_reach || (reach > 0.0 && e2 <= reach2[size_t(t.partner)]);
                 if (s.covered) break;
+            }
+            // Within reach of a partner: it only counts for a sample neither covered nor near.
+            for (size_t k = 0; reach > 0.0 && !s.near && k < partner_vertices.size(); ++k) {
+                if (!(reach2[k] > 0.0)) continue;
+                const double r = std::min(std::sqrt(reach2[k]), partner_grow[k]);
+                for (int i = partner_begin[k]; i < partner_begin[k + 1]; ++i) {
+                    const WorldTriangle& t = partners[size_t(i)];
+                    if (outside(p, t, r)) continue;
+                    const glm::dvec3 q = closest_on_triangle(p, t.a, t.b, t.c);
+                    if (glm::dot(q - p, q - p) <= reach2[k]) {
+                        s.within_reach = true;
+                        break;
+                    }
+                }
+                if (s.within_reach) break;
             }
             visit(q_object, piece, s);
         };
