@@ -60,19 +60,37 @@ public:
         cell_ = std::max(2.0 * margin + extent / double(std::max<size_t>(1, triangles.size())),
                          1e-9 * std::max(1.0, glm::length(hi - lo)));
         origin_ = lo - margin;
+        // A triangle far larger than the cells (a floor among a statue's triangles) is tested by
+        // every sample instead of filling a million cells.
+        constexpr int64_t kMaxCells = 4096;
+        std::vector<std::pair<glm::ivec3, glm::ivec3>> spans(triangles.size());
         for (size_t i = 0; i < triangles.size(); ++i) {
             const glm::ivec3 a = cell_of(triangles[i].lo - margin),
                              b = cell_of(triangles[i].hi + margin);
+            const int64_t cells =
+                (int64_t(b.x) - a.x + 1) * (int64_t(b.y) - a.y + 1) * (int64_t(b.z) - a.z + 1);
+            if (cells > kMaxCells) {
+                large_.push_back(int(i));
+                spans[i] = {glm::ivec3(1), glm::ivec3(0)};  // empty
+            } else {
+                spans[i] = {a, b};
+            }
+        }
+        for (size_t i = 0; i < triangles.size(); ++i) {
+            const auto [a, b] = spans[i];
             for (int z = a.z; z <= b.z; ++z)
                 for (int y = a.y; y <= b.y; ++y)
-                    for (int x = a.x; x <= b.x; ++x)
-                        cells_[key(glm::ivec3(x, y, z))].push_back(int(i));
+                    for (int x = a.x; x <= b.x; ++x) {
+                        std::vector<int>& cell = cells_[key(glm::ivec3(x, y, z))];
+                        if (cell.empty()) cell = large_;  // in increasing index order
+                        cell.insert(std::upper_bound(cell.begin(), cell.end(), int(i)), int(i));
+                    }
         }
     }
-    // The triangles whose grown bounds may hold p (in increasing index order), or none.
+    // The triangles whose grown bounds may hold p (in increasing index order).
     const std::vector<int>& near(const glm::dvec3& p) const {
         const auto it = cells_.find(key(cell_of(p)));
-        return it == cells_.end() ? empty_ : it->second;
+        return it == cells_.end() ? large_ : it->second;
     }
 
 private:
@@ -87,7 +105,7 @@ private:
     double cell_ = 1.0;
     glm::dvec3 origin_{0.0};
     std::unordered_map<uint64_t, std::vector<int>> cells_;
-    std::vector<int> empty_;
+    std::vector<int> large_;  // the triangles every cell holds
 };
 
 }  // namespace

@@ -27,8 +27,9 @@ struct ContactSample {
     bool covered = false;  // touches one
     // Within `reach` × the partner's height above the sample's plane (how far it stands out
     // along the chart's normal) of that partner: the scale over which the partner's occlusion
-    // of the sample's hemisphere, so its indirect light, changes (lightmap.refine_reach). Always
-    // false when reach ≤ 0.
+    // of the sample's hemisphere, so its indirect light, changes (lightmap.refine_reach). Only
+    // looked for where it decides anything, a sample neither near nor covered; false otherwise
+    // and when reach ≤ 0.
     bool within_reach = false;
 };
 void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,

@@ -16,6 +16,7 @@
 
 #include "shared/input_error.h"
 #include "shared/shapes.h"
+#include "shared/texel_density.h"
 
 namespace ag {
 namespace {
@@ -759,6 +760,125 @@ TEST(Atlas, TooManyTexelsAreRefusedNamingTheSettingAndTheLimit) {
         << err;
     // Just inside both bounds: accepted.
     EXPECT_EQ(error(make_quad(10000.0f, 1.0f), 1.0f), "");
+}
+
+// The contact samples find a large partner's triangles through a grid (shared/texel_density.cpp);
+// every sample must be classified as testing each triangle would: a dynamic box's charts against
+// a bumpy floor of 1,152 triangles (past the grid's threshold) with one huge triangle far below
+// it (too large for the grid's cells: tested by every sample).
+TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
+    Scene scene;
+    Object floor;
+    floor.name = "floor";
+    constexpr int kN = 24;
+    for (int z = 0; z <= kN; ++z)
+        for (int x = 0; x <= kN; ++x) {
+            const float fx = -4.0f + 8.0f * float(x) / kN, fz = -4.0f + 8.0f * float(z) / kN;
+            floor.mesh.positions.push_back(
+                {fx, 0.05f * std::sin(3.0f * fx) * std::cos(2.0f * fz), fz});
+        }
+    for (int z = 0; z < kN; ++z)
+        for (int x = 0; x < kN; ++x) {
+            const uint32_t i = uint32_t(z * (kN + 1) + x);
+            floor.mesh.triangles.push_back({i, i + kN + 1, i + 1});
+            floor.mesh.triangles.push_back({i + 1, i + kN + 1, i + kN + 2});
+        }
+    const uint32_t big = uint32_t(floor.mesh.positions.size());
+    floor.mesh.positions.push_back({-500.0f, -5.0f, -500.0f});
+    floor.mesh.positions.push_back({-500.0f, -5.0f, 500.0f});
+    floor.mesh.positions.push_back({500.0f, -5.0f, 0.0f});
+    floor.mesh.triangles.push_back({big, big + 1, big + 2});
+    scene.objects.push_back(std::move(floor));
+    Object box;
+    box.name = "box";
+    box.mesh = make_box({2.0f, 2.0f, 2.0f});
+    box.transform.translation = {0.5f, 1.02f, -0.3f};
+    box.dynamic = true;
+    scene.objects.push_back(std::move(box));
+    scene.settings.lightmap.texel_size = 0.5f;
+    make_surfaces_and_atlas(scene);
+
+    // Every partner triangle in world space, as the samples see them.
+    struct Tri {
+        glm::dvec3 a, b, c;
+    };
+    std::vector<Tri> tris;
+    glm::dvec3 lo(1e300), hi(-1e300);
+    const Object& f = scene.objects[0];
+    for (const glm::vec3& p : f.mesh.positions) {
+        lo = glm::min(lo, glm::dvec3(f.transform.apply_point(p)));
+        hi = glm::max(hi, glm::dvec3(f.transform.apply_point(p)));
+    }
+    for (const glm::uvec3& t : f.mesh.triangles)
+        tris.push_back({glm::dvec3(f.transform.apply_point(f.mesh.positions[t.x])),
+                        glm::dvec3(f.transform.apply_point(f.mesh.positions[t.y])),
+                        glm::dvec3(f.transform.apply_point(f.mesh.positions[t.z]))});
+    // Closest point on a triangle by projection and edge clamping (independent of the library's).
+    const auto dist2 = [](const glm::dvec3& p, const Tri& t) {
+        const glm::dvec3 n = glm::normalize(glm::cross(t.b - t.a, t.c - t.a));
+        const glm::dvec3 q = p - glm::dot(p - t.a, n) * n;
+        const auto inside = [&](const glm::dvec3& u, const glm::dvec3& v) {
+            return glm::dot(glm::cross(v - u, q - u), n) >= 0.0;
+        };
+        if (inside(t.a, t.b) && inside(t.b, t.c) && inside(t.c, t.a)) return glm::dot(p - q, p - q);
+        double best = 1e300;
+        for (const auto& [u, v] : {std::pair{t.a, t.b}, {t.b, t.c}, {t.c, t.a}}) {
+            const double s = std::clamp(glm::dot(p - u, v - u) / glm::dot(v - u, v - u), 0.0, 1.0);
+            const glm::dvec3 e = u + s * (v - u);
+            best = std::min(best, glm::dot(p - e, p - e));
+        }
+        return best;
+    };
+    const double distance = 0.25, reach = 1.0;
+    const double grow = std::max(distance, reach * glm::length(hi - lo));
+    const Object& b = scene.objects[1];
+    int samples = 0, near = 0, covered = 0, within = 0;
+    for (const Chart& chart : scene.atlas.charts) {
+        if (chart.object != 1) continue;
+        for_each_contact_sample(
+            scene, chart, distance, 0.1, reach,
+            [&](const glm::dvec3& object_point, double, const ContactSample& s) {
+                const glm::dvec3 p(b.transform.apply_point(glm::vec3(object_point)));
+                // The sample's chart normal: the box face it lies on (the largest coordinate).
+                const glm::dvec3 o = object_point;
+                const int axis = std::abs(o.x) >= std::abs(o.y) && std::abs(o.x) >= std::abs(o.z)
+                                     ? 0
+                                 : std::abs(o.y) >= std::abs(o.z) ? 1
+                                                                  : 2;
+                glm::dvec3 normal(0.0);
+                normal[axis] = o[axis] > 0.0 ? 1.0 : -1.0;
+                double top = -1e300;
+                for (const glm::vec3& w : f.mesh.positions)
+                    top = std::max(top, glm::dot(glm::dvec3(f.transform.apply_point(w)), normal));
+                const double height = std::max(0.0, top - glm::dot(p, normal));
+                double min2 = 1e300;
+                bool in_reach = false;
+                for (const Tri& t : tris) {
+                    const double e2 = dist2(p, t);
+                    min2 = std::min(min2, e2);
+                    const glm::dvec3 tlo = glm::min(glm::min(t.a, t.b), t.c) - grow;
+                    const glm::dvec3 thi = glm::max(glm::max(t.a, t.b), t.c) + grow;
+                    const bool in_box = glm::all(glm::greaterThanEqual(p, tlo)) &&
+                                        glm::all(glm::lessThanEqual(p, thi));
+                    in_reach = in_reach || (in_box && e2 <= reach * reach * height * height);
+                }
+                const bool want_covered = min2 <= 1e-12 * distance * distance;
+                const bool want_near = min2 <= distance * distance;
+                ++samples;
+                near += want_near;
+                covered += want_covered;
+                EXPECT_EQ(s.covered, want_covered) << "at " << p.x << ' ' << p.y << ' ' << p.z;
+                if (want_covered) return;
+                EXPECT_EQ(s.near, want_near) << "at " << p.x << ' ' << p.y << ' ' << p.z;
+                if (want_near) return;
+                within += in_reach;
+                EXPECT_EQ(s.within_reach, in_reach) << "at " << p.x << ' ' << p.y << ' ' << p.z;
+            });
+    }
+    EXPECT_GT(samples, 1000);
+    EXPECT_GT(near, 0) << "the box's bottom rim is within the contact distance of the floor";
+    EXPECT_GT(samples - near, 0);
+    EXPECT_GT(within, 0);
 }
 
 }  // namespace
