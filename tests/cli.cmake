@@ -65,6 +65,10 @@ set_tests_properties(cli.fidelity_tiles PROPERTIES LABELS gl SKIP_RETURN_CODE 77
 add_test(NAME cli.fidelity_edges COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_edges_test.sh
          ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
 set_tests_properties(cli.fidelity_edges PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
+# Two independent pt estimators at the same points (fidelity --pt-pixels, docs/fidelity.md).
+add_test(NAME cli.fidelity_pt_pixels COMMAND ${CMAKE_CURRENT_SOURCE_DIR}/cli/fidelity_pt_pixels_test.sh
+         ${AG_BIN} WORKING_DIRECTORY ${PROJECT_SOURCE_DIR})
+set_tests_properties(cli.fidelity_pt_pixels PROPERTIES LABELS gl SKIP_RETURN_CODE 77)
 # Issue #12's whole-image bars at 48² with finer texels at contacts and 16 photon sets, against
 # pt with light tracing at 1024 spp (docs/fidelity.md "Session 18"); with one photon set two_rooms'
 # seed 3 reads 0.985 and fails.

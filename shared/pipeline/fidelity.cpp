@@ -354,6 +354,19 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     }
     const bool with_pt =
         options.reference_indirect.width == w && options.reference_indirect.height == h;
+    if (options.pt_pixels > 0) {
+        std::vector<cpu::SurfacePoint> centres;
+        centres.reserve(pixel_points.size());
+        for (const GatherPoint& g : pixel_points) centres.push_back({g.position, g.normal});
+        const std::vector<cpu::PointIrradiance> at_pixels = cpu::path_traced_irradiance(
+            scene, rays, centres, options.pt_pixels, 1, saved.seed, pool);
+        report.pt_pixels = Image(w, h);
+        for (size_t i = 0; i < at_pixels.size(); ++i) {
+            const auto [x, y] = pixel_of[i];
+            report.pt_pixels.set_rgb(
+                x, y, pixel_albedo[i] * at_pixels[i].indirect / std::numbers::pi_v<float>);
+        }
+    }
     // Shadows split at their mean column: the two halves' tints say whether the light seen
     // through a glass ball lands on the right side (the Cornell floor under the sphere).
     for (size_t i = 0, n = region_order.size(); i < n; ++i) {
@@ -386,7 +399,14 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
             report.rows.push_back(compare_pixels("e", "frame", "pt_image", region,
                                                  report.frame_indirect, options.reference_indirect,
                                                  mask));
+            if (options.pt_pixels > 0)
+                report.rows.push_back(compare_pixels("e", "pt_pixels", "pt_image", region,
+                                                     report.pt_pixels, options.reference_indirect,
+                                                     mask));
         }
+        if (options.pt_pixels > 0)
+            report.rows.push_back(compare_pixels("e", "pixel_gather", "pt_pixels", region,
+                                                 report.pixel_indirect, report.pt_pixels, mask));
     }
     return report;
 }

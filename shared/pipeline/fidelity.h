@@ -20,6 +20,10 @@ struct FidelityOptions {
     int pt_paths = 4096;        // path-traced irradiance: paths per texel centre
     int reference_rays = 4096;  // rays of the full-hemisphere gather the plane gathers are held to
     int pixel_rays = 1024;      // rays of the per-pixel gather of stage (d)
+    // Path-traced paths at every pixel centre (0 = none): an estimator independent of the pt
+    // image (stratified directions, no pixel footprint, no light tracing), so stage (e) can hold
+    // the per-pixel gather to it and the pt image to it at the same points.
+    int pt_pixels = 0;
     int width = 96, height = 96;
     bool gl = true;  // GL stages (hemi-plane gathers, the frame); needs a current context
     // Optional: the indirect term of a pt reference at width × height (afterglow reference
@@ -44,6 +48,7 @@ struct FidelityReport {
     std::vector<char> texel_valid;  // the texel's centre sees few back faces
     int routed = 0;  // texels the pipeline's GL gather handed to the rays (they see specular)
     Image frame_indirect, pixel_indirect, mask;  // stage (d): what the camera sees, per pixel
+    Image pt_pixels;  // with FidelityOptions::pt_pixels: ρ/π E_indirect at each pixel centre
 };
 
 // Photons traced to completion and every AIM rebuilt first; the scene's settings otherwise.

@@ -26,6 +26,10 @@ const Command kFidelityCommand{
         integer("reference-rays", "N", "rays of the full-hemisphere reference gather", 1, 10000000,
                 4096),
         integer("pixel-rays", "N", "rays of the per-pixel gather, stage (d)", 1, 10000000, 1024),
+        integer("pt-pixels", "N",
+                "path-traced paths at every pixel centre (no light tracing): stage (e) holds the "
+                "per-pixel gather and the --reference image to it at the same points (0 = off)",
+                0, 10000000, 0),
         size_option("image size of stage (d)", "96x96"),
         text("reference", "PT.exr",
              "pt reference at the same size (its PT.indirect.exr is read), for stage (e)"),
@@ -49,6 +53,7 @@ int run_fidelity(const Args& args) {
     options.pt_paths = args.get_int("pt-paths");
     options.reference_rays = args.get_int("reference-rays");
     options.pixel_rays = args.get_int("pixel-rays");
+    options.pt_pixels = args.get_int("pt-pixels");
     options.width = 96;
     options.height = 96;
     args.get_size("size", options.width, options.height);
