@@ -165,7 +165,6 @@ Aim::Aim(const Scene& scene, ThreadPool& pool) : scene_(scene), pool_(pool) {
     reach2_.assign(scene_.atlas.texels.size(), std::numeric_limits<float>::infinity());
     built_.assign(scene_.surfaces.size(), 0);
     built_albedo_.assign(scene_.surfaces.size(), glm::vec3(0.0f));
-    built_layers_.assign(scene_.surfaces.size(), 1);
     indirect_floor_.assign(scene_.atlas.texels.size(), 0.0f);
     texture_mean_.resize(scene_.atlas.texels.size());
     pool_.parallel_for(
@@ -443,10 +442,14 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     std::vector<int> used;  // indices into s.hits of the hits the estimate counts
     used.reserve(s.hits.size());
     glm::dvec3 used_flux(0.0);
+    // Each hit counts with its group's weight, 1 / its photon sets (photons.refine_layers).
+    std::vector<double> weight;
+    weight.reserve(s.hits.size());
     for (size_t i = 0; i < s.hits.size(); ++i) {
         if (exact && s.hits[i].bounce < 1) continue;
         used.push_back(int(i));
-        used_flux += glm::dvec3(s.hits[i].power);
+        weight.push_back(maps.hit_weight(s.hits[i]));
+        used_flux += glm::dvec3(s.hits[i].power) * weight.back();
     }
     KnnIndex index;
     if (!todo.empty()) {
@@ -496,7 +499,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
             const double inv_r = 1.0 / std::sqrt(r2);
             for (int j = 0; j < n; ++j) {
                 const PhotonHit& hit = s.hits[size_t(used[size_t(idx[size_t(j)])])];
-                const glm::dvec3 power(hit.power);
+                const glm::dvec3 power = glm::dvec3(hit.power) * weight[size_t(idx[size_t(j)])];
                 sum += power;
                 if (hit.bounce >= 1) bounced += power;
                 if (part.area >= 1.0 || !linear) continue;
@@ -527,7 +530,6 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     }
     built_albedo_[size_t(surface)] = albedo;
     built_[size_t(surface)] = 1;
-    built_layers_[size_t(surface)] = maps.layers();
     s.changes.clear();
     s.changes_overflow = false;
     if (covered) covered_changed_[size_t(surface)] = 0;
@@ -547,8 +549,8 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
         const double open = covered ? double(open_fraction_[size_t(r)]) : 1.0;
         estimated += glm::dvec3(e[i]) * double(scene_.atlas.texels[size_t(r)].area) * open;
     }
-    // Each of the maps' photon sets carries the whole flux (photons.refine_layers).
-    const glm::dvec3 flux = (exact ? used_flux : s.flux) / double(maps.layers());
+    // The books hold each hit at its group's weight (photons.refine_layers).
+    const glm::dvec3 flux = exact ? used_flux : s.flux;
     for (int c = 0; c < 3; ++c) {
         const double scale = estimated[c] > 0.0 ? flux[c] / estimated[c] : 0.0;
         for (glm::vec3& v : e) v[c] = float(double(v[c]) * scale);
@@ -703,12 +705,9 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
     std::vector<Candidate> candidates;
     for (int s = 0; s < int(maps.surface_count()); ++s) {
         SurfaceHits& h = maps.surface(s);
-        bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
+        const bool recoloured = built_[size_t(s)] && built_albedo_[size_t(s)] != albedo_of(s);
         // Its covered parts changed (an object moved onto it or away): scale and fill again.
         const bool recovered = !covered_changed_.empty() && covered_changed_[size_t(s)];
-        // Built from another number of photon sets (photons.refine_layers): its scale changed.
-        const bool rescaled = built_[size_t(s)] && built_layers_[size_t(s)] != maps.layers();
-        if (rescaled) recoloured = true;
         if (h.delta_f <= 0.0 && !recoloured && !recovered) continue;
         Candidate c{s, h.delta_f, std::nullopt};
         if (built_[size_t(s)] && !scene_.settings.aim.exact_direct) {

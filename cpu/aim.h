@@ -119,7 +119,6 @@ private:
     std::vector<float> reach2_;
     std::vector<char> built_;
     std::vector<glm::vec3> built_albedo_;
-    std::vector<int> built_layers_;  // per surface: the photon sets (layers) it was built from
     // aim.exact_direct: shadow rays for the direct part; aim.covered_texels: the covered test.
     std::unique_ptr<RayTracer> rays_;
     // aim.covered_texels (empty when off). Atlas-sized: the cells of each texel that are covered,

@@ -1,18 +1,22 @@
 #include "cpu/photon_map.h"
 
 #include <cassert>
+#include <algorithm>
 #include <cmath>
 
 namespace ag::cpu {
 
-void PhotonMaps::resize(size_t surfaces, size_t lights, int groups_per_light) {
+void PhotonMaps::resize(size_t surfaces, size_t lights, int groups, int max_sets) {
     surfaces_.assign(surfaces, SurfaceHits{});
-    layers_ = 1;
-    groups_.assign(lights, std::vector<PhotonGroup>(size_t(groups_per_light)));
+    base_groups_ = std::max(1, groups);
+    max_sets_ = std::clamp(max_sets, 1, 255);
+    groups_.assign(lights, std::vector<PhotonGroup>(size_t(base_groups_) * size_t(max_sets_)));
+    sets_.assign(lights, std::vector<uint8_t>(size_t(base_groups_), 0));
 }
 
-void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& power,
-                            uint8_t bounce, double sign) {
+void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& raw,
+                            uint8_t bounce, double sign, double weight) {
+    const glm::vec3 power = weight == 1.0 ? raw : raw * float(weight);
     if (!s.changes_overflow) {
         if (s.changes.size() >= 4 * s.hits.size() + 64) {
             s.changes_overflow = true;
@@ -30,11 +34,12 @@ void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm
 
 void PhotonMaps::clear_group(int light, int g) {
     PhotonGroup& group = groups_[size_t(light)][size_t(g)];
+    const double w = weight(light, g);
     for (const PathVertex& v : group.vertices) {
         if (v.hit < 0) continue;
         SurfaceHits& s = surfaces_[size_t(v.surface)];
         const PhotonHit removed = s.hits[size_t(v.hit)];
-        add_energy(s, removed.position, removed.power, removed.bounce, -1.0);
+        add_energy(s, removed.position, removed.power, removed.bounce, -1.0, w);
         // Swap-remove: the last hit takes the freed slot; patch its owner's path vertex.
         const size_t last = s.hits.size() - 1;
         if (size_t(v.hit) != last) {
@@ -52,6 +57,10 @@ void PhotonMaps::clear_group(int light, int g) {
 void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* photons,
                            size_t count) {
     clear_group(light, g);
+    uint8_t& sets = sets_[size_t(light)][size_t(g % base_groups_)];
+    assert(g / base_groups_ < std::max<int>(1, sets));
+    if (sets == 0) sets = 1;  // the group's first set
+    const double w = weight(light, g);
     PhotonGroup& group = groups_[size_t(light)][size_t(g)];
     group.photon_begin.reserve(count + 1);
     for (size_t p = 0; p < count; ++p) {
@@ -64,7 +73,7 @@ void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* ph
                 v.hit = int32_t(s.hits.size());
                 s.hits.push_back(PhotonHit{t.local_position, t.power, uint32_t(light), uint32_t(g),
                                            uint32_t(group.vertices.size()), t.bounce});
-                add_energy(s, t.local_position, t.power, t.bounce, +1.0);
+                add_energy(s, t.local_position, t.power, t.bounce, +1.0, w);
             }
             group.vertices.push_back(v);
         }
@@ -75,25 +84,48 @@ void PhotonMaps::set_group(int light, int g, const std::vector<TracedVertex>* ph
 
 void PhotonMaps::rescale_group(int light, int g, const glm::vec3& ratio) {
     PhotonGroup& group = groups_[size_t(light)][size_t(g)];
+    const double w = weight(light, g);
     for (const PathVertex& v : group.vertices) {
         if (v.hit < 0) continue;
         SurfaceHits& s = surfaces_[size_t(v.surface)];
         PhotonHit& hit = s.hits[size_t(v.hit)];
-        add_energy(s, hit.position, hit.power, hit.bounce, -1.0);
+        add_energy(s, hit.position, hit.power, hit.bounce, -1.0, w);
         hit.power *= ratio;
-        add_energy(s, hit.position, hit.power, hit.bounce, +1.0);
+        add_energy(s, hit.position, hit.power, hit.bounce, +1.0, w);
     }
 }
 
-void PhotonMaps::set_layers(int layers) {
-    if (layers == layers_) return;
-    layers_ = layers;
-    for (SurfaceHits& s : surfaces_) {
-        if (s.hits.empty()) continue;
-        const double e = std::abs(energy(s.flux));
-        s.delta_f += e;
-        s.delta_i += e;
+void PhotonMaps::set_sets(int light, int g, int n) {
+    uint8_t& sets = sets_[size_t(light)][size_t(g)];
+    n = std::clamp(n, 0, max_sets_);
+    if (n == int(sets)) return;
+    const double before = weight(light, g);
+    const double after = n > 1 ? 1.0 / double(n) : 1.0;
+    if (before != after) {
+        // The hits of the sets kept count again with the new weight (in set order, then path
+        // order: the books are the same for any thread count).
+        for (int k = 0; k < std::min<int>(sets, n); ++k) {
+            const PhotonGroup& group = groups_[size_t(light)][size_t(k * base_groups_ + g)];
+            for (const PathVertex& v : group.vertices) {
+                if (v.hit < 0) continue;
+                SurfaceHits& s = surfaces_[size_t(v.surface)];
+                const PhotonHit& hit = s.hits[size_t(v.hit)];
+                add_energy(s, hit.position, hit.power, hit.bounce, -1.0, before);
+                add_energy(s, hit.position, hit.power, hit.bounce, +1.0, after);
+            }
+        }
     }
+    for (int k = n; k < int(sets); ++k)
+        assert(!groups_[size_t(light)][size_t(k * base_groups_ + g)].traced);
+    sets = uint8_t(n);
+}
+
+int PhotonMaps::layers() const {
+    int fewest = 0;
+    for (const std::vector<uint8_t>& light : sets_)
+        for (uint8_t n : light)
+            if (n > 0 && (fewest == 0 || n < fewest)) fewest = n;
+    return std::max(1, fewest);
 }
 
 size_t PhotonMaps::stored_bytes() const {

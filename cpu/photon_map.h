@@ -65,7 +65,9 @@ inline double energy(const glm::dvec3& p) { return (p.x + p.y + p.z) / 3.0; }
 
 class PhotonMaps {
 public:
-    void resize(size_t surfaces, size_t lights, int groups_per_light);
+    // Room for `groups` QMC groups per light, each with up to `max_sets` photon sets
+    // (photons.refine_layers): set k of group g lives at group index k·groups + g.
+    void resize(size_t surfaces, size_t lights, int groups, int max_sets = 1);
 
     SurfaceHits& surface(int s) { return surfaces_[size_t(s)]; }
     const SurfaceHits& surface(int s) const { return surfaces_[size_t(s)]; }
@@ -84,19 +86,35 @@ public:
     // Bytes of the stored paths and hits (vertices, offsets, hits; not the change logs).
     size_t stored_bytes() const;
 
-    // Complete photon sets the hits hold (photons.refine_layers): every hit carries the flux of
-    // one photon of one set, Φ / (G·P), and a surface's estimate is scaled by 1 / layers. Changing
-    // it marks every surface with hits as changed (its whole estimate scales).
-    int layers() const { return layers_; }
-    void set_layers(int layers);
+    // Photon sets per group (photons.refine_layers). Each group holds its own number of sets:
+    // an edit re-traces the groups it touches with one set and leaves the others' sets alone.
+    // A hit keeps the flux of one photon of one set, Φ / (G·P), and counts with weight
+    // 1 / sets of its group (hit_weight) in the surface's flux, its deltas, its change log and
+    // the AIM's density estimate: every group's stratum carries its whole flux however many sets
+    // it holds, so the estimate is unbiased in any mix.
+    int base_groups() const { return base_groups_; }
+    int max_sets() const { return max_sets_; }
+    int sets(int light, int g) const { return sets_[size_t(light)][size_t(g)]; }
+    double weight(int light, int g) const {
+        const int n = sets_[size_t(light)][size_t(g % base_groups_)];
+        return n > 1 ? 1.0 / double(n) : 1.0;
+    }
+    double hit_weight(const PhotonHit& h) const { return weight(int(h.light), int(h.group)); }
+    // Sets group g (< base_groups()) of the light holds from now on: the hits of its sets below
+    // min(old, n) are counted again with weight 1 / n. Sets n and above must be cleared first.
+    void set_sets(int light, int g, int n);
+    // The fewest sets any group of an enabled light holds: the complete photon sets (1 if none).
+    int layers() const;
 
 private:
+    // Books a hit of `power` × `weight` added (sign +1) or removed (−1).
     void add_energy(SurfaceHits& s, const glm::vec3& position, const glm::vec3& power,
-                    uint8_t bounce, double sign);
+                    uint8_t bounce, double sign, double weight);
 
     std::vector<SurfaceHits> surfaces_;
-    std::vector<std::vector<PhotonGroup>> groups_;  // [light][group]
-    int layers_ = 1;
+    std::vector<std::vector<PhotonGroup>> groups_;  // [light][set · base_groups_ + group]
+    std::vector<std::vector<uint8_t>> sets_;        // [light][group]: sets held, 0 = none yet
+    int base_groups_ = 1, max_sets_ = 1;
 };
 
 }  // namespace ag::cpu

@@ -64,12 +64,12 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool)
     const int groups = scene_.settings.photons.groups;
     // Room for the refinement layers the scene asks for, and no more (56 bytes an empty group).
     max_layers_ = std::max(1, scene_.settings.photons.refine_layers);
-    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups * max_layers_);
+    maps_.resize(scene_.surfaces.size(), scene_.lights.size(), groups, max_layers_);
     tolerance_ = scene_.settings.photons.path_tolerance * scene_.diagonal();
     seen_sequence_ = scene_.version;
     traced_power_.resize(scene_.lights.size());
     invalidations_.assign(scene_.lights.size(), 0);
-    segments_.resize(scene_.lights.size() * size_t(groups));
+    segments_.resize(scene_.lights.size() * size_t(groups) * size_t(max_layers_));
     for (const Object& o : scene_.objects) {
         placed_.push_back(o.transform);
         object_bounds_.push_back(mesh_bounds(o.mesh));
@@ -85,14 +85,30 @@ PhotonSimulation::PhotonSimulation(const Scene& scene, ThreadPool& pool)
 }
 
 double PhotonSimulation::group_flux(int light, int group) const {
-    const PhotonGroup& g = maps_.group(light, group);
-    if (!g.traced)
+    if (!maps_.group(light, group).traced)
         return double(scene_.settings.photons.photons_per_group) *
                energy(tracer_->photon_power(light));
+    // Every set of the group, each hit at the group's weight (the flux its books hold).
     double flux = 0.0;
-    for (const PathVertex& v : g.vertices)
-        if (v.hit >= 0) flux += energy(maps_.surface(v.surface).hits[size_t(v.hit)].power);
-    return flux;
+    for (int k = 0; k < maps_.sets(light, group); ++k)
+        for (const PathVertex& v : maps_.group(light, k * maps_.base_groups() + group).vertices)
+            if (v.hit >= 0) flux += energy(maps_.surface(v.surface).hits[size_t(v.hit)].power);
+    return flux * maps_.weight(light, group);
+}
+
+size_t PhotonSimulation::segment_index(int light, int set_group) const {
+    return size_t(light) * size_t(scene_.settings.photons.groups) * size_t(max_layers_) +
+           size_t(set_group);
+}
+
+void PhotonSimulation::clear_sets(int light, int group, int keep) {
+    const int groups = scene_.settings.photons.groups;
+    // Last set first, in a fixed order (the maps are the same on any thread count).
+    for (int k = maps_.sets(light, group) - 1; k >= keep; --k) {
+        maps_.clear_group(light, k * groups + group);
+        segments_[segment_index(light, k * groups + group)] = GroupSegments{};
+    }
+    maps_.set_sets(light, group, keep);
 }
 
 void PhotonSimulation::invalidate(int light, int group, PhotonFrameStats& stats) {
@@ -123,9 +139,8 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                 std::set<std::pair<int, int>> touched;
                 for (int s = 0; s < int(scene_.surfaces.size()); ++s) {
                     if (scene_.surfaces[size_t(s)].object != c.index) continue;
-                    for (const PhotonHit& h : maps_.surface(s).hits)
-                        if (int(h.group) < groups)  // refinement layers are dropped below
-                            touched.emplace(int(h.light), int(h.group));
+                    for (const PhotonHit& h : maps_.surface(s).hits)  // every photon set's
+                        touched.emplace(int(h.light), int(h.group) % groups);
                 }
                 for (const auto& [l, g] : touched) invalidate(l, g, stats);
                 break;
@@ -147,10 +162,13 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                         rescalable = false;  // nothing to scale from
                 }
                 for (int g = 0; g < groups; ++g) {
-                    if (!rescalable)
+                    if (!rescalable) {
                         invalidate(c.index, g, stats);
-                    else if (maps_.group(c.index, g).traced)
-                        maps_.rescale_group(c.index, g, ratio);
+                        continue;
+                    }
+                    for (int k = 0; k < maps_.sets(c.index, g); ++k)
+                        if (maps_.group(c.index, k * groups + g).traced)
+                            maps_.rescale_group(c.index, k * groups + g, ratio);
                 }
                 break;
             }
@@ -160,7 +178,7 @@ void PhotonSimulation::apply_changes(PhotonFrameStats& stats) {
                     for (int g = 0; g < groups; ++g) invalidate(c.index, g, stats);
                 } else {
                     for (int g = 0; g < groups; ++g) {
-                        maps_.clear_group(c.index, g);
+                        clear_sets(c.index, g, 0);
                         maps_.group(c.index, g).queued = false;
                     }
                     std::erase_if(queue_, [&](const QueuedGroup& q) { return q.light == c.index; });
@@ -215,16 +233,21 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
         return false;
     };
 
+    // Every photon set of every group: a path of any set crossing a placement invalidates the
+    // group (all its sets).
     const int groups = scene_.settings.photons.groups;
-    const size_t count = scene_.lights.size() * size_t(groups);
+    const size_t per_light = size_t(groups) * size_t(max_layers_);
+    const size_t count = scene_.lights.size() * per_light;
     std::vector<uint8_t> hit(count, 0);
     std::vector<uint64_t> tested(count, 0);
     pool_.parallel_for(
         count,
         [&](size_t i) {
-            const int l = int(i / size_t(groups)), g = int(i % size_t(groups));
-            const PhotonGroup& group = maps_.group(l, g);
-            if (!group.traced || group.queued) return;
+            const int l = int(i / per_light), gi = int(i % per_light), g = gi % groups;
+            const PhotonGroup& base = maps_.group(l, g);
+            if (!base.traced || base.queued || gi / groups >= maps_.sets(l, g)) return;
+            const PhotonGroup& group = maps_.group(l, gi);
+            if (!group.traced) return;
             const GroupSegments& seg = segments_[i];
             // Broad phase: the group's segments' bounds against each placement's world AABB.
             bool near = false;
@@ -256,9 +279,13 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
         },
         4);
     // Invalidate in group order on this thread: the queue is the same for any thread count.
+    std::vector<uint8_t> crossed(scene_.lights.size() * size_t(groups), 0);
     for (size_t i = 0; i < count; ++i) {
         stats.query_segments_tested += tested[i];
-        if (!hit[i]) continue;
+        if (hit[i]) crossed[(i / per_light) * size_t(groups) + (i % per_light) % size_t(groups)] = 1;
+    }
+    for (size_t i = 0; i < crossed.size(); ++i) {
+        if (!crossed[i]) continue;
         const int before = stats.groups_invalidated;
         invalidate(int(i / size_t(groups)), int(i % size_t(groups)), stats);
         stats.groups_invalidated_by_query += stats.groups_invalidated - before;
@@ -285,51 +312,20 @@ bool PhotonSimulation::same_path(const PhotonGroup& group, int photon,
     return true;
 }
 
-void PhotonSimulation::grow_groups(const std::vector<std::pair<int, int>>& groups) {
+void PhotonSimulation::store_segments(int l, int set_group, const PathEnds* ends) {
     const int per_group = scene_.settings.photons.photons_per_group;
-    const int layer = layers();
-    const size_t first = grow_paths_.size(), jobs = groups.size() * size_t(per_group);
-    grow_paths_.resize(first + jobs);
-    grow_ends_.resize(first + jobs);
-    pool_.parallel_for(
-        jobs,
-        [&](size_t job) {
-            const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
-            grow_ends_[first + job] = tracer_->trace(groups[gi].first, groups[gi].second, int(p),
-                                                     grow_paths_[first + job], layer);
-        },
-        8);
-    grow_done_.insert(grow_done_.end(), groups.begin(), groups.end());
-}
-
-void PhotonSimulation::commit_layer() {
-    const int per_group = scene_.settings.photons.photons_per_group;
-    const int base = layers() * scene_.settings.photons.groups;
-    for (size_t i = 0; i < grow_done_.size(); ++i) {
-        const auto [l, g] = grow_done_[i];
-        maps_.set_group(l, base + g, &grow_paths_[i * size_t(per_group)], size_t(per_group));
+    GroupSegments& seg = segments_[segment_index(l, set_group)];
+    seg = GroupSegments{};
+    seg.ends.assign(ends, ends + per_group);
+    for (const PathEnds& e : seg.ends) {
+        seg.bounds.add(e.origin);
+        seg.escapes = seg.escapes || e.escape != glm::vec3(0.0f);
     }
-    maps_.set_layers(layers() + 1);
-    grow_done_.clear();
-    grow_paths_.clear();
-    grow_ends_.clear();
+    for (const PathVertex& v : maps_.group(l, set_group).vertices) seg.bounds.add(v.position);
 }
 
-void PhotonSimulation::drop_layers() {
-    grow_todo_.clear();
-    grow_done_.clear();
-    grow_paths_.clear();
-    grow_ends_.clear();
-    if (layers() == 1) return;
-    const int groups = scene_.settings.photons.groups;
-    // Last layer first, in a fixed order (the maps are the same on any thread count).
-    for (int g = layers() * groups - 1; g >= groups; --g)
-        for (int l = int(scene_.lights.size()) - 1; l >= 0; --l)
-            if (maps_.group(l, g).traced) maps_.clear_group(l, g);
-    maps_.set_layers(1);
-}
-
-void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& groups) {
+void PhotonSimulation::trace_groups(const std::vector<std::pair<int, int>>& groups,
+                                    const std::vector<int>& sets) {
     const int per_group = scene_.settings.photons.photons_per_group;
     const size_t jobs = groups.size() * size_t(per_group);
     if (traced_.size() < jobs) traced_.resize(jobs);
@@ -339,25 +335,65 @@ void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& gr
         [&](size_t job) {
             const size_t gi = job / size_t(per_group), p = job % size_t(per_group);
             traced_[job].clear();  // keeps its capacity from earlier frames
-            traced_ends_[job] =
-                tracer_->trace(groups[gi].first, groups[gi].second, int(p), traced_[job]);
+            traced_ends_[job] = tracer_->trace(groups[gi].first, groups[gi].second, int(p),
+                                               traced_[job], sets.empty() ? 0 : sets[gi]);
         },
         8);
-    // Merge in group order on this thread: the maps end up identical for any thread count.
+}
+
+void PhotonSimulation::grow_groups(const std::vector<std::pair<int, int>>& groups) {
+    const int per_group = scene_.settings.photons.photons_per_group;
+    const int base = scene_.settings.photons.groups;
+    std::vector<int> sets;
+    for (const auto& [l, g] : groups) sets.push_back(maps_.sets(l, g));
+    trace_groups(groups, sets);
+    // Each group's new set joins the maps at once, its other sets re-weighted (in group order on
+    // this thread: the maps are the same for any thread count).
     for (size_t gi = 0; gi < groups.size(); ++gi) {
         const auto [l, g] = groups[gi];
+        const int k = sets[gi];
+        maps_.set_sets(l, g, k + 1);
+        maps_.set_group(l, k * base + g, &traced_[gi * size_t(per_group)], size_t(per_group));
+        store_segments(l, k * base + g, &traced_ends_[gi * size_t(per_group)]);
+    }
+}
+
+void PhotonSimulation::trim_sets(int most) {
+    for (int l = 0; l < int(scene_.lights.size()); ++l)
+        for (int g = 0; g < scene_.settings.photons.groups; ++g)
+            if (maps_.sets(l, g) > most) clear_sets(l, g, most);
+}
+
+std::vector<std::pair<int, int>> PhotonSimulation::groups_to_grow() const {
+    std::vector<std::pair<int, int>> out;
+    if (!growth_on_) return out;
+    const int target = target_layers();
+    for (int l = 0; l < int(scene_.lights.size()); ++l) {
+        if (!scene_.lights[size_t(l)].enabled) continue;
+        for (int g = 0; g < scene_.settings.photons.groups; ++g) {
+            const int n = maps_.sets(l, g);
+            if (n >= 1 && n < target && !maps_.group(l, g).queued) out.emplace_back(l, g);
+        }
+    }
+    // The groups with the fewest sets first (those an edit re-traced), then in (light, group)
+    // order: a fixed order, and a settled scene grows one complete set after another.
+    std::stable_sort(out.begin(), out.end(), [&](const auto& a, const auto& b) {
+        return maps_.sets(a.first, a.second) < maps_.sets(b.first, b.second);
+    });
+    return out;
+}
+
+void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& groups) {
+    const int per_group = scene_.settings.photons.photons_per_group;
+    trace_groups(groups, {});
+    // Merge in group order on this thread: the maps end up identical for any thread count. A
+    // re-traced group starts again from one photon set (its extra sets held the old scene).
+    for (size_t gi = 0; gi < groups.size(); ++gi) {
+        const auto [l, g] = groups[gi];
+        if (maps_.sets(l, g) > 1) clear_sets(l, g, 0);
         maps_.set_group(l, g, &traced_[gi * size_t(per_group)], size_t(per_group));
         maps_.group(l, g).queued = false;
-        GroupSegments& seg =
-            segments_[size_t(l) * size_t(scene_.settings.photons.groups) + size_t(g)];
-        seg = GroupSegments{};
-        seg.ends.assign(traced_ends_.begin() + std::ptrdiff_t(gi * size_t(per_group)),
-                        traced_ends_.begin() + std::ptrdiff_t((gi + 1) * size_t(per_group)));
-        for (const PathEnds& e : seg.ends) {
-            seg.bounds.add(e.origin);
-            seg.escapes = seg.escapes || e.escape != glm::vec3(0.0f);
-        }
-        for (const PathVertex& v : maps_.group(l, g).vertices) seg.bounds.add(v.position);
+        store_segments(l, g, &traced_ends_[gi * size_t(per_group)]);
     }
 }
 
@@ -403,11 +439,9 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget, bool grow) {
     for (size_t i = 0; i < jobs.size(); ++i)
         if (!same_path(maps_.group(jobs[i].light, jobs[i].group), jobs[i].photon, paths[i]))
             invalidate(jobs[i].light, jobs[i].group, stats);
-    // Refinement layers hold the scene as it was: any edit (or a path found changed) drops them,
-    // so an edit costs what it costs without refinement, and growth starts again once settled.
-    if (changed_ || stats.groups_invalidated > 0 || !growth_on_ || layers() > target_layers() ||
-        !queue_.empty())
-        drop_layers();
+    // Refinement switched off or lowered: the sets above the target leave the maps. (An edit
+    // re-traces only the groups it touches, each with one set; the other groups keep theirs.)
+    trim_sets(growth_on_ ? target_layers() : 1);
 
     // Work off the queue under the budget (whole groups; at least one per frame).
     std::vector<std::pair<int, int>> batch;
@@ -422,24 +456,20 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget, bool grow) {
     stats.photons_retraced = int(batch.size()) * settings.photons_per_group;
     stats.groups_queued = int(queue_.size());
 
-    // Refinement with what the budget has left (whole groups; one if no repair ran this frame).
-    // Not in a frame that saw an edit: the scene must have held still for a whole frame.
+    // Refinement with what the budget has left (whole groups; one if no repair ran this frame),
+    // one more set for each group taken, the fewest-set groups first. Not in a frame that saw an
+    // edit: the scene must have held still for a whole frame.
     if (grow && queue_.empty() && growth_pending() && !changed_ && stats.groups_invalidated == 0) {
-        if (grow_todo_.empty() && grow_done_.empty())
-            for (int l = 0; l < int(scene_.lights.size()); ++l)
-                if (scene_.lights[size_t(l)].enabled)
-                    for (int g = 0; g < settings.groups; ++g) grow_todo_.emplace_back(l, g);
+        const std::vector<std::pair<int, int>> todo = groups_to_grow();
         std::vector<std::pair<int, int>> more;
-        size_t next = 0;
-        while (next < grow_todo_.size() &&
-               ((batch.empty() && more.empty()) || budget >= settings.photons_per_group)) {
-            more.push_back(grow_todo_[next++]);
+        for (size_t next = 0; next < todo.size() && ((batch.empty() && more.empty()) ||
+                                                     budget >= settings.photons_per_group);
+             ++next) {
+            more.push_back(todo[next]);
             budget -= settings.photons_per_group;
         }
-        grow_todo_.erase(grow_todo_.begin(), grow_todo_.begin() + std::ptrdiff_t(next));
         grow_groups(more);
         stats.photons_grown = int(more.size()) * settings.photons_per_group;
-        if (grow_todo_.empty()) commit_layer();
     }
     stats.layers = layers();
     return stats;
@@ -455,20 +485,16 @@ void PhotonSimulation::trace_all() {
             if (scene_.lights[size_t(l)].enabled)
                 all.emplace_back(l, g);
             else
-                maps_.clear_group(l, g);
+                clear_sets(l, g, 0);
             maps_.group(l, g).queued = false;
         }
-    drop_layers();
     retrace_groups(all);
-    // Every refinement layer at once, as growth would add them one by one.
-    while (growth_pending()) {
-        for (int l = 0; l < int(scene_.lights.size()); ++l)
-            if (scene_.lights[size_t(l)].enabled)
-                for (int g = 0; g < scene_.settings.photons.groups; ++g)
-                    grow_todo_.emplace_back(l, g);
-        grow_groups(grow_todo_);
-        grow_todo_.clear();
-        commit_layer();
+    // Every refinement set, one complete set after another, as growth would add them.
+    for (std::vector<std::pair<int, int>> todo = groups_to_grow(); !todo.empty();
+         todo = groups_to_grow()) {
+        const int fewest = maps_.sets(todo.front().first, todo.front().second);
+        std::erase_if(todo, [&](const auto& lg) { return maps_.sets(lg.first, lg.second) > fewest; });
+        grow_groups(todo);
     }
 }
 

@@ -54,8 +54,9 @@ public:
     // last frame, verifies one photon per group, re-traces queued groups within the budget.
     PhotonFrameStats frame();
     // The same with another retrace budget (photons) than settings.photons.retrace_budget. With
-    // `grow`, a settled simulation spends what the budget has left on the next refinement layer
-    // (photons.refine_layers), committed to the maps when all its groups are traced.
+    // `grow`, a settled simulation spends what the budget has left on refinement
+    // (photons.refine_layers): one more photon set for as many groups as it affords, the groups
+    // with the fewest sets first, each joining the maps at once.
     PhotonFrameStats frame(int retrace_budget, bool grow = true);
     // Queues every group of every enabled light for a retrace (brute force: nothing is trusted);
     // returns how many were queued.
@@ -68,9 +69,11 @@ public:
     // Nothing queued and, with growth on, every refinement layer in the maps.
     bool settled() const { return queue_.empty() && !growth_pending(); }
     // Progressive photon refinement on or off (on by construction; it does nothing while
-    // photons.refine_layers is 1). Off drops the extra layers at the next frame.
+    // photons.refine_layers is 1). Off drops the extra sets at the next frame. An edit drops
+    // the extra sets of the groups it re-traces only.
     void set_growth(bool on) { growth_on_ = on; }
     bool growth_pending() const { return growth_on_ && layers() < target_layers(); }
+    // The fewest photon sets any group holds: the complete sets in the maps.
     int layers() const { return maps_.layers(); }
     // photons.refine_layers, at most what the maps were made for (the setting at construction).
     int target_layers() const {
@@ -123,15 +126,22 @@ private:
                              PhotonFrameStats& stats);
     double group_flux(int light, int group) const;
     void invalidate(int light, int group, PhotonFrameStats& stats);
+    // Traces the groups' photons into traced_ / traced_ends_ (set sets[i] of group i; set 0
+    // when `sets` is empty) on the pool's threads.
+    void trace_groups(const std::vector<std::pair<int, int>>& groups, const std::vector<int>& sets);
+    // Re-traces the groups' first set; a group's other sets leave the maps.
     void retrace_groups(const std::vector<std::pair<int, int>>& groups);
-    // Traces groups of the layer being grown into the staging paths.
+    // Traces one more photon set for each group and adds it to the maps.
     void grow_groups(const std::vector<std::pair<int, int>>& groups);
-    // Moves the staged layer into the maps (all its groups at once: the flux per photon changes).
-    void commit_layer();
-    // Back to the one-layer state: the extra layers' hits leave the maps, staging is forgotten.
-    void drop_layers();
-    // Stores traced paths as group g of light l (its segments for the edit queries too).
-    void store_group(int l, int g, const std::vector<TracedVertex>* paths, const PathEnds* ends);
+    // Groups that may grow a set, the fewest sets first, then in (light, group) order.
+    std::vector<std::pair<int, int>> groups_to_grow() const;
+    // Every group keeps at most `most` sets.
+    void trim_sets(int most);
+    // Group `group` of `light` keeps its first `keep` sets; the others' hits and segments go.
+    void clear_sets(int light, int group, int keep);
+    // The edit query's segments of set-group `set_group` (set k · groups + group) of light l.
+    void store_segments(int l, int set_group, const PathEnds* ends);
+    size_t segment_index(int light, int set_group) const;
     bool same_path(const PhotonGroup& group, int photon,
                    const std::vector<TracedVertex>& path) const;
 
@@ -142,7 +152,7 @@ private:
     PhotonMaps maps_;
     std::set<QueuedGroup> queue_;
     std::vector<std::pair<int, int>> invalidated_;  // during the last frame
-    std::vector<GroupSegments> segments_;           // [light * groups + group]
+    std::vector<GroupSegments> segments_;  // [(light · max sets + set) · groups + group]
     std::vector<Transform> placed_;      // per object: the transform the paths were traced in
     std::vector<Bounds> object_bounds_;  // per object, in its own frame
     bool query_on_ = true;
@@ -155,15 +165,9 @@ private:
     std::vector<uint64_t> invalidations_;  // per light
     std::vector<std::vector<TracedVertex>> traced_;  // re-used path buffers, one per photon job
     std::vector<PathEnds> traced_ends_;              // their ends
-    // Refinement: the layer being grown (groups of every enabled light not yet traced, in
-    // order), and its traced paths until it is committed.
     bool growth_on_ = true;
     int max_layers_ =
         1;  // photon sets the maps have room for (photons.refine_layers at construction)
-    std::vector<std::pair<int, int>> grow_todo_;
-    std::vector<std::pair<int, int>> grow_done_;
-    std::vector<std::vector<TracedVertex>> grow_paths_;  // [index in grow_done_ · P + photon]
-    std::vector<PathEnds> grow_ends_;
 };
 
 }  // namespace ag::cpu

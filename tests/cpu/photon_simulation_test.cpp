@@ -191,6 +191,10 @@ void expect_exact_paths(const PhotonSimulation& a, const PhotonSimulation& b,
     const Scene& scene = b.scene();
     ASSERT_EQ(a.layers(), b.layers()) << what;
     for (int l = 0; l < int(scene.lights.size()); ++l)
+        for (int g = 0; g < scene.settings.photons.groups; ++g)
+            ASSERT_EQ(a.maps().sets(l, g), b.maps().sets(l, g))
+                << what << ": light " << l << " group " << g;
+    for (int l = 0; l < int(scene.lights.size()); ++l)
         for (int g = 0; g < scene.settings.photons.groups * b.layers(); ++g) {
             const PhotonGroup &x = a.maps().group(l, g), &y = b.maps().group(l, g);
             ASSERT_EQ(x.traced, y.traced) << what << ": light " << l << " group " << g;
@@ -281,9 +285,11 @@ TEST(SelectiveTracing, RepairEqualsRebuildWithRefinementLayers) {
     repair_equals_rebuild("two_rooms.json", 510, 4, false, 3);
 }
 
-// Growth: one layer at a time once settled, each photon's flux Φ / (G·P·layers) in the AIM; an
-// edit drops the extra layers at once.
-TEST(SelectiveTracing, RefinementGrowsWhenSettledAndAnEditDropsIt) {
+// Growth: one more set for a few groups at a time once settled, the fewest-set groups first,
+// each photon's flux Φ / (G·P·sets of its group) in the AIM. An edit re-traces the groups it
+// touches with one set and leaves every other group's sets alone: regrowing afterwards costs
+// exactly the touched groups' missing sets (dropping every group's sets would cost them all).
+TEST(SelectiveTracing, RefinementGrowsWhenSettledAndAnEditKeepsUntouchedSets) {
     Scene scene = load_scene(test::scene_path("cornell.json"));
     scene.settings.photons.refine_layers = 4;
     ThreadPool pool(2);
@@ -310,13 +316,32 @@ TEST(SelectiveTracing, RefinementGrowsWhenSettledAndAnEditDropsIt) {
     const PhotonSettings& p = scene.settings.photons;
     EXPECT_EQ(grown, 3 * p.groups * p.photons_per_group);
     EXPECT_GT(sim.maps().hit_count(), 3 * base_hits);
+
     const int cube = scene.find_object("cube");
     ASSERT_GE(cube, 0);
     translate_object(scene, cube, {10.0f, 0.0f, 0.0f});
     const PhotonFrameStats st = sim.frame();
-    EXPECT_EQ(st.layers, 1);
     EXPECT_EQ(st.photons_grown, 0);
     EXPECT_FALSE(sim.settled());
+    ASSERT_GT(st.groups_invalidated, 0);
+    ASSERT_LT(st.groups_invalidated, p.groups);
+    ASSERT_EQ(st.groups_queued, 0);  // the budget re-traces them all in the edit's frame
+    const std::set<std::pair<int, int>> touched(sim.invalidated_last_frame().begin(),
+                                                sim.invalidated_last_frame().end());
+    for (int g = 0; g < p.groups; ++g)
+        EXPECT_EQ(sim.maps().sets(0, g), touched.count({0, g}) ? 1 : 4) << "group " << g;
+    EXPECT_EQ(st.layers, 1);
+
+    int retraced = st.groups_retraced, regrown = 0;
+    for (frames = 0; !sim.settled() && frames < 1000; ++frames) {
+        const PhotonFrameStats f = sim.frame();
+        retraced += f.groups_retraced;
+        regrown += f.photons_grown;
+    }
+    ASSERT_TRUE(sim.settled());
+    EXPECT_EQ(sim.layers(), 4);
+    EXPECT_EQ(regrown, 3 * retraced * p.photons_per_group);
+    EXPECT_LT(retraced, p.groups);
 }
 
 TEST(SelectiveTracing, RepairEqualsRebuildBumpyFloor) {
