@@ -1,7 +1,7 @@
 #include "cpu/photon_map.h"
 
-#include <cassert>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 
 namespace ag::cpu {

@@ -282,7 +282,8 @@ void PhotonSimulation::invalidate_crossing(const std::vector<std::pair<int, Tran
     std::vector<uint8_t> crossed(scene_.lights.size() * size_t(groups), 0);
     for (size_t i = 0; i < count; ++i) {
         stats.query_segments_tested += tested[i];
-        if (hit[i]) crossed[(i / per_light) * size_t(groups) + (i % per_light) % size_t(groups)] = 1;
+        if (hit[i])
+            crossed[(i / per_light) * size_t(groups) + (i % per_light) % size_t(groups)] = 1;
     }
     for (size_t i = 0; i < crossed.size(); ++i) {
         if (!crossed[i]) continue;
@@ -493,7 +494,8 @@ void PhotonSimulation::trace_all() {
     for (std::vector<std::pair<int, int>> todo = groups_to_grow(); !todo.empty();
          todo = groups_to_grow()) {
         const int fewest = maps_.sets(todo.front().first, todo.front().second);
-        std::erase_if(todo, [&](const auto& lg) { return maps_.sets(lg.first, lg.second) > fewest; });
+        std::erase_if(todo,
+                      [&](const auto& lg) { return maps_.sets(lg.first, lg.second) > fewest; });
         grow_groups(todo);
     }
 }

@@ -152,7 +152,7 @@ private:
     PhotonMaps maps_;
     std::set<QueuedGroup> queue_;
     std::vector<std::pair<int, int>> invalidated_;  // during the last frame
-    std::vector<GroupSegments> segments_;  // [(light · max sets + set) · groups + group]
+    std::vector<GroupSegments> segments_;           // [(light · max sets + set) · groups + group]
     std::vector<Transform> placed_;      // per object: the transform the paths were traced in
     std::vector<Bounds> object_bounds_;  // per object, in its own frame
     bool query_on_ = true;
