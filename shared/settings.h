@@ -84,9 +84,9 @@ struct PhotonSettings {
     // Progressive photon refinement (docs/fidelity.md, session 17): once the scene is static and
     // every group is traced, the simulation grows to this many complete photon sets (layers of
     // groups × photons_per_group photons per light, each its own QMC points), one layer at a time
-    // with the retrace budget repairs leave; each photon then carries Φ / (G·P·layers). An edit
-    // drops the extra layers (the state of a fresh simulation) and growth starts again once
-    // settled. 1 = off.
+    // with the retrace budget repairs leave; each photon then carries Φ / (G·P·sets of its
+    // group). An edit re-traces the groups it touches with one set (the others keep theirs) and
+    // growth starts again once settled. 1 = off.
     int refine_layers = 1;
 };
 

@@ -28,7 +28,8 @@ const Command kPhotonsCommand{
     "edit script if given, and report per-frame counters (groups invalidated by the moved-object "
     "query, segments it tested, its time); --dump writes per-surface hit counts, flux, delta_f, "
     "delta_i, per-light "
-    "group states and per-frame counters as JSON.",
+    "group states and per-frame counters (photons grown for refinement, complete photon sets) as "
+    "JSON.",
     {
         integer("frames,n", "N", "frames to run", 0, 10000000, 1),
         text("dump", "FILE.json", "write the state as JSON (atomically)"),
@@ -84,18 +85,19 @@ int run_photons(const Args& args) {
                              {"query_ms", st.query_ms},
                              {"photons_retraced", st.photons_retraced},
                              {"groups_queued", st.groups_queued},
+                             {"photons_grown", st.photons_grown},
+                             {"layers", st.layers},
                              {"aim_surfaces_rebuilt", st.aim_surfaces_rebuilt},
                              {"aim_texels_rebuilt", st.aim_texels_rebuilt},
                              {"photon_ms", photon_ms},
                              {"aim_ms", aim_ms}});
         if (!args.has("quiet")) {
             std::fprintf(stderr,
-                         "frame %4d: verified %5d, invalidated %4d, retraced %6d, queued %4d, AIM "
-                         "%3d surfaces "
-                         "%5d texels  (%.2f + %.2f ms)\n",
+                         "frame %4d: verified %5d, invalidated %4d, retraced %6d, queued %4d, "
+                         "grown %6d, AIM %3d surfaces %5d texels  (%.2f + %.2f ms)\n",
                          int(st.frame), st.photons_verified, st.groups_invalidated,
-                         st.photons_retraced, st.groups_queued, st.aim_surfaces_rebuilt,
-                         st.aim_texels_rebuilt, photon_ms, aim_ms);
+                         st.photons_retraced, st.groups_queued, st.photons_grown,
+                         st.aim_surfaces_rebuilt, st.aim_texels_rebuilt, photon_ms, aim_ms);
             if (st.objects_moved > 0)
                 std::fprintf(stderr,
                              "            query: %d moved, %d groups invalidated, %llu segments "
