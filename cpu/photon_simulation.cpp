@@ -384,17 +384,33 @@ std::vector<std::pair<int, int>> PhotonSimulation::groups_to_grow() const {
     return out;
 }
 
+int PhotonSimulation::retrace_sets(int light, int group) const {
+    return scene_.settings.photons.retrace_all_sets ? std::max(1, maps_.sets(light, group)) : 1;
+}
+
 void PhotonSimulation::retrace_groups(const std::vector<std::pair<int, int>>& groups) {
     const int per_group = scene_.settings.photons.photons_per_group;
-    trace_groups(groups, {});
+    const int base = scene_.settings.photons.groups;
+    // One job list over every set re-traced: set k of group i as its own entry.
+    std::vector<std::pair<int, int>> jobs;
+    std::vector<int> sets;
+    for (const auto& [l, g] : groups)
+        for (int k = 0; k < retrace_sets(l, g); ++k) {
+            jobs.emplace_back(l, g);
+            sets.push_back(k);
+        }
+    trace_groups(jobs, sets);
     // Merge in group order on this thread: the maps end up identical for any thread count. A
-    // re-traced group starts again from one photon set (its extra sets held the old scene).
-    for (size_t gi = 0; gi < groups.size(); ++gi) {
-        const auto [l, g] = groups[gi];
-        if (maps_.sets(l, g) > 1) clear_sets(l, g, 0);
-        maps_.set_group(l, g, &traced_[gi * size_t(per_group)], size_t(per_group));
+    // re-traced group starts again from one photon set (its extra sets held the old scene), or
+    // with photons.retrace_all_sets keeps its sets, each re-traced (same weights: the hits whose
+    // paths did not change come back as they were and cancel in the AIM's change log).
+    for (size_t j = 0; j < jobs.size(); ++j) {
+        const auto [l, g] = jobs[j];
+        const int k = sets[j];
+        if (k == 0 && maps_.sets(l, g) > retrace_sets(l, g)) clear_sets(l, g, 0);
+        maps_.set_group(l, k * base + g, &traced_[j * size_t(per_group)], size_t(per_group));
         maps_.group(l, g).queued = false;
-        store_segments(l, g, &traced_ends_[gi * size_t(per_group)]);
+        store_segments(l, k * base + g, &traced_ends_[j * size_t(per_group)]);
     }
 }
 
@@ -447,14 +463,19 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget, bool grow) {
     // Work off the queue under the budget (whole groups; at least one per frame).
     std::vector<std::pair<int, int>> batch;
     int budget = retrace_budget;
-    while (!queue_.empty() && (batch.empty() || budget >= settings.photons_per_group)) {
+    int photons = 0;
+    while (!queue_.empty()) {
+        const int cost =
+            retrace_sets(queue_.begin()->light, queue_.begin()->group) * settings.photons_per_group;
+        if (!batch.empty() && budget < cost) break;
         batch.emplace_back(queue_.begin()->light, queue_.begin()->group);
         queue_.erase(queue_.begin());
-        budget -= settings.photons_per_group;
+        budget -= cost;
+        photons += cost;
     }
     retrace_groups(batch);
     stats.groups_retraced = int(batch.size());
-    stats.photons_retraced = int(batch.size()) * settings.photons_per_group;
+    stats.photons_retraced = photons;
     stats.groups_queued = int(queue_.size());
 
     // Refinement with what the budget has left (whole groups; one if no repair ran this frame),

@@ -129,8 +129,11 @@ private:
     // Traces the groups' photons into traced_ / traced_ends_ (set sets[i] of group i; set 0
     // when `sets` is empty) on the pool's threads.
     void trace_groups(const std::vector<std::pair<int, int>>& groups, const std::vector<int>& sets);
-    // Re-traces the groups' first set; a group's other sets leave the maps.
+    // Re-traces the groups: their first set, the other sets leaving the maps; or with
+    // photons.retrace_all_sets every set each holds.
     void retrace_groups(const std::vector<std::pair<int, int>>& groups);
+    // Photon sets a re-trace of the group traces (retrace_groups).
+    int retrace_sets(int light, int group) const;
     // Traces one more photon set for each group and adds it to the maps.
     void grow_groups(const std::vector<std::pair<int, int>>& groups);
     // Groups that may grow a set, the fewest sets first, then in (light, group) order.

@@ -88,6 +88,10 @@ struct PhotonSettings {
     // group). An edit re-traces the groups it touches with one set (the others keep theirs) and
     // growth starts again once settled. 1 = off.
     int refine_layers = 1;
+    // With refine_layers > 1: an invalidated group is re-traced with every photon set it holds
+    // (its photons count L times against the retrace budget, no regrowth after the edit)
+    // instead of dropping back to one set and growing again.
+    bool retrace_all_sets = false;
 };
 
 struct LightmapSettings {
@@ -342,6 +346,8 @@ void visit_settings(Settings& s, Visitor& v) {
                          "path agreement, fraction of scene diagonal"});
     v.field(Field<int>{"refine_layers", s.photons.refine_layers, 1, 64,
                        "photon sets a static, settled scene grows to (1 = off)"});
+    v.field(Field<bool>{"retrace_all_sets", s.photons.retrace_all_sets, 0, 1,
+                        "an invalidated group is re-traced with all its photon sets"});
     v.end_section();
     v.section("lightmap", "surfaces and charts, Larsen ch. 8");
     v.field(Field<float>{"texel_size", s.lightmap.texel_size, 0, 1e30,

@@ -234,10 +234,11 @@ int settle(PhotonSimulation& sim) {
 // With `verify` off the round-robin safety net is switched off: the edits' own invalidation (the
 // moved-object query, light and albedo edits) must then find every group alone.
 void repair_equals_rebuild(const std::string& scene_file, uint32_t seed, int edits,
-                           bool verify = true, int layers = 1) {
+                           bool verify = true, int layers = 1, bool all_sets = false) {
     Scene scene = load_scene(test::scene_path(scene_file));
     if (!verify) scene.settings.photons.verify_per_frame = 0;
     scene.settings.photons.refine_layers = layers;
+    scene.settings.photons.retrace_all_sets = all_sets;
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     settle(sim);
@@ -283,6 +284,41 @@ TEST(SelectiveTracing, RepairEqualsRebuildWithRefinementLayers) {
     for (uint32_t seed = 500; seed <= 503; ++seed)
         repair_equals_rebuild("cornell.json", seed, 4, true, 3);
     repair_equals_rebuild("two_rooms.json", 510, 4, false, 3);
+    // photons.retrace_all_sets: an invalidated group is re-traced with every set it holds.
+    for (uint32_t seed = 520; seed <= 522; ++seed)
+        repair_equals_rebuild("cornell.json", seed, 4, true, 3, true);
+    repair_equals_rebuild("two_rooms.json", 530, 4, false, 3, true);
+}
+
+// photons.retrace_all_sets: the groups an edit invalidates are re-traced with all their sets
+// (each counting against the budget), so nothing is regrown afterwards and every group keeps 4.
+TEST(SelectiveTracing, RetracingAllSetsLeavesNothingToRegrow) {
+    Scene scene = load_scene(test::scene_path("cornell.json"));
+    scene.settings.photons.refine_layers = 4;
+    scene.settings.photons.retrace_all_sets = true;
+    ThreadPool pool(2);
+    PhotonSimulation sim(scene, pool);
+    for (int f = 0; f < 1000 && !sim.settled(); ++f) sim.frame();
+    ASSERT_TRUE(sim.settled());
+    const int cube = scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    translate_object(scene, cube, {10.0f, 0.0f, 0.0f});
+    const PhotonSettings& p = scene.settings.photons;
+    int invalidated = 0, retraced = 0, photons = 0, grown = 0, frames = 0;
+    for (; frames < 1000 && (frames == 0 || !sim.settled()); ++frames) {
+        const PhotonFrameStats st = sim.frame(p.retrace_budget, true);
+        invalidated += st.groups_invalidated;
+        retraced += st.groups_retraced;
+        photons += st.photons_retraced;
+        grown += st.photons_grown;
+        EXPECT_EQ(st.layers, 4);
+    }
+    ASSERT_TRUE(sim.settled());
+    EXPECT_GT(invalidated, 0);
+    EXPECT_EQ(retraced, invalidated);
+    EXPECT_EQ(photons, 4 * p.photons_per_group * retraced);
+    EXPECT_EQ(grown, 0);
+    EXPECT_GT(frames, 1);  // 4 × 40 photons a group: the 4,000-photon budget takes 25 a frame
 }
 
 // Growth: one more set for a few groups at a time once settled, the fewest-set groups first,
