@@ -89,8 +89,10 @@ struct PhotonSettings {
     // growth starts again once settled. 1 = off.
     int refine_layers = 1;
     // With refine_layers > 1: an invalidated group is re-traced with every photon set it holds
-    // (its photons count L times against the retrace budget, no regrowth after the edit)
-    // instead of dropping back to one set and growing again.
+    // (its photons count L times against the retrace budget, no regrowth after the edit; the
+    // hits whose paths did not change cancel in the AIM) instead of dropping back to one set and
+    // growing again (a quicker first repair, then L − 1 more AIM and IIM updates). Which settles
+    // sooner depends on the scene (docs/fidelity.md, session 19).
     bool retrace_all_sets = false;
 };
 
