@@ -87,7 +87,8 @@ public:
     size_t stored_bytes() const;
 
     // Photon sets per group (photons.refine_layers). Each group holds its own number of sets:
-    // an edit re-traces the groups it touches with one set and leaves the others' sets alone.
+    // an edit re-traces the groups it touches (with one set, or with every set it holds under
+    // photons.retrace_all_sets) and leaves the others' sets alone.
     // A hit keeps the flux of one photon of one set, Φ / (G·P), and counts with weight
     // 1 / sets of its group (hit_weight) in the surface's flux, its deltas, its change log and
     // the AIM's density estimate: every group's stratum carries its whole flux however many sets
@@ -103,7 +104,7 @@ public:
     // Sets group g (< base_groups()) of the light holds from now on: the hits of its sets below
     // min(old, n) are counted again with weight 1 / n. Sets n and above must be cleared first.
     void set_sets(int light, int g, int n);
-    // The fewest sets any group of an enabled light holds: the complete photon sets (1 if none).
+    // The fewest sets any group holding photons has: the complete photon sets (1 if none).
     int layers() const;
 
 private:
