@@ -219,7 +219,10 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.photon_ms = st.photon_ms, r.aim_ms = st.aim_ms;
         r.early_hand_over = st.early_hand_over;
         r.photons_grown = uint64_t(st.photons.photons_grown);
-        r.layers = st.photons.layers;
+        // A frame whose workers handed nothing over has no photon frame (frame 0): the sets are
+        // what the last hand-over left.
+        r.layers = st.photons.frame > 0 || run.frames.empty() ? st.photons.layers
+                                                               : run.frames.back().layers;
         r.converged = pipeline_converged;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
