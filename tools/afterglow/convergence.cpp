@@ -222,7 +222,7 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         // A frame whose workers handed nothing over has no photon frame (frame 0): the sets are
         // what the last hand-over left.
         r.layers = st.photons.frame > 0 || run.frames.empty() ? st.photons.layers
-                                                               : run.frames.back().layers;
+                                                              : run.frames.back().layers;
         r.converged = pipeline_converged;
         run.frames.push_back(r);
         if (on_image) on_image(f, test);
