@@ -457,7 +457,7 @@ PhotonFrameStats PhotonSimulation::frame(int retrace_budget, bool grow) {
         if (!same_path(maps_.group(jobs[i].light, jobs[i].group), jobs[i].photon, paths[i]))
             invalidate(jobs[i].light, jobs[i].group, stats);
     // Refinement switched off or lowered: the sets above the target leave the maps. (An edit
-    // re-traces only the groups it touches, each with one set; the other groups keep theirs.)
+    // re-traces only the groups it touches, retrace_groups; the other groups keep their sets.)
     trim_sets(growth_on_ ? target_layers() : 1);
 
     // Work off the queue under the budget (whole groups; at least one per frame).
