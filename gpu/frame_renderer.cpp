@@ -570,7 +570,13 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
         throw GlError("frame: compose framebuffer incomplete");
     empty_vao_ = make_vertex_array();
 
-    for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
+    // Shadow volumes from each mesh as loaded: a tile cut (lightmap.refine_tile) splits triangles
+    // with T-junctions, which would open a closed box into a per-triangle prism soup.
+    for (size_t o = 0; o < scene.objects.size(); ++o)
+        casters_.push_back(make_shadow_caster(o < scene.unsplit_meshes.size() &&
+                                                      !scene.unsplit_meshes[o].triangles.empty()
+                                                  ? scene.unsplit_meshes[o]
+                                                  : scene.objects[o].mesh));
     for (const Object& o : scene.objects)
         if (o.material.type == MaterialType::diffuse) diffuse_triangles_ += o.mesh.triangles.size();
     volume_vbo_ = make_buffer();

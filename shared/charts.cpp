@@ -1060,6 +1060,10 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
         const glm::vec3& e = object.material.emission;
         if (std::max({e.x, e.y, e.z}) > 0.0f) continue;
         const glm::dvec2 origin = chart_layout_origin(layouts[size_t(c)], texel_size);
+        // A chart over 65536 texels wide is refused after this, naming the texel size; cutting
+        // it first would allocate its tile grid (a 10^7 m triangle at 0.2 m: bad_alloc).
+        const glm::dvec2 extent = layouts[size_t(c)].extent / texel_size;
+        if (!(extent.x < 65536.0 && extent.y < 65536.0)) continue;
         const glm::ivec2 texels = chart_layout_texels(layouts[size_t(c)], texel_size);
         const int nx = (texels.x + tile - 1) / tile, ny = (texels.y + tile - 1) / tile;
         // The chart's own (float) axes, as its layout was measured with.

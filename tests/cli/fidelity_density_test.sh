@@ -2,7 +2,8 @@
 # fidelity_density_test.sh AFTERGLOW: adaptive lightmap density (issue #12 item 4,
 # docs/fidelity.md "Adaptive texel density") at CI size. `afterglow fidelity` on the Cornell box
 # at 48² with lightmap.refine_factor=2 (the floor and the cube's faces, which touch the dynamic
-# cube and sphere, at 27.75 mm; the rest at 55.5 mm), stage (d): the frame's indirect term
+# cube and sphere, at 27.75 mm; the rest at 55.5 mm: whole charts, refine_tile=0, one photon set,
+# not the default tiles), stage (d): the frame's indirect term
 # against gathering at every pixel, in the contact regions. Uniform 55.5 mm texels fail both
 # checks (bounds and measured values below). Exit 77 (skipped) without a GL context.
 set -uo pipefail
@@ -10,7 +11,8 @@ bin="$1"
 d=$(mktemp -d); trap 'rm -rf "$d"' EXIT
 "$bin" glinfo >/dev/null 2>&1 || { echo "no OSMesa context: skipped"; exit 77; }
 "$bin" fidelity scenes/cornell.json --size 48x48 --pt-paths 16 --reference-rays 256 \
-  --pixel-rays 256 --set lightmap.refine_factor=2 --csv "$d/f.csv" >/dev/null ||
+  --pixel-rays 256 --set lightmap.refine_factor=2 --set lightmap.refine_budget=2 \
+  --set lightmap.refine_tile=0 --set lightmap.refine_reach=0 --set photons.refine_layers=1 --csv "$d/f.csv" >/dev/null ||
   { echo "fidelity failed" >&2; exit 1; }
 python3 - "$d/f.csv" <<'PY'
 import csv, sys

@@ -11,9 +11,10 @@ set -uo pipefail
 bin="$1"
 d=$(mktemp -d); trap 'rm -rf "$d"' EXIT
 "$bin" glinfo >/dev/null 2>&1 || { echo "no OSMesa context: skipped"; exit 77; }
-fine=(--set lightmap.refine_factor=4 --set lightmap.refine_budget=10)
+fine=(--set lightmap.refine_factor=4 --set lightmap.refine_budget=10 --set lightmap.refine_reach=0
+      --set photons.refine_layers=1)
 texels() { "$bin" info scenes/cornell.json "$@" | awk '$1 == "texels" { print $2 }'; }
-whole=$(texels "${fine[@]}") tiled=$(texels "${fine[@]}" --set lightmap.refine_tile=1) uniform=$(texels)
+whole=$(texels "${fine[@]}" --set lightmap.refine_tile=0) tiled=$(texels "${fine[@]}" --set lightmap.refine_tile=1) uniform=$(texels --set lightmap.refine_factor=1)
 "$bin" fidelity scenes/cornell.json --size 48x48 --pt-paths 4 --reference-rays 64 \
   --pixel-rays 256 "${fine[@]}" --set lightmap.refine_tile=1 --csv "$d/f.csv" >/dev/null ||
   { echo "fidelity failed" >&2; exit 1; }

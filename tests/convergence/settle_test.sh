@@ -11,7 +11,9 @@
 # redoes everything. Both start from the converged state of frame 0 (--prime). One gather per
 # texel (gather.refine_passes=1): full-budget re-queues every texel each cycle and so never
 # refines, and a refining selective run settles lower (0.026 against 0.029), a narrower 10% band
-# than the baseline's; the count is about invalidation, not refinement. Exit 77 (skipped)
+# than the baseline's; the count is about invalidation, not refinement. For the same reason one
+# photon set (photons.refine_layers=1; the default grows 16, full-budget grows none), as
+# `bench settle` does. Exit 77 (skipped)
 # without a GL context or without Debian's python3.
 set -uo pipefail
 bin="$1"; work="$2"
@@ -20,7 +22,7 @@ bin="$1"; work="$2"
 mkdir -p "$work"
 common=(scenes/cornell.json --script scenes/cornell_cube_jump.lua --size 48x48 --frames 70
         --frame-ms 2000 --prime --ref-spp 16 --ref-photons 200000 --cache "$work/settle-cache" --plot "" -q
-        --set gather.refine_passes=1 --set schedule.wait_for_workers=true)
+        --set gather.refine_passes=1 --set photons.refine_layers=1 --set schedule.wait_for_workers=true)
 "$bin" converge "${common[@]}" --csv "$work/jump.selective.csv" || exit 1
 "$bin" converge "${common[@]}" --baseline full-budget --csv "$work/jump.full-budget.csv" || exit 1
 /usr/bin/python3 tests/convergence/check_settle.py "$work/jump.selective.csv" "$work/jump.full-budget.csv"
