@@ -741,7 +741,14 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
     volume_.use();
     volume_.set("view_projection", view_projection);
     gl::BindVertexArray(volume_vao_.get());
+    // The near caps lie in the caster's lit faces. Drawn from the mesh as loaded (a tiled layout
+    // draws the surface split along its tile edges, other triangles in the same plane), a cap
+    // could win the depth test against its own face by rounding and shadow it in speckles; a
+    // depth slope's worth farther, it fails against its face as when the triangles are the same.
+    gl::Enable(GL_POLYGON_OFFSET_FILL);
+    gl::PolygonOffset(1.0f, 1.0f);
     gl::DrawArrays(GL_TRIANGLES, 0, GLsizei(triangles.size()));
+    gl::Disable(GL_POLYGON_OFFSET_FILL);
 }
 
 bool FrameRenderer::update_light_maps(const std::vector<LightSample>& lights) {
