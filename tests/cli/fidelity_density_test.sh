@@ -2,8 +2,8 @@
 # fidelity_density_test.sh AFTERGLOW: adaptive lightmap density (issue #12 item 4,
 # docs/fidelity.md "Adaptive texel density") at CI size. `afterglow fidelity` on the Cornell box
 # at 48² with lightmap.refine_factor=2 (the floor and the cube's faces, which touch the dynamic
-# cube and sphere, at 27.75 mm; the rest at 55.5 mm: whole charts, refine_tile=0, one photon set,
-# not the default tiles), stage (d): the frame's indirect term
+# cube and sphere, at 27.75 mm; the rest at 55.5 mm: whole charts and one photon set, stated so
+# that other defaults leave it as calibrated), stage (d): the frame's indirect term
 # against gathering at every pixel, in the contact regions. Uniform 55.5 mm texels fail both
 # checks (bounds and measured values below). Exit 77 (skipped) without a GL context.
 set -uo pipefail

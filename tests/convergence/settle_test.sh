@@ -12,8 +12,8 @@
 # texel (gather.refine_passes=1): full-budget re-queues every texel each cycle and so never
 # refines, and a refining selective run settles lower (0.026 against 0.029), a narrower 10% band
 # than the baseline's; the count is about invalidation, not refinement. For the same reason one
-# photon set (photons.refine_layers=1; the default grows 16, full-budget grows none), as
-# `bench settle` does. Exit 77 (skipped)
+# photon set, stated whatever the default (photons.refine_layers: selective grows more sets once
+# settled, full-budget none), as `bench settle` does. Exit 77 (skipped)
 # without a GL context or without Debian's python3.
 set -uo pipefail
 bin="$1"; work="$2"
