@@ -570,13 +570,7 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
         throw GlError("frame: compose framebuffer incomplete");
     empty_vao_ = make_vertex_array();
 
-    // Shadow volumes from each mesh as loaded: a tile cut (lightmap.refine_tile) splits triangles
-    // with T-junctions, which would open a closed box into a per-triangle prism soup.
-    for (size_t o = 0; o < scene.objects.size(); ++o)
-        casters_.push_back(make_shadow_caster(o < scene.unsplit_meshes.size() &&
-                                                      !scene.unsplit_meshes[o].triangles.empty()
-                                                  ? scene.unsplit_meshes[o]
-                                                  : scene.objects[o].mesh));
+    for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
     for (const Object& o : scene.objects)
         if (o.material.type == MaterialType::diffuse) diffuse_triangles_ += o.mesh.triangles.size();
     volume_vbo_ = make_buffer();
@@ -741,14 +735,7 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
     volume_.use();
     volume_.set("view_projection", view_projection);
     gl::BindVertexArray(volume_vao_.get());
-    // The near caps lie in the caster's lit faces. Drawn from the mesh as loaded (a tiled layout
-    // draws the surface split along its tile edges, other triangles in the same plane), a cap
-    // could win the depth test against its own face by rounding and shadow it in speckles; a
-    // depth slope's worth farther, it fails against its face as when the triangles are the same.
-    gl::Enable(GL_POLYGON_OFFSET_FILL);
-    gl::PolygonOffset(1.0f, 1.0f);
     gl::DrawArrays(GL_TRIANGLES, 0, GLsizei(triangles.size()));
-    gl::Disable(GL_POLYGON_OFFSET_FILL);
 }
 
 bool FrameRenderer::update_light_maps(const std::vector<LightSample>& lights) {
