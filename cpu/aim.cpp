@@ -530,7 +530,7 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
     }
     built_albedo_[size_t(surface)] = albedo;
     built_[size_t(surface)] = 1;
-    s.changes.clear();
+    s.clear_changes();
     s.changes_overflow = false;
     if (covered) covered_changed_[size_t(surface)] = 0;
 
@@ -593,18 +593,25 @@ int Aim::estimate_surface(PhotonMaps& maps, int surface, const std::vector<glm::
 std::optional<std::vector<glm::vec3>> Aim::net_changes(const SurfaceHits& s, double* energy_out) {
     if (s.changes_overflow) return std::nullopt;
     // A hit removed and added again (a re-traced photon that landed where it did) cancels: sort
-    // the changes by what they are, sum the signs of equal ones.
-    std::vector<uint32_t> order(s.changes.size());
-    std::iota(order.begin(), order.end(), 0u);
+    // the changes by what they are, sum the signs of equal ones. The order of the log's prefix
+    // is kept from the last call; the tail logged since is sorted and merged into it, which gives
+    // the same order as sorting the whole log (ties go by index, so the order is total).
+    std::vector<uint32_t>& order = s.changes_sorted;
+    if (order.size() > s.changes.size()) order.clear();
     auto key = [&](uint32_t i) {
         const HitChange& c = s.changes[i];
         return std::make_tuple(c.position.x, c.position.y, c.position.z, c.power.x, c.power.y,
                                c.power.z, c.bounce);
     };
-    std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const auto before = [&](uint32_t a, uint32_t b) {
         const auto ka = key(a), kb = key(b);
         return ka != kb ? ka < kb : a < b;
-    });
+    };
+    const size_t sorted = order.size();
+    order.resize(s.changes.size());
+    std::iota(order.begin() + std::ptrdiff_t(sorted), order.end(), uint32_t(sorted));
+    std::sort(order.begin() + std::ptrdiff_t(sorted), order.end(), before);
+    std::inplace_merge(order.begin(), order.begin() + std::ptrdiff_t(sorted), order.end(), before);
     std::vector<glm::vec3> out;
     double e = 0.0;
     for (size_t i = 0; i < order.size();) {
@@ -713,7 +720,7 @@ int Aim::update(PhotonMaps& maps, int max_surfaces, int max_texels, int* surface
         if (built_[size_t(s)] && !scene_.settings.aim.exact_direct) {
             c.changed = net_changes(h, &c.delta);
             if (c.changed && c.changed->empty() && !recoloured && !recovered) {
-                h.changes.clear();
+                h.clear_changes();
                 h.delta_f = 0.0;
                 h.signed_delta = glm::dvec3(0.0);
                 continue;

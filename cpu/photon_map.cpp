@@ -21,6 +21,7 @@ void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm
         if (s.changes.size() >= 4 * s.hits.size() + 64) {
             s.changes_overflow = true;
             std::vector<HitChange>().swap(s.changes);
+            std::vector<uint32_t>().swap(s.changes_sorted);
         } else {
             s.changes.push_back(HitChange{position, power, bounce, int8_t(sign > 0.0 ? 1 : -1)});
         }

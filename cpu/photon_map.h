@@ -53,6 +53,15 @@ struct SurfaceHits {
     // that anything may have changed.
     std::vector<HitChange> changes;
     bool changes_overflow = false;
+    // Aim::net_changes' cache: the indices of the first changes_sorted.size() changes, sorted by
+    // what they are (ties by index). A surface left pending is ranked every frame; only the
+    // changes logged since are sorted and merged in. Cleared with the log (clear_changes).
+    mutable std::vector<uint32_t> changes_sorted;
+    // Forgets the log (after an AIM rebuild, or on overflow) and its sorted order.
+    void clear_changes() {
+        changes.clear();
+        changes_sorted.clear();
+    }
     glm::dvec3 flux{0.0};          // Σ power of the stored hits
     double delta_f = 0.0;          // Σ |energy| of hits added/removed since the AIM rebuild
     double delta_i = 0.0;          // same, hits with bounce ≥ 1 only, since the IIM update

@@ -429,6 +429,36 @@ AimState state_of(const Aim& aim) {
 
 }  // namespace
 
+// The net changes come from the log sorted in parts (the order kept from the last call, the new
+// tail merged in): they must be what sorting the whole log at once gives, call after call.
+TEST(AimUpdate, NetChangesOfAGrowingLogEqualThoseOfTheWholeLog) {
+    SurfaceHits grown;
+    std::vector<HitChange> pool;  // few distinct hits, so that many cancel
+    for (int i = 0; i < 23; ++i)
+        pool.push_back(HitChange{glm::vec3(float(i % 5), float(i % 3), 0.5f),
+                                 glm::vec3(0.1f * float(i % 4 + 1)), uint8_t(i % 2), 0});
+    uint32_t state = 12345u;
+    const auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    for (int call = 0; call < 40; ++call) {
+        const int logged = int(next() % 50);
+        for (int k = 0; k < logged; ++k) {
+            HitChange c = pool[next() % pool.size()];
+            c.sign = int8_t(next() % 2 ? 1 : -1);
+            grown.changes.push_back(c);
+        }
+        if (call == 25) grown.clear_changes();  // an AIM rebuild in between
+        SurfaceHits whole;
+        whole.changes = grown.changes;  // no order kept: sorted at once
+        double e_grown = -1.0, e_whole = -2.0;
+        const auto a = Aim::net_changes(grown, &e_grown);
+        const auto b = Aim::net_changes(whole, &e_whole);
+        ASSERT_TRUE(a && b);
+        ASSERT_EQ(grown.changes_sorted.size(), grown.changes.size());
+        EXPECT_EQ(*a, *b) << "call " << call;
+        EXPECT_EQ(e_grown, e_whole) << "call " << call;
+    }
+}
+
 // Groups re-traced along the paths they had remove and re-add the same hits: those cancel, and
 // no AIM texel is estimated again (with the gross Δf every surface they touch was rebuilt).
 TEST(AimUpdate, HitsThatComeBackAsTheyWereRebuildNothing) {
