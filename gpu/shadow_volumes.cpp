@@ -146,14 +146,96 @@ void append_side(const glm::vec3& a, const glm::vec3& b, const glm::vec4& light_
 
 }  // namespace
 
+namespace {
+
+struct Corner {
+    glm::vec3 p;
+    double tolerance;
+};
+
+// SoupWeld::inner: for each outline edge of each soup caster, the welded corners of other meshes
+// strictly inside it (within the smaller of the two weld tolerances of the segment). Corners are
+// binned in a uniform grid over their bounds; an edge visits the cells its box overlaps.
+void find_corners_on_edges(const std::vector<ShadowCaster>& casters,
+                           const std::vector<glm::mat4>& models, const std::vector<Corner>& corners,
+                           SoupWeld& weld) {
+    weld.inner.assign(casters.size(), {});
+    if (corners.size() < 3) return;
+    glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+    for (const Corner& c : corners) {
+        lo = glm::min(lo, glm::dvec3(c.p));
+        hi = glm::max(hi, glm::dvec3(c.p));
+    }
+    const int n = std::clamp(int(std::cbrt(double(corners.size()))), 1, 64);
+    const glm::dvec3 size = glm::max(hi - lo, glm::dvec3(1e-30));
+    const auto cell_of = [&](const glm::dvec3& p) {
+        const glm::dvec3 f = glm::clamp((p - lo) / size * double(n), 0.0, double(n - 1));
+        return glm::ivec3(f);
+    };
+    std::vector<std::vector<uint32_t>> grid(size_t(n) * size_t(n) * size_t(n));
+    const auto at = [&](const glm::ivec3& i) -> std::vector<uint32_t>& {
+        return grid[(size_t(i.z) * size_t(n) + size_t(i.y)) * size_t(n) + size_t(i.x)];
+    };
+    for (size_t k = 0; k < corners.size(); ++k)
+        at(cell_of(glm::dvec3(corners[k].p))).push_back(uint32_t(k));
+    for (size_t o = 0; o < casters.size(); ++o) {
+        const ShadowCaster& c = casters[o];
+        if (!c.soup) continue;
+        const std::vector<uint32_t>& ids = weld.ids[o];
+        // The outline: edges (by id) one triangle alone has; with a local corner for each end.
+        std::unordered_map<uint64_t, std::pair<int, glm::uvec2>> edges;
+        for (const glm::uvec3& t : c.triangles)
+            for (int k = 0; k < 3; ++k) {
+                const unsigned a = t[k], b = t[(k + 1) % 3];
+                const uint32_t ia = ids[a], ib = ids[b];
+                if (ia == ib) continue;
+                const uint64_t key = (uint64_t(std::min(ia, ib)) << 32) | std::max(ia, ib);
+                auto& [count, ends] = edges[key];
+                ++count;
+                ends = ia < ib ? glm::uvec2(a, b) : glm::uvec2(b, a);
+            }
+        for (const auto& [key, edge] : edges) {
+            if (edge.first != 1) continue;
+            const glm::dvec3 a(world_point(models[o], c.positions[edge.second.x]));
+            const glm::dvec3 b(world_point(models[o], c.positions[edge.second.y]));
+            const uint32_t ia = uint32_t(key >> 32), ib = uint32_t(key & 0xffffffffu);
+            const double tolerance = std::min(corners[ia].tolerance, corners[ib].tolerance);
+            const glm::dvec3 d = b - a;
+            const double length2 = glm::dot(d, d);
+            if (!(length2 > 0.0) || !std::isfinite(length2)) continue;
+            const glm::ivec3 c0 = cell_of(glm::min(a, b) - tolerance);
+            const glm::ivec3 c1 = cell_of(glm::max(a, b) + tolerance);
+            std::vector<std::pair<double, uint32_t>> on;
+            for (int z = c0.z; z <= c1.z; ++z)
+                for (int y = c0.y; y <= c1.y; ++y)
+                    for (int x = c0.x; x <= c1.x; ++x)
+                        for (const uint32_t k : at({x, y, z})) {
+                            if (k == ia || k == ib) continue;
+                            const glm::dvec3 p(corners[k].p);
+                            const double t = glm::dot(p - a, d) / length2;
+                            if (!(t > 0.0 && t < 1.0)) continue;
+                            const double within = std::min(tolerance, corners[k].tolerance);
+                            const glm::dvec3 off = glm::abs(a + t * d - p);
+                            if (std::max({off.x, off.y, off.z}) > within) continue;
+                            // Not one of the ends (those would have welded to it).
+                            if (glm::length(p - a) <= within || glm::length(p - b) <= within)
+                                continue;
+                            on.emplace_back(t, k);
+                        }
+            if (on.empty()) continue;
+            std::sort(on.begin(), on.end());
+            std::vector<uint32_t>& list = weld.inner[o][key];
+            for (const auto& [t, k] : on) list.push_back(k);
+        }
+    }
+}
+
+}  // namespace
+
 SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
                            const std::vector<glm::mat4>& models) {
     SoupWeld weld;
     weld.ids.resize(casters.size());
-    struct Corner {
-        glm::vec3 p;
-        double tolerance;
-    };
     std::vector<Corner> corners;  // one per id: the first corner that took it
     std::unordered_map<WeldCell, std::vector<uint32_t>, WeldCellHash> grid;
     std::vector<int> levels;  // those grid holds, in the order first used
@@ -203,6 +285,9 @@ SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
             weld.ids[o][i] = id;
         }
     }
+    weld.corners.reserve(corners.size());
+    for (const Corner& c : corners) weld.corners.push_back(c.p);
+    find_corners_on_edges(casters, models, corners, weld);
     return weld;
 }
 
@@ -214,6 +299,7 @@ void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
     std::vector<SideFace> sides;
     std::unordered_map<uint64_t, int> net;  // per welded edge: sides drawn lower→higher − back
     std::vector<glm::vec3> p;
+    std::vector<uint32_t> chain;  // an edge's ids from one end to the other
     for (size_t o = 0; o < casters.size(); ++o) {
         const ShadowCaster& caster = casters[o];
         if (!caster.closed && !caster.soup) continue;
@@ -245,9 +331,28 @@ void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
                     continue;
                 }
                 const uint64_t edge = (uint64_t(std::min(ia, ib)) << 32) | std::max(ia, ib);
-                const int sign = ia < ib ? 1 : -1;
-                net[edge] += sign;
-                sides.push_back({edge, sign, p[a], p[b]});
+                // Other meshes' corners on the edge split it into pieces, each of which may be
+                // shared.
+                chain.assign(1, ia);
+                if (!weld.inner.empty()) {
+                    const auto it = weld.inner[o].find(edge);
+                    if (it != weld.inner[o].end()) {
+                        if (ia < ib)
+                            chain.insert(chain.end(), it->second.begin(), it->second.end());
+                        else
+                            chain.insert(chain.end(), it->second.rbegin(), it->second.rend());
+                    }
+                }
+                chain.push_back(ib);
+                for (size_t i = 0; i + 1 < chain.size(); ++i) {
+                    const uint32_t u = chain[i], v = chain[i + 1];
+                    const glm::vec3 pu = i == 0 ? p[a] : weld.corners[u];
+                    const glm::vec3 pv = i + 2 == chain.size() ? p[b] : weld.corners[v];
+                    const uint64_t piece = (uint64_t(std::min(u, v)) << 32) | std::max(u, v);
+                    const int sign = u < v ? 1 : -1;
+                    net[piece] += sign;
+                    sides.push_back({piece, sign, pu, pv});
+                }
             }
         }
     }

@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <glm/glm.hpp>
+#include <unordered_map>
 #include <vector>
 
 #include "shared/mesh.h"
@@ -32,6 +33,13 @@ ShadowCaster make_closed_caster(const Mesh& mesh);
 // one id. It does not depend on the light: made again when the geometry changes.
 struct SoupWeld {
     std::vector<std::vector<uint32_t>> ids;  // per caster, per position; empty unless soup
+    // Per id: where its first corner lies (world space).
+    std::vector<glm::vec3> corners;
+    // Per caster: for each edge of its outline (an edge one of its triangles alone has, keyed by
+    // its ids, the lower first) that another mesh's corners lie on, those corners' ids in order
+    // from the lower id's end. A tiled wall's corners on the edge of the whole wall beside it
+    // (T-junctions between meshes) split that edge, so that its pieces meet their pairs.
+    std::vector<std::unordered_map<uint64_t, std::vector<uint32_t>>> inner;
 };
 SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
                            const std::vector<glm::mat4>& models);

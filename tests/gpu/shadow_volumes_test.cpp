@@ -125,4 +125,58 @@ TEST(ShadowVolumes, CornersApartAreNotWelded) {
     EXPECT_EQ(unmatched_edges(triangles, 0.0f), 0);
 }
 
+// The lamp-in-box room with its box's top 1 cm under the ceiling and both cut into tiles there
+// (lightmap.refine_tile: texels of 0.1, a quarter of that near the contact).
+Scene tiled_room_with_lamp_in_box() {
+    Scene scene = test::room_with_lamp_in_box(0.99f);
+    const LightmapSettings before = scene.settings.lightmap;
+    scene.settings.lightmap.texel_size = 0.1f;
+    scene.objects[5].dynamic = true;  // the box: a partner whose contacts get finer texels
+    scene.settings.lightmap.refine_factor = 4;
+    scene.settings.lightmap.refine_budget = 10.0f;
+    scene.settings.lightmap.refine_tile = 1;
+    scene.settings.lightmap.refine_reach = 1.0f;
+    settings_changed(scene, before);
+    return scene;
+}
+
+// Cutting charts into tiles splits a closed mesh's triangles; the split mesh stays closed (its
+// T-junctions are closed within the mesh), so it still casts its silhouette's volume.
+TEST(ShadowVolumes, ATiledClosedBoxStillCastsAClosedVolume) {
+    const Scene scene = tiled_room_with_lamp_in_box();
+    const Object& box = scene.objects[5];
+    ASSERT_GT(box.mesh.triangles.size(), 12u) << "the box's charts are not cut";
+    const ShadowCaster caster = make_shadow_caster(box.mesh);
+    EXPECT_TRUE(caster.closed);
+    std::vector<glm::vec4> triangles;
+    append_shadow_volume(caster, box.transform.matrix(), scene.lights[0].position, triangles);
+    EXPECT_EQ(unmatched_edges(triangles, 0.0f), 0);
+}
+
+// The cut puts corners on the ceiling's outline, in the middle of the edge each wall beside it has
+// whole (a T-junction between two meshes). Those corners split the wall's edge, so that its pieces
+// meet the ceiling's and every side face along the seams is left out, as untiled: only the open
+// front keeps its sides. Drawn, the seams' sides left a line of light along the ceiling's edges
+// with the lamp inside the box (the sweep's light_in_box_below_ceiling with tiles).
+TEST(ShadowVolumes, TJunctionsBetweenTiledWallsStillCancelAlongTheSeams) {
+    const Scene scene = tiled_room_with_lamp_in_box();
+    ASSERT_GT(scene.objects[1].mesh.triangles.size(), 2u) << "the ceiling is not cut";
+    const Casters c = casters_of(scene, 5);
+    const SoupWeld weld = weld_soup_corners(c.casters, c.models);
+    std::vector<glm::vec4> triangles;
+    append_shadow_volumes(c.casters, c.models, weld, glm::vec4(scene.lights[0].position, 1.0f),
+                          triangles);
+    int sides = 0, off_front = 0;
+    for (size_t t = 0; t + 2 < triangles.size(); t += 3) {
+        const float w = triangles[t].w + triangles[t + 1].w + triangles[t + 2].w;
+        if (w != 2.0f) continue;  // a cap, or a side's second half (one near corner)
+        ++sides;
+        for (int k = 0; k < 3; ++k)
+            if (triangles[t + size_t(k)].w == 1.0f && std::abs(triangles[t + size_t(k)].z) > 1e-4f)
+                ++off_front;
+    }
+    EXPECT_GT(sides, 4) << "the front's edges are drawn, the cut ones in pieces";
+    EXPECT_EQ(off_front, 0) << "of " << sides << " side faces";
+}
+
 }  // namespace ag::gpu
