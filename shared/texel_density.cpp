@@ -142,6 +142,7 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
     std::vector<std::vector<glm::dvec3>> partner_vertices;
     std::vector<int> partner_begin;  // per partner, its first triangle in `partners`; then the end
     std::vector<double> partner_grow;
+    std::vector<WorldTriangle> partner_bounds;  // per partner: its world bounds (lo, hi)
     for (int oi = 0; oi < int(scene.objects.size()); ++oi) {
         const Object& o = scene.objects[size_t(oi)];
         if (oi == chart.object || !(own.dynamic || o.dynamic)) continue;
@@ -160,7 +161,16 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             glm::any(glm::greaterThan(lo - grow, chart_hi)))
             continue;
         partner_grow.push_back(grow);
+        WorldTriangle whole;
+        whole.lo = lo;
+        whole.hi = hi;
+        partner_bounds.push_back(whole);
         partner_begin.push_back(int(partners.size()));
+        // Only the triangles that can come within `grow` of the chart (every test below is one
+        // of distance or reach, and both are at most grow): a sphere among 65 others keeps the
+        // few facing the chart, and the grid over them is built from those alone. A little
+        // slack: a sample point may lie a rounding step outside the chart's bounds.
+        const double slack = grow + 1e-9 * (1.0 + glm::length(chart_hi - chart_lo));
         for (const glm::uvec3& f : o.mesh.triangles) {
             WorldTriangle t;
             t.a = vertices[f.x];
@@ -168,6 +178,9 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             t.c = vertices[f.z];
             t.lo = glm::min(glm::min(t.a, t.b), t.c);
             t.hi = glm::max(glm::max(t.a, t.b), t.c);
+            if (glm::any(glm::lessThan(t.hi + slack, chart_lo)) ||
+                glm::any(glm::greaterThan(t.lo - slack, chart_hi)))
+                continue;
             t.partner = int(partner_vertices.size());
             partners.push_back(t);
         }
@@ -235,6 +248,9 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             for (size_t k = 0; reach > 0.0 && !s.near && k < partner_vertices.size(); ++k) {
                 if (!(reach2[k] > 0.0)) continue;
                 const double r = std::min(std::sqrt(reach2[k]), partner_grow[k]);
+                // Outside the partner's bounds grown by r: outside every triangle's (the same
+                // answer, without the loop).
+                if (outside(p, partner_bounds[k], r)) continue;
                 for (int i = partner_begin[k]; i < partner_begin[k + 1]; ++i) {
                     const WorldTriangle& t = partners[size_t(i)];
                     if (outside(p, t, r)) continue;

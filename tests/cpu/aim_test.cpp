@@ -256,6 +256,7 @@ TEST(Aim, EdgeTexelsUnderAFallingIrradianceReadItAtTheirCentre) {
         s.settings.aim.knn = 200;
         s.settings.aim.boundary_linear = linear;
         s.settings.lightmap.texel_size = kTexel;
+        test::uniform_layout_one_set(s.settings);  // the layout and photons it was measured on
         init_versions(s);
         make_surfaces_and_atlas(s);
         return s;
@@ -569,6 +570,7 @@ TEST(AimCovered, APlaneUnderABoxReadsTheSunBesideIt) {
         s.objects.push_back(box);
         s.settings.aim.covered_texels = covered;
         s.settings.aim.covered_disc = disc;
+        test::uniform_layout_one_set(s.settings);  // the layout and photons it was measured on
         prepare_sun_scene(s);
         return s;
     };

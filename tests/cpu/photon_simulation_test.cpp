@@ -333,6 +333,7 @@ TEST(SelectiveTracing, RefinementGrowsWhenSettledAndAnEditKeepsUntouchedSets) {
     EXPECT_FALSE(sim.settled());
     const size_t base_hits = [&] {
         Scene s1 = load_scene(test::scene_path("cornell.json"));
+        s1.settings.photons.refine_layers = 1;  // one set, whatever the default
         PhotonSimulation one(s1, pool);
         one.trace_all();
         return one.maps().hit_count();

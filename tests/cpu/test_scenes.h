@@ -14,6 +14,17 @@
 
 namespace ag::test {
 
+// The uniform texel layout (one texel size per chart, no tiles) and one photon set: the settings
+// a test calibrated on them states, so that it holds whatever the defaults. Set before the
+// scene's atlas is made (or call settings_changed after).
+inline void uniform_layout_one_set(Settings& s) {
+    s.lightmap.refine_factor = 1;
+    s.lightmap.refine_budget = 2.0f;
+    s.lightmap.refine_tile = 0;
+    s.lightmap.refine_reach = 0.0f;
+    s.photons.refine_layers = 1;
+}
+
 inline std::string scene_path(const std::string& name) {
     return std::string(AG_SOURCE_DIR) + "/scenes/" + name;
 }

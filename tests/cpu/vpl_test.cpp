@@ -87,6 +87,9 @@ TEST(Vpl, ClampRemovesTheSingularityAndReportsItsBias) {
 // Photon VPLs carry Φ_hit · ρ, scaled by P/k when only the first k photons of a group are used.
 TEST(Vpl, PhotonVplsCarryTheReflectedFluxOfTheGroup) {
     Scene scene = test::closed_box(0.6f, 10.0f, 64, 16);
+    // One photon set: the VPLs come from each group's first set, and the hits summed below are
+    // every set's.
+    scene.settings.photons.refine_layers = 1;
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     sim.trace_all();
