@@ -6,6 +6,14 @@
 
 namespace ag::cpu {
 
+namespace {
+// A surface's change log past this many entries per stored hit (plus 64) is dropped and the
+// surface rebuilt whole (changes_overflow): by then most of its texels change anyway, and the
+// log costs more to net than the kNN it would save. A rebuild gives to the bit what the local
+// update gives (AimUpdate.LocalUpdateEqualsAWholeRebuild), so this is a matter of speed only.
+constexpr size_t kChangesPerHit = 2;
+}  // namespace
+
 void PhotonMaps::resize(size_t surfaces, size_t lights, int groups, int max_sets) {
     surfaces_.assign(surfaces, SurfaceHits{});
     base_groups_ = std::max(1, groups);
@@ -18,7 +26,7 @@ void PhotonMaps::add_energy(SurfaceHits& s, const glm::vec3& position, const glm
                             uint8_t bounce, double sign, double weight) {
     const glm::vec3 power = weight == 1.0 ? raw : raw * float(weight);
     if (!s.changes_overflow) {
-        if (s.changes.size() >= 4 * s.hits.size() + 64) {
+        if (s.changes.size() >= kChangesPerHit * s.hits.size() + 64) {
             s.changes_overflow = true;
             std::vector<HitChange>().swap(s.changes);
             std::vector<uint32_t>().swap(s.changes_sorted);
