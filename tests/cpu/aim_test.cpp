@@ -57,6 +57,9 @@ TEST(Aim, PlaneUnderPointLightMatchesAnalyticRadiance) {
     scene.settings.photons.photons_per_group = 400;
     scene.settings.aim.knn = 200;
     scene.settings.lightmap.texel_size = 100.0f;
+    // One photon set: the bound is that of one QMC set's kNN-200 estimate (16 sets measured a
+    // worst texel of 6.3%: the disc shrinks to a sixteenth while k stays 200).
+    test::uniform_layout_one_set(scene.settings);
     make_surfaces_and_atlas(scene);
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
@@ -311,6 +314,9 @@ TEST(Aim, ExactDirectKeepsAHardShadowHard) {
         s.settings.aim.knn = 50;
         s.settings.aim.exact_direct = exact;
         s.settings.lightmap.texel_size = kTexel;
+        // The smear photons alone leave is that of one set at these texels (16 sets and finer
+        // texels at the slab's shadow leave less of it to show).
+        test::uniform_layout_one_set(s.settings);
         init_versions(s);
         make_surfaces_and_atlas(s);
         return s;
@@ -464,6 +470,11 @@ TEST(AimUpdate, NetChangesOfAGrowingLogEqualThoseOfTheWholeLog) {
 // no AIM texel is estimated again (with the gross Δf every surface they touch was rebuilt).
 TEST(AimUpdate, HitsThatComeBackAsTheyWereRebuildNothing) {
     Scene scene = load_scene(test::scene_path("cornell.json"));
+    // One set: a re-traced group starts again from one set, so with more it would not come back
+    // as it was (its other sets are dropped).
+    const LightmapSettings layout = scene.settings.lightmap;
+    test::uniform_layout_one_set(scene.settings);
+    settings_changed(scene, layout);
     ThreadPool pool(2);
     PhotonSimulation sim(scene, pool);
     sim.trace_all();
@@ -492,52 +503,70 @@ TEST(AimUpdate, HitsThatComeBackAsTheyWereRebuildNothing) {
 }
 
 // After an edit the AIM re-estimates only the texels whose kNN disc reaches a changed hit, and
-// ends bit for bit where a whole rebuild from the same hits ends.
+// ends bit for bit where a whole rebuild from the same hits ends: on the uniform layout with one
+// photon set, and on #12's layout (tiles of finer texels at contacts) with 16 sets, where a
+// re-traced group also drops its other sets.
 TEST(AimUpdate, LocalUpdateEqualsAWholeRebuild) {
-    Scene scene = load_scene(test::scene_path("cornell.json"));
-    // A black cube: light bounced off it would carry the change everywhere (a photon leaving
-    // from another point lands elsewhere); here only its own hits and its shadow's edges change.
-    const int cube = scene.find_object("cube");
-    scene.objects[size_t(cube)].material.albedo = glm::vec3(0.0f);
-    ThreadPool pool(2);
-    PhotonSimulation sim(scene, pool);
-    sim.trace_all();
-    Aim aim(scene, pool);
-    aim.rebuild_all(sim.maps());
+    for (const bool fine : {false, true}) {
+        SCOPED_TRACE(fine ? "tiled, 16 sets" : "uniform, one set");
+        Scene scene = load_scene(test::scene_path("cornell.json"));
+        const LightmapSettings before = scene.settings.lightmap;
+        test::uniform_layout_one_set(scene.settings);
+        if (fine) {
+            scene.settings.lightmap.refine_factor = 4;
+            scene.settings.lightmap.refine_budget = 10.0f;
+            scene.settings.lightmap.refine_tile = 1;
+            scene.settings.lightmap.refine_reach = 1.0f;
+            scene.settings.photons.refine_layers = 16;
+        }
+        settings_changed(scene, before);
+        // A black cube: light bounced off it would carry the change everywhere (a photon leaving
+        // from another point lands elsewhere); here only its own hits and its shadow's edges
+        // change.
+        const int cube = scene.find_object("cube");
+        scene.objects[size_t(cube)].material.albedo = glm::vec3(0.0f);
+        ThreadPool pool(2);
+        PhotonSimulation sim(scene, pool);
+        sim.trace_all();
+        Aim aim(scene, pool);
+        aim.rebuild_all(sim.maps());
 
-    // A nudge: few photons land elsewhere (the cube's shadow edges, its faces' hits).
-    translate_object(scene, cube, {2.0f, 0.0f, -1.0f});
-    for (int i = 0; i < 1000 && (i == 0 || !sim.settled()); ++i) sim.frame(1 << 30);
-    ASSERT_TRUE(sim.settled());
-    const int estimated = aim.update(sim.maps(), 1 << 30, 1 << 30, nullptr);
-    std::printf("a nudged black cube: %d of %zu texels estimated again\n", estimated,
-                scene.atlas.texels.size());
-    EXPECT_GT(estimated, 0);
-    EXPECT_LT(estimated, int(scene.atlas.texels.size()) / 2)
-        << "a local edit re-estimates far fewer texels than there are";
+        // A nudge: few photons land elsewhere (the cube's shadow edges, its faces' hits).
+        translate_object(scene, cube, {2.0f, 0.0f, -1.0f});
+        for (int i = 0; i < 1000 && (i == 0 || !sim.settled()); ++i) sim.frame(1 << 30);
+        ASSERT_TRUE(sim.settled());
+        const int estimated = aim.update(sim.maps(), 1 << 30, 1 << 30, nullptr);
+        std::printf("a nudged black cube: %d of %zu texels estimated again\n", estimated,
+                    scene.atlas.texels.size());
+        EXPECT_GT(estimated, 0);
+        // With 16 sets every touched group drops 15 of them, which changes hits everywhere.
+        if (!fine)
+            EXPECT_LT(estimated, int(scene.atlas.texels.size()) / 2)
+                << "a local edit re-estimates far fewer texels than there are";
 
-    Aim fresh(scene, pool);
-    fresh.rebuild_all(sim.maps());
-    const AimState got = state_of(aim), expected = state_of(fresh);
-    int differ = 0;
-    for (size_t a = 0; a < got.radiance.size(); ++a)
-        differ +=
-            got.radiance[a] != expected.radiance[a] || got.irradiance[a] != expected.irradiance[a];
-    for (size_t r = 0; r < got.indirect.size(); ++r)
-        differ += got.indirect[r] != expected.indirect[r];
-    EXPECT_EQ(differ, 0) << "texels where the local update differs from a rebuild";
+        Aim fresh(scene, pool);
+        fresh.rebuild_all(sim.maps());
+        const AimState got = state_of(aim), expected = state_of(fresh);
+        int differ = 0;
+        for (size_t a = 0; a < got.radiance.size(); ++a)
+            differ += got.radiance[a] != expected.radiance[a] ||
+                      got.irradiance[a] != expected.irradiance[a];
+        for (size_t r = 0; r < got.indirect.size(); ++r)
+            differ += got.indirect[r] != expected.indirect[r];
+        EXPECT_EQ(differ, 0) << "texels where the local update differs from a rebuild";
 
-    // An albedo edit changes no hit on the surface itself, but its radiance.
-    const int wall = scene.find_object("left_wall");
-    ASSERT_GE(wall, 0);
-    scene.objects[size_t(wall)].material.albedo *= 0.5f;
-    aim.take_dirty_texels();
-    int surfaces = 0;
-    aim.update(sim.maps(), 1 << 30, 1 << 30, &surfaces);
-    EXPECT_GT(surfaces, 0);
-    Aim recoloured(scene, pool);
-    recoloured.rebuild_all(sim.maps());
-    EXPECT_TRUE(state_of(aim) == state_of(recoloured));
+        // An albedo edit changes no hit on the surface itself, but its radiance.
+        const int wall = scene.find_object("left_wall");
+        ASSERT_GE(wall, 0);
+        scene.objects[size_t(wall)].material.albedo *= 0.5f;
+        aim.take_dirty_texels();
+        int surfaces = 0;
+        aim.update(sim.maps(), 1 << 30, 1 << 30, &surfaces);
+        EXPECT_GT(surfaces, 0);
+        Aim recoloured(scene, pool);
+        recoloured.rebuild_all(sim.maps());
+        EXPECT_TRUE(state_of(aim) == state_of(recoloured));
+    }
 }
 
 }  // namespace ag::cpu

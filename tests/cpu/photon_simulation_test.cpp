@@ -615,7 +615,12 @@ TEST(SelectiveTracing, DeltaBookkeepingIsExact) {
         // Δf sums |energy| of every add and remove, so it bounds the net change.
         EXPECT_GE(h.delta_f + 1e-9, std::abs(energy(change)));
         glm::dvec3 sum(0.0);
-        for (const PhotonHit& hit : h.hits) sum += glm::dvec3(hit.power);
+        // Each hit counts at its group's weight (1 / its photon sets with photons.refine_layers),
+        // applied as PhotonMaps::add_energy applies it.
+        for (const PhotonHit& hit : h.hits) {
+            const double w = sim.maps().hit_weight(hit);
+            sum += glm::dvec3(w == 1.0 ? hit.power : hit.power * float(w));
+        }
         for (int c = 0; c < 3; ++c)
             EXPECT_NEAR(sum[c], h.flux[c], 1e-9 * std::max(1.0, std::abs(sum[c])));
         any = any || h.delta_f > 0.0;
