@@ -1350,14 +1350,30 @@ void make_surfaces_and_atlas(Scene& scene) {
         }
     }
 
-    if (ls.refine_tile > 0 && ls.refine_factor > 1)
+    // An atlas over the limit at the base texel size is refused below, naming the texel size,
+    // whatever finer texels would add: no tiles or subdivision are worked out for it first (a
+    // 10 µm texel on the Cornell box: a tile grid of 3·10⁹ cells, and another error message).
+    double base_total = 0.0;
+    for (const ChartLayout& layout : layouts) {
+        const glm::dvec2 wide = layout.extent / texel_size;
+        if (!(wide.x < 65536.0 && wide.y < 65536.0)) {  // refused below as it is
+            base_total = std::numeric_limits<double>::infinity();
+            break;
+        }
+        const glm::dvec2 e =
+            glm::dvec2(chart_layout_texels(layout, texel_size)) + 2.0 * double(atlas.gutter);
+        base_total += e.x * e.y;
+    }
+    const bool refine = base_total <= double(kMaxAtlasTexels);
+    if (refine && ls.refine_tile > 0 && ls.refine_factor > 1)
         cut_contact_tiles(scene, infos, layouts, texel_size);
 
     // Rectangles: the projected bounds plus a margin, centred, in whole texels of the chart's
     // own size (texel_density.h: finer where the chart touches a dynamic object); the parts of
     // a tiled chart exactly on its grid.
     const std::vector<int> subdivision =
-        choose_chart_subdivision(scene, atlas.charts, layouts, texel_size, atlas.gutter);
+        refine ? choose_chart_subdivision(scene, atlas.charts, layouts, texel_size, atlas.gutter)
+               : std::vector<int>(atlas.charts.size(), 1);
     for (size_t c = 0; c < atlas.charts.size(); ++c) {
         Chart& chart = atlas.charts[c];
         const double size = texel_size / double(subdivision[c]);

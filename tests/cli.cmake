@@ -157,12 +157,20 @@ ag_test_timeout(cli.render_script_dev_zero 20)
 # limit.
 ag_cli_test(info_set_photon_budget 2
             "--set: .*groups \\(100000\\) × photons_per_group \\(100000\\) × lights \\(1\\) = 10000000000 photons; expected at most 100000000"
-            info scenes/cornell.json --set photons.groups=100000 --set photons.photons_per_group=100000)
+            info scenes/cornell.json --set photons.groups=100000 --set photons.photons_per_group=100000
+            --set photons.refine_layers=1)
 ag_cli_test(info_set_caustic_budget 2 "--set: .*caustics/photons.*expected at most 100000000"
             info scenes/two_rooms.json --set caustics.photons=100000000)
 ag_cli_test(info_set_atlas 2
             "--set: .*settings.lightmap.texel_size: a texel size of 0.01 makes a lightmap atlas of [0-9]+ texels; expected at most 16777216"
             info scenes/cornell.json --set lightmap.texel_size=0.01)
+# The same with finer texels at contacts (tiles and subdivision): refused as it is, before any
+# tile grid is made (it took 28 s and named a chart's width instead).
+ag_cli_test(info_set_atlas_tiled 2
+            "--set: .*settings.lightmap.texel_size: a texel size of 0.01 makes a lightmap atlas of [0-9]+ texels; expected at most 16777216"
+            info scenes/cornell.json --set lightmap.texel_size=0.01 --set lightmap.refine_factor=4
+            --set lightmap.refine_budget=10 --set lightmap.refine_tile=1
+            --set lightmap.refine_reach=1)
 # bench soak: the scene's change log holds at most one frame's edits however long the run (two
 # objects moved and a light recoloured per frame: 3), where it used to grow by 3 a frame (600
 # entries by the end of this run).
