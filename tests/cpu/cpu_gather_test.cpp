@@ -506,9 +506,20 @@ TEST(CpuGather, CornellColourBleeding) {
         }
         return iim[atlas_index(scene.atlas, scene.atlas.texels[size_t(best)])];
     };
+    // Every floor texel but those wholly under the cube, which no one sees: with finer texels at
+    // the contact (lightmap.refine_tile) a few of them have no open neighbour on their chart to
+    // be repaired from, and stay 0 (4 of 1,425 on #12's layout).
     const int floor = scene.find_object("floor");
-    for (const TexelRecord& t : scene.atlas.texels) {
+    const Object& cube = scene.objects[size_t(scene.find_object("cube"))];
+    const auto under_cube = [&](const glm::vec3& p) {
+        const glm::vec3 local =
+            glm::inverse(cube.transform.rotation) * (p - cube.transform.translation);
+        return std::abs(local.x) < 82.5f && std::abs(local.z) < 82.5f;
+    };
+    for (size_t r = 0; r < scene.atlas.texels.size(); ++r) {
+        const TexelRecord& t = scene.atlas.texels[r];
         if (t.object != floor) continue;
+        if (!g.valid[r] && under_cube(world_position(scene, t))) continue;
         for (int i = 0; i < 3; ++i) EXPECT_GT(iim[atlas_index(scene.atlas, t)][i], 0.0f);
     }
     for (const char* object : {"floor", "back_wall"}) {
