@@ -9,6 +9,7 @@
 #include <numeric>
 
 #include "../cpu/gather_scenes.h"
+#include "../cpu/test_scenes.h"
 #include "../gpu/gl_fixture.h"
 #include "cpu/aim.h"
 #include "cpu/cpu_gather.h"
@@ -208,6 +209,9 @@ void gl_and_cpu_agree_on_cornell(int tiles, double worst_bound, double rms_bound
     // ceiling into a patch a 256² plane samples with a few pixels, and the floor and wall texels
     // that see it scatter by 5% RMS around the rays' values (ceiling texels 0.8%).
     scene.settings.lightmap.texel_size = 111.0f;
+    // The layout is stated (uniform, or tiled below) and one photon set, whatever the defaults:
+    // the bounds were measured on these.
+    test::uniform_layout_one_set(scene.settings);
     if (tiles > 0) {
         scene.settings.lightmap.refine_factor = 4;
         scene.settings.lightmap.refine_tile = tiles;
