@@ -540,9 +540,10 @@ TEST(AimUpdate, LocalUpdateEqualsAWholeRebuild) {
                     scene.atlas.texels.size());
         EXPECT_GT(estimated, 0);
         // With 16 sets every touched group drops 15 of them, which changes hits everywhere.
-        if (!fine)
+        if (!fine) {
             EXPECT_LT(estimated, int(scene.atlas.texels.size()) / 2)
                 << "a local edit re-estimates far fewer texels than there are";
+        }
 
         Aim fresh(scene, pool);
         fresh.rebuild_all(sim.maps());
