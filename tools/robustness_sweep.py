@@ -1124,7 +1124,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--afterglow", default=os.path.join(ROOT, "build", "afterglow"))
     ap.add_argument("--mode", choices=["ci", "methods", "full"], default="ci",
-                    help="ci (default): each case through one run in turn, 73 runs; "
+                    help="ci (default): each case through one run in turn, 117 runs; "
                     "methods: every case through every indirect method and both references; "
                     "full: every run (CPU gather, VPL shadows, frame-time target, converge, "
                     "media) and the slow cases")
