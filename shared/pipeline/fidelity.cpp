@@ -21,6 +21,7 @@
 #include "shared/gather.h"
 #include "shared/lightmap_sample.h"
 #include "shared/metrics.h"
+#include "shared/pipeline/iim_method.h"
 
 namespace ag {
 
@@ -170,12 +171,15 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
                                               {"stretch", BorderCorrection::stretch},
                                               {"stretch_radial", BorderCorrection::stretch_radial},
                                               {"band", BorderCorrection::band}};
-    for (const Variant& v : corrections)
+    const std::vector<Variant> variants =
+        options.gather_variants ? corrections : std::vector<Variant>{};
+    for (const Variant& v : variants)
         values["cpu_plane_" + v.name] =
             iim_of(cpu_gather(n_ref, GatherHemisphere::plane, v.correction, 0));
-    values["cpu_full_" + std::to_string(saved.gather.cpu_rays)] =
-        iim_of(cpu_gather(saved.gather.cpu_rays, GatherHemisphere::full, BorderCorrection::none,
-                          saved.gather.specular_bounces));
+    if (options.gather_variants)
+        values["cpu_full_" + std::to_string(saved.gather.cpu_rays)] =
+            iim_of(cpu_gather(saved.gather.cpu_rays, GatherHemisphere::full, BorderCorrection::none,
+                              saved.gather.specular_bounces));
 
     std::unique_ptr<gpu::SceneMeshes> meshes;
     std::unique_ptr<gpu::LightmapTexture> aim_texture;
@@ -183,7 +187,7 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
         meshes = std::make_unique<gpu::SceneMeshes>(scene);
         aim_texture = std::make_unique<gpu::LightmapTexture>(atlas);
         aim_texture->update_all(aim_radiance);
-        for (const Variant& v : corrections) {
+        for (const Variant& v : variants) {
             scene.settings.gather.border_correction = v.correction;
             scene.settings.gather.specular_bounces = 0;
             gpu::HemiPlaneGather gather(scene, *meshes, 256, aim_texture.get());
@@ -199,7 +203,11 @@ FidelityReport measure_fidelity(Scene& scene, const FidelityOptions& options, Th
     {
         cpu::CpuGather rays_gather(scene, rays, pool, &aim_radiance);
         cpu::Iim map(scene);
-        if (options.gl && saved.gather.backend != GatherBackend::cpu) {
+        // `automatic` as the pipeline resolves it (the CPU rays on a software rasteriser).
+        const GatherBackend backend = saved.gather.backend == GatherBackend::automatic && options.gl
+                                          ? automatic_gather_backend()
+                                          : saved.gather.backend;
+        if (options.gl && backend != GatherBackend::cpu) {
             gpu::HemiPlaneGather plane(scene, *meshes, 256, aim_texture.get());
             SpecularRoutedGather routed(plane, rays_gather);
             if (saved.gather.specular_bounces > 0) {

@@ -25,6 +25,10 @@ struct FidelityOptions {
     // the per-pixel gather to it and the pt image to it at the same points.
     int pt_pixels = 0;
     int width = 96, height = 96;
+    // Stage (b)'s hemi-plane variants (GL and CPU, each border correction, and the CPU gather at
+    // the scene's ray count): the slowest part on a fine layout (a GL hemi-plane per texel and
+    // variant). false leaves them out; the pipeline's own gather and stages (a), (c)–(e) stay.
+    bool gather_variants = true;
     bool gl = true;  // GL stages (hemi-plane gathers, the frame); needs a current context
     // Optional: the indirect term of a pt reference at width × height (afterglow reference
     // --method pt); stage (e) holds the frame's and the per-pixel gather's indirect term to it.

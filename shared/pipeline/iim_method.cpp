@@ -71,7 +71,7 @@ void IimMethod::set_backend(GatherBackend backend) {
     if (backend != GatherBackend::automatic) backend_ = backend;
 }
 
-void IimMethod::choose_backend() {
+GatherBackend automatic_gather_backend(std::string* reason) {
     // By the GL renderer, not by timing. Until session 16 both backends were timed on 32 texels
     // at load and the faster kept: on a busy machine the timing could flip, so the same scene and
     // settings gave different images from one run to the next (a `full` baseline in `tools/run`
@@ -88,10 +88,13 @@ void IimMethod::choose_backend() {
                           lower.find("softpipe") != std::string::npos ||
                           lower.find("swrast") != std::string::npos ||
                           lower.find("software") != std::string::npos;
-    backend_ = software ? GatherBackend::cpu : GatherBackend::gl;
-    backend_reason_ = "automatic: the GL renderer '" + renderer + "' is " +
-                      (software ? "a software rasteriser" : "not a software rasteriser");
+    if (reason)
+        *reason = "automatic: the GL renderer '" + renderer + "' is " +
+                  (software ? "a software rasteriser" : "not a software rasteriser");
+    return software ? GatherBackend::cpu : GatherBackend::gl;
 }
+
+void IimMethod::choose_backend() { backend_ = automatic_gather_backend(&backend_reason_); }
 
 void IimMethod::update_coverage(bool objects_moved, uint64_t frame) {
     moved_since_coverage_ = moved_since_coverage_ || objects_moved;

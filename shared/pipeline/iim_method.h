@@ -19,6 +19,10 @@
 
 namespace ag {
 
+// What `gather.backend = automatic` resolves to under the current GL context: cpu on a software
+// rasteriser (llvmpipe, softpipe, swrast), gl on anything else; `reason` (when given) says why.
+GatherBackend automatic_gather_backend(std::string* reason = nullptr);
+
 class IimMethod final : public IndirectMethod {
 public:
     // `aim_texture` and `aim_values` (atlas-sized) are the AIMs as handed over to the GL thread;

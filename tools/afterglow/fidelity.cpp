@@ -35,6 +35,10 @@ const Command kFidelityCommand{
              "pt reference at the same size (its PT.indirect.exr is read), for stage (e)"),
         text("csv", "OUT.csv", "write the rows and the per-texel values as CSV"),
         text("images", "PREFIX", "write PREFIX.frame.exr/.png and PREFIX.pixel.exr/.png (stage d)"),
+        flag("no-variants",
+             "leave out stage (b)'s hemi-plane variants (GL and CPU gathers under each border "
+             "correction): the slow part on a fine layout; the pipeline's gather and the other "
+             "stages stay"),
         flag("regions", "print the per-object rows too (the CSV always has them)"),
         gl_option({gpu::GlBackend::osmesa, gpu::GlBackend::egl, gpu::GlBackend::automatic},
                   gpu::GlBackend::osmesa),
@@ -54,6 +58,7 @@ int run_fidelity(const Args& args) {
     options.reference_rays = args.get_int("reference-rays");
     options.pixel_rays = args.get_int("pixel-rays");
     options.pt_pixels = args.get_int("pt-pixels");
+    options.gather_variants = !args.has("no-variants");
     options.width = 96;
     options.height = 96;
     args.get_size("size", options.width, options.height);
