@@ -570,7 +570,12 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
         throw GlError("frame: compose framebuffer incomplete");
     empty_vao_ = make_vertex_array();
 
-    for (const Object& o : scene.objects) casters_.push_back(make_shadow_caster(o.mesh));
+    for (const Object& o : scene.objects) {
+        casters_.push_back(make_shadow_caster(o.mesh));
+        Bounds b;
+        for (const glm::vec3& p : o.mesh.positions) b.add(p);
+        object_bounds_.push_back(b);
+    }
     for (const Object& o : scene.objects)
         if (o.material.type == MaterialType::diffuse) diffuse_triangles_ += o.mesh.triangles.size();
     volume_vbo_ = make_buffer();
@@ -725,9 +730,21 @@ void FrameRenderer::draw_shadow_volumes(const LightSample& light,
         soup_moved = casters_[o].soup && models[o] != caster_models_[o];
     if (soup_moved) soup_weld_ = weld_soup_corners(casters_, models);
     caster_models_ = std::move(models);
+    // Where every object is (the receivers): a planar soup with all of them in front of it,
+    // seen from the light (a room's floor, walls and ceiling), casts nothing.
+    std::vector<Bounds> receivers(object_bounds_.size());
+    for (size_t o = 0; o < receivers.size(); ++o) {
+        const Bounds& b = object_bounds_[o];
+        if (b.empty()) continue;
+        for (int k = 0; k < 8; ++k)
+            receivers[o].add(glm::vec3(
+                caster_models_[o] * glm::vec4(k & 1 ? b.max.x : b.min.x, k & 2 ? b.max.y : b.min.y,
+                                              k & 4 ? b.max.z : b.min.z, 1.0f)));
+    }
     std::vector<glm::vec4> triangles;
     append_shadow_volumes(casters_, caster_models_, soup_weld_,
-                          glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles);
+                          glm::vec4(light.position, light.directional ? 0.0f : 1.0f), triangles,
+                          &receivers);
     if (triangles.empty()) return;
     gl::BindBuffer(GL_ARRAY_BUFFER, volume_vbo_.get());
     gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(triangles.size() * sizeof(glm::vec4)),

@@ -200,6 +200,7 @@ private:
     std::vector<ShadowCaster> casters_;
     std::vector<glm::mat4> caster_models_;  // where the objects were at the last volumes drawn
     SoupWeld soup_weld_;                    // made where the soup casters are in caster_models_
+    std::vector<Bounds> object_bounds_;     // per object, its mesh's bounds (object space)
     // direct.method vpl: the light samples' shadow maps (made on first use) and what they show.
     std::unique_ptr<VplShadowMaps> light_maps_;
     std::vector<LightSample> mapped_lights_;

@@ -287,13 +287,68 @@ SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
     }
     weld.corners.reserve(corners.size());
     for (const Corner& c : corners) weld.corners.push_back(c.p);
+    weld.planes.assign(casters.size(), {});
+    for (size_t o = 0; o < casters.size(); ++o) {
+        const ShadowCaster& c = casters[o];
+        if (!c.soup || c.positions.empty()) continue;
+        // The plane of the largest triangle; planar if every corner lies within the weld
+        // tolerance of it.
+        std::vector<glm::dvec3> p(c.positions.size());
+        for (size_t i = 0; i < p.size(); ++i)
+            p[i] = glm::dvec3(world_point(models[o], c.positions[i]));
+        glm::dvec3 normal(0.0);
+        double largest = 0.0;
+        for (const glm::uvec3& t : c.triangles) {
+            const glm::dvec3 n = glm::cross(p[t.y] - p[t.x], p[t.z] - p[t.x]);
+            const double l = glm::length(n);
+            if (l > largest && std::isfinite(l)) {
+                largest = l;
+                normal = n / l;
+            }
+        }
+        if (!(largest > 0.0)) continue;
+        const double offset = -glm::dot(normal, p[c.triangles.front().x]);
+        double tolerance = 0.0;
+        for (const uint32_t id : weld.ids[o])
+            tolerance = std::max(tolerance, corners[id].tolerance);
+        bool planar = true;
+        for (const glm::dvec3& q : p)
+            planar = planar && std::abs(glm::dot(normal, q) + offset) <= tolerance;
+        if (planar) weld.planes[o] = {normal, offset, tolerance};
+    }
     find_corners_on_edges(casters, models, corners, weld);
     return weld;
 }
 
+namespace {
+
+// The receiver test of append_shadow_volumes: whether every receiver but the caster itself lies
+// on the light's side of the planar soup's plane or in it (its volume then holds none).
+bool shadows_nothing(const SoupWeld::Plane& plane, size_t self,
+                     const std::vector<Bounds>& receivers, const glm::vec4& light_h) {
+    if (!(plane.tolerance > 0.0)) return false;
+    const double towards =
+        glm::dot(plane.normal, glm::dvec3(light_h)) + double(light_h.w) * plane.offset;
+    if (towards == 0.0 || !std::isfinite(towards)) return false;
+    const double side = towards > 0.0 ? 1.0 : -1.0;
+    for (size_t r = 0; r < receivers.size(); ++r) {
+        const Bounds& b = receivers[r];
+        if (r == self || b.empty()) continue;
+        // The corner of the box farthest behind the plane.
+        const glm::dvec3 n = side * plane.normal;
+        const glm::dvec3 corner(n.x >= 0.0 ? b.min.x : b.max.x, n.y >= 0.0 ? b.min.y : b.max.y,
+                                n.z >= 0.0 ? b.min.z : b.max.z);
+        if (!(glm::dot(n, corner) + side * plane.offset >= -plane.tolerance)) return false;
+    }
+    return true;
+}
+
+}  // namespace
+
 void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
                            const std::vector<glm::mat4>& models, const SoupWeld& weld,
-                           const glm::vec4& light_h, std::vector<glm::vec4>& out) {
+                           const glm::vec4& light_h, std::vector<glm::vec4>& out,
+                           const std::vector<Bounds>* receivers) {
     const glm::vec3 light(light_h);
     const float w = light_h.w;  // 1: a point; 0: a direction towards the light
     std::vector<SideFace> sides;
@@ -309,6 +364,9 @@ void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
             append_closed(caster, p, light_h, out);
             continue;
         }
+        if (receivers && o < weld.planes.size() &&
+            shadows_nothing(weld.planes[o], o, *receivers, light_h))
+            continue;
         // Each triangle, turned to face the light (an opaque sheet blocks from either side), as
         // its own closed prism: near cap, far cap here, three sides below.
         const std::vector<uint32_t>& ids = weld.ids[o];

@@ -33,6 +33,15 @@ ShadowCaster make_closed_caster(const Mesh& mesh);
 // one id. It does not depend on the light: made again when the geometry changes.
 struct SoupWeld {
     std::vector<std::vector<uint32_t>> ids;  // per caster, per position; empty unless soup
+    // Per caster: the world plane (unit normal, offset: n·x + offset = 0) of a soup whose corners
+    // all lie in one plane within its weld tolerance (`tolerance`, > 0), for the receiver test of
+    // append_shadow_volumes; tolerance 0 where the caster is not a planar soup.
+    struct Plane {
+        glm::dvec3 normal{0.0};
+        double offset = 0.0;
+        double tolerance = 0.0;
+    };
+    std::vector<Plane> planes;
     // Per id: where its first corner lies (world space).
     std::vector<glm::vec3> corners;
     // Per caster: for each edge of its outline (an edge one of its triangles alone has, keyed by
@@ -48,9 +57,15 @@ SoupWeld weld_soup_corners(const std::vector<ShadowCaster>& casters,
 // append_shadow_volume does for each, except that a side face two soup prisms share (one welded
 // edge, drawn once each way: a quad's two triangles along its diagonal, two walls along their
 // seam) is left out: the pair cancels in the count, and drawn it left cracks along the seams.
+// With `receivers` (the world bounds of everything the frame draws, per object, in the casters'
+// order): a planar soup whose plane has every other receiver on the light's side or in it (a
+// room's floor, walls and ceiling under a lamp inside the room) is left out. Its volume lies
+// behind its plane, where no receiver is, so it holds no visible point and changes no count;
+// the other prisms stay closed without it (their sides along its seams are then drawn).
 void append_shadow_volumes(const std::vector<ShadowCaster>& casters,
                            const std::vector<glm::mat4>& models, const SoupWeld& weld,
-                           const glm::vec4& light, std::vector<glm::vec4>& out);
+                           const glm::vec4& light, std::vector<glm::vec4>& out,
+                           const std::vector<Bounds>* receivers = nullptr);
 
 // Appends the volume of `caster` (transformed by `model`) for a point light at `light` as
 // homogeneous world-space triangles (w = 0 at infinity), consistently wound outwards.

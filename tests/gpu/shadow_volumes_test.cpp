@@ -108,6 +108,57 @@ TEST(ShadowVolumes, SidesTheWallsShareAreLeftOutAndTheRoomsVolumeStillCloses) {
     }
 }
 
+// World bounds of the scene's objects (the receivers append_shadow_volumes tests planar soups
+// against).
+std::vector<Bounds> world_bounds(const Scene& scene) {
+    std::vector<Bounds> out;
+    for (const Object& o : scene.objects) {
+        Bounds b;
+        for (const glm::vec3& p : o.mesh.positions) b.add(o.transform.apply_point(p));
+        out.push_back(b);
+    }
+    return out;
+}
+
+// With the lamp inside the room every wall's volume lies behind the wall, where nothing is: given
+// the receivers, the walls (planar soups) cast nothing and only the box's volume is drawn, closed.
+// A receiver below the floor brings the floor's volume back, whole (its seams' pairs, the walls'
+// sides, are gone with the walls), and the union still closes.
+TEST(ShadowVolumes, PlanarSoupsWithEveryReceiverInFrontCastNothing) {
+    const Scene scene = test::room_with_lamp_in_box(0.8f);
+    const Casters c = casters_of(scene, scene.objects.size());
+    const SoupWeld weld = weld_soup_corners(c.casters, c.models);
+    for (size_t o = 0; o < 5; ++o) EXPECT_GT(weld.planes[o].tolerance, 0.0) << o << ": planar";
+    EXPECT_EQ(weld.planes[5].tolerance, 0.0) << "the box is closed, not a soup";
+    const glm::vec4 lamp(scene.lights[0].position, 1.0f);
+    std::vector<glm::vec4> all, culled, box;
+    append_shadow_volumes(c.casters, c.models, weld, lamp, all);
+    std::vector<Bounds> receivers = world_bounds(scene);
+    append_shadow_volumes(c.casters, c.models, weld, lamp, culled, &receivers);
+    append_shadow_volume(c.casters[5], c.models[5], scene.lights[0].position, box);
+    EXPECT_GT(all.size(), box.size());
+    EXPECT_EQ(culled.size(), box.size());
+    EXPECT_EQ(unmatched_edges(culled, 1e-5f), 0);
+
+    Bounds below;  // something under the floor: the floor's volume can hold it
+    below.add({0.2f, -0.5f, 0.2f});
+    below.add({0.4f, -0.3f, 0.4f});
+    receivers.push_back(below);
+    std::vector<glm::vec4> with_floor, floor;
+    append_shadow_volumes(c.casters, c.models, weld, lamp, with_floor, &receivers);
+    append_shadow_volume(c.casters[0], c.models[0], scene.lights[0].position, floor);
+    EXPECT_EQ(with_floor.size(), box.size() + floor.size());
+    EXPECT_EQ(unmatched_edges(with_floor, 1e-5f), 0);
+
+    // A box resting on the floor (its bottom in the floor's plane) is in front of it.
+    receivers.back() = Bounds{};
+    receivers.back().add({0.2f, 0.0f, 0.2f});
+    receivers.back().add({0.4f, 0.3f, 0.4f});
+    std::vector<glm::vec4> resting;
+    append_shadow_volumes(c.casters, c.models, weld, lamp, resting, &receivers);
+    EXPECT_EQ(resting.size(), box.size());
+}
+
 // Corners 10⁻⁴ apart are not welded: two quads side by side with that gap each keep all their
 // outer sides, and each closes on its own.
 TEST(ShadowVolumes, CornersApartAreNotWelded) {
