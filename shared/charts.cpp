@@ -1054,6 +1054,7 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
     std::vector<std::map<std::pair<uint32_t, uint32_t>, std::vector<uint32_t>>> made(
         scene.objects.size());
     const int original_count = int(atlas.charts.size());
+    ContactCache cache;  // objects cut below are taken again: their meshes grow
     for (int c = 0; c < original_count; ++c) {
         const int oi = atlas.charts[size_t(c)].object;
         Object& object = scene.objects[size_t(oi)];
@@ -1079,18 +1080,20 @@ void cut_contact_tiles(Scene& scene, std::vector<TriangleInfo>& infos,
         constexpr uint8_t kBand = 2, kNear = 3;
         std::vector<uint8_t> state(size_t(nx) * size_t(ny), 0);
         bool covered_only = true;
-        for_each_contact_sample(scene, atlas.charts[size_t(c)],
-                                double(ls.refine_distance) * texel_size, 0.25 * texel_size, reach,
-                                [&](const glm::dvec3& p, double, const ContactSample& sample) {
-                                    covered_only = covered_only && sample.covered;
-                                    const glm::ivec2 i = cell_of(frame.project(glm::vec3(p)));
-                                    uint8_t& s = state[size_t(i.y) * size_t(nx) + size_t(i.x)];
-                                    const uint8_t level = sample.covered        ? 1
-                                                          : sample.near         ? kNear
-                                                          : sample.within_reach ? kBand
-                                                                                : 1;
-                                    s = std::max(s, level);
-                                });
+        for_each_contact_sample(
+            scene, atlas.charts[size_t(c)], double(ls.refine_distance) * texel_size,
+            0.25 * texel_size, reach,
+            [&](const glm::dvec3& p, double, const ContactSample& sample) {
+                covered_only = covered_only && sample.covered;
+                const glm::ivec2 i = cell_of(frame.project(glm::vec3(p)));
+                uint8_t& s = state[size_t(i.y) * size_t(nx) + size_t(i.x)];
+                const uint8_t level = sample.covered        ? 1
+                                      : sample.near         ? kNear
+                                      : sample.within_reach ? kBand
+                                                            : 1;
+                s = std::max(s, level);
+            },
+            &cache);
         const auto near_cells = std::count(state.begin(), state.end(), kNear);
         if (near_cells == 0 && covered_only) {
             layouts[size_t(c)].keep_base = true;  // wholly under a partner (a box's bottom)

@@ -86,8 +86,9 @@ struct PhotonSettings {
     // groups × photons_per_group photons per light, each its own QMC points), one layer at a time
     // with the retrace budget repairs leave; each photon then carries Φ / (G·P·sets of its
     // group). An edit re-traces the groups it touches with one set (the others keep theirs) and
-    // growth starts again once settled. 1 = off.
-    int refine_layers = 1;
+    // growth starts again once settled. 1 = off. 16 by default since session 22 (issue #12: the
+    // photon noise of one set kept the whole image 1-1.5% off pt on some seeds, docs/fidelity.md).
+    int refine_layers = 16;
     // With refine_layers > 1: an invalidated group is re-traced with every photon set it holds
     // (its photons count L times against the retrace budget, no regrowth after the edit; the
     // hits whose paths did not change cancel in the AIM) instead of dropping back to one set and
@@ -103,20 +104,22 @@ struct LightmapSettings {
     int gutter = 1;              // free texels around every chart in the atlas
     // Adaptive density (docs/fidelity.md): charts that touch dynamic objects get texel_size /
     // refine_factor, nearest first, while the atlas stays within refine_budget × the uniform one.
-    int refine_factor = 1;         // 1 = one texel size everywhere
+    // The defaults (×4, budget 10, tiles of 1 base texel, reach 1) are the tiled layout under
+    // which issue #12's regions hold against pt (docs/fidelity.md, sessions 18 and 22).
+    int refine_factor = 4;         // 1 = one texel size everywhere
     float refine_distance = 1.0f;  // contact: within this many base texels of a partner
-    float refine_budget = 2.0f;    // at most this × the uniform layout's texels
+    float refine_budget = 10.0f;   // at most this × the uniform layout's texels
     // Density within a chart: with refine_tile > 0 a chart that touches a partner is cut along
     // its base texel grid into tiles of refine_tile × refine_tile base texels; the tiles near the
     // contact become one chart of finer texels, the rest stays one chart at the base size (its
     // triangles split along the cut). 0 = whole charts only.
-    int refine_tile = 0;
+    int refine_tile = 1;
     // With refine_tile: the tiles within refine_reach × a partner's height above the chart (how
     // far it stands out along the chart's normal) get the finer texels too: the band where the
     // partner's occlusion of the hemisphere, so the indirect light, still changes fast (a box's
     // shadow reaching past the contact). Whether a chart is cut follows the contact alone.
     // 0 = the contact only.
-    float refine_reach = 0.0f;
+    float refine_reach = 1.0f;
 };
 
 struct AimSettings {

@@ -5,6 +5,7 @@
 
 #include <functional>
 #include <glm/glm.hpp>
+#include <memory>
 #include <vector>
 
 #include "shared/lightmap.h"
@@ -12,12 +13,25 @@
 
 namespace ag {
 
+// The scene's objects' triangles in world space, kept across the charts of one pass so each
+// object is transformed and ordered once, not once per chart. An object whose mesh has grown since
+// (cut into tiles) is taken again; one moved since is not: make a new cache after moving objects.
+class ContactCache {
+public:
+    ContactCache();
+    ~ContactCache();
+    ContactCache(const ContactCache&) = delete;
+    ContactCache& operator=(const ContactCache&) = delete;
+    struct Impl;
+    std::unique_ptr<Impl> impl;
+};
+
 // The objects whose nearness makes `chart` a contact: for a chart of a static object, the dynamic
 // objects; for a chart of a dynamic object, every other object (what it stands on or leans on).
 // Returns the fraction of the chart's area within `distance` (world units) of their triangles, as
 // placed now, measured at sample points no further apart than `spacing`.
 double chart_contact_fraction(const Scene& scene, const Chart& chart, double distance,
-                              double spacing);
+                              double spacing, ContactCache* cache = nullptr);
 // The samples behind chart_contact_fraction: `visit` gets each sample point in the chart's
 // object space, the area it stands for, whether it lies within `distance` of a partner, and
 // whether it touches one (within 10⁻⁶ × distance: the floor under a box standing on it, which
@@ -35,7 +49,8 @@ struct ContactSample {
 void for_each_contact_sample(const Scene& scene, const Chart& chart, double distance,
                              double spacing, double reach,
                              const std::function<void(const glm::dvec3& object_point, double area,
-                                                      const ContactSample&)>& visit);
+                                                      const ContactSample&)>& visit,
+                             ContactCache* cache = nullptr);
 
 // Charts keep this many texels between their triangles and their rectangle's edge, so every
 // corner UV lies strictly inside the rectangle.
