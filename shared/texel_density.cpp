@@ -70,10 +70,15 @@ void sort_along_morton_curve(std::vector<WorldTriangle>& triangles, int begin, i
     keyed.reserve(size_t(end - begin));
     for (int i = begin; i < end; ++i) {
         const WorldTriangle& t = triangles[size_t(i)];
-        const glm::dvec3 u =
-            glm::clamp(((t.lo + t.hi) * 0.5 - lo) / size, glm::dvec3(0.0), glm::dvec3(1.0));
-        const glm::u64vec3 q(u * double((1 << 21) - 1));
-        keyed.emplace_back(spread_bits(q.x) | spread_bits(q.y) << 1 | spread_bits(q.z) << 2, i);
+        const glm::dvec3 u = ((t.lo + t.hi) * 0.5 - lo) / size;
+        // 21 bits an axis; NaN (a degenerate mesh) and anything outside [0, 1] clamped, before
+        // the cast to an integer.
+        const auto bits = [](double x) {
+            constexpr double kTop = double((1 << 21) - 1);
+            return x > 0.0 ? uint64_t(std::min(x, 1.0) * kTop) : uint64_t(0);
+        };
+        keyed.emplace_back(
+            spread_bits(bits(u.x)) | spread_bits(bits(u.y)) << 1 | spread_bits(bits(u.z)) << 2, i);
     }
     std::stable_sort(keyed.begin(), keyed.end(),
                      [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -346,7 +351,8 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const double longest =
             std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
         if (!std::isfinite(longest)) continue;
-        const size_t n = size_t(std::clamp(std::ceil(longest / spacing), 1.0, 64.0));
+        const double steps = longest / spacing;  // as the sampling below, NaN counted as 1
+        const size_t n = steps > 1.0 ? size_t(std::min(std::ceil(steps), 64.0)) : 1;
         samples += n * n;
     }
     constexpr size_t kGridFrom = 256;

@@ -766,11 +766,13 @@ TEST(Atlas, TooManyTexelsAreRefusedNamingTheSettingAndTheLimit) {
 // every sample must be classified as testing each triangle would: a dynamic box's charts against
 // a bumpy floor of 1,152 triangles (past the grid's threshold) with one huge triangle far below
 // it (too large for the grid's cells: tested by every sample).
-TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
+// The contact samples of a box standing on a wavy floor of 2 × kN² triangles (plus one huge
+// triangle every grid cell holds) against a brute-force test of every floor triangle. With
+// `bottom_only`, only the box's bottom chart; with `cache`, one ContactCache for all its charts.
+void check_contact_samples_against_every_triangle(int kN, bool bottom_only, bool cache) {
     Scene scene;
     Object floor;
     floor.name = "floor";
-    constexpr int kN = 24;
     for (int z = 0; z <= kN; ++z)
         for (int x = 0; x <= kN; ++x) {
             const float fx = -4.0f + 8.0f * float(x) / kN, fz = -4.0f + 8.0f * float(z) / kN;
@@ -833,8 +835,9 @@ TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
     const double grow = std::max(distance, reach * glm::length(hi - lo));
     const Object& b = scene.objects[1];
     int samples = 0, near = 0, covered = 0, within = 0;
+    ContactCache shared;
     for (const Chart& chart : scene.atlas.charts) {
-        if (chart.object != 1) continue;
+        if (chart.object != 1 || (bottom_only && !(chart.axis.y < -0.9f))) continue;
         for_each_contact_sample(
             scene, chart, distance, 0.1, reach,
             [&](const glm::dvec3& object_point, double, const ContactSample& s) {
@@ -873,12 +876,25 @@ TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
                 if (want_near) return;
                 within += in_reach;
                 EXPECT_EQ(s.within_reach, in_reach) << "at " << p.x << ' ' << p.y << ' ' << p.z;
-            });
+            },
+            cache ? &shared : nullptr);
     }
     EXPECT_GT(samples, 1000);
     EXPECT_GT(near, 0) << "the box's bottom rim is within the contact distance of the floor";
+    if (bottom_only) return;  // the bottom is near the floor everywhere
     EXPECT_GT(samples - near, 0);
     EXPECT_GT(within, 0);
+}
+
+TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
+    check_contact_samples_against_every_triangle(24, false, false);
+}
+
+// The box's bottom over a floor of 8,192 triangles: about 800 of them lie within the contact
+// distance of its chart, and its 1,682 samples make the triangle grid worth building over them
+// (the samples test the candidates' runs of 16 otherwise); through one cache for the charts.
+TEST(Atlas, ContactSamplesOnAFineFloorThroughTheCacheMatchTestingEveryTriangle) {
+    check_contact_samples_against_every_triangle(64, true, true);
 }
 
 }  // namespace
