@@ -2,7 +2,7 @@
 # fidelity_acceptance_test.sh AFTERGLOW SCENE SPP FRAMES: issue #12's whole-image bars on SCENE at
 # CI size (48²), for the settings that meet them at 96² (docs/fidelity.md "Session 18"): finer
 # texels at contacts (lightmap.refine_factor=4, refine_budget=10, refine_tile=1, refine_reach=1)
-# and 16 photon sets (photons.refine_layers): the defaults since session 22, stated here too so
+# and 16 photon sets (photons.refine_layers): the defaults since session 23, stated here too so
 # that the test keeps its subject if the defaults change. Two pt references with light tracing
 # (seeds 1 and 2, SPP samples a pixel) and the settled frame as shown (the 64-frame mean, FRAMES
 # frames), then:
