@@ -36,7 +36,6 @@ glm::dvec3 closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const g
 
 struct WorldTriangle {
     glm::dvec3 a, b, c, lo, hi;  // bounds without margin
-    int partner = 0;             // index into the partners' vertex lists
 };
 
 // Scalar compares: this runs for every sample against every nearby triangle, and the fuzz
@@ -60,16 +59,16 @@ uint64_t spread_bits(uint64_t v) {
     return v;
 }
 
-// Sorts triangles [begin, end) along a Morton curve of their centroids within (lo, hi), so runs
-// of consecutive triangles are spatially compact. The contact tests ask "is any triangle near",
-// so the order changes no answer.
-void sort_along_morton_curve(std::vector<WorldTriangle>& triangles, int begin, int end,
-                             const glm::dvec3& lo, const glm::dvec3& hi) {
+// Sorts triangles along a Morton curve of their centroids within (lo, hi), so runs of consecutive
+// triangles are spatially compact. The contact tests ask "is any triangle near", so the order
+// changes no answer.
+void sort_along_morton_curve(std::vector<WorldTriangle>& triangles, const glm::dvec3& lo,
+                             const glm::dvec3& hi) {
     const glm::dvec3 size = glm::max(hi - lo, glm::dvec3(1e-300));
-    std::vector<std::pair<uint64_t, int>> keyed;
-    keyed.reserve(size_t(end - begin));
-    for (int i = begin; i < end; ++i) {
-        const WorldTriangle& t = triangles[size_t(i)];
+    std::vector<std::pair<uint64_t, size_t>> keyed;
+    keyed.reserve(triangles.size());
+    for (size_t i = 0; i < triangles.size(); ++i) {
+        const WorldTriangle& t = triangles[i];
         const glm::dvec3 u = ((t.lo + t.hi) * 0.5 - lo) / size;
         // 21 bits an axis; NaN (a degenerate mesh) and anything outside [0, 1] clamped, before
         // the cast to an integer.
@@ -84,8 +83,39 @@ void sort_along_morton_curve(std::vector<WorldTriangle>& triangles, int begin, i
                      [](const auto& a, const auto& b) { return a.first < b.first; });
     std::vector<WorldTriangle> sorted;
     sorted.reserve(keyed.size());
-    for (const auto& [code, i] : keyed) sorted.push_back(triangles[size_t(i)]);
-    std::copy(sorted.begin(), sorted.end(), triangles.begin() + begin);
+    for (const auto& [code, i] : keyed) sorted.push_back(triangles[i]);
+    triangles = std::move(sorted);
+}
+
+// Triangles per run: runs of kCluster consecutive triangles (in Morton order, so compact) carry
+// their bounds, and a box test on a run stands for its triangles'.
+constexpr size_t kCluster = 16;
+
+// The bounds (lo, hi) of each run of kCluster of the `count` triangles triangles[index(i)].
+template <class Index>
+std::vector<WorldTriangle> run_bounds(const std::vector<WorldTriangle>& triangles, size_t count,
+                                      Index index) {
+    std::vector<WorldTriangle> runs;
+    for (size_t i = 0; i < count; i += kCluster) {
+        WorldTriangle run;
+        run.lo = glm::dvec3(1e300);
+        run.hi = glm::dvec3(-1e300);
+        for (size_t j = i; j < std::min(i + kCluster, count); ++j) {
+            run.lo = glm::min(run.lo, triangles[index(j)].lo);
+            run.hi = glm::max(run.hi, triangles[index(j)].hi);
+        }
+        runs.push_back(run);
+    }
+    return runs;
+}
+
+// Each chart triangle is sampled at the centroids of an n×n split: n for its world corners (NaN
+// and anything below one step: 1).
+int sample_subdivisions(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c,
+                        double spacing) {
+    const double longest = std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
+    const double steps = longest / spacing;
+    return steps > 1.0 ? int(std::min(std::ceil(steps), 64.0)) : 1;
 }
 
 // Partner triangles by the cells of a uniform grid their bounds (grown by `margin`) overlap, so a
@@ -162,12 +192,6 @@ glm::ivec2 chart_layout_texels(const ChartLayout& layout, double texel_size) {
     return {std::max(1, int(texels.x)), std::max(1, int(texels.y))};
 }
 
-namespace {
-// Triangles per run: runs of kCluster consecutive triangles along a Morton curve carry their
-// bounds, and a box test on a run stands for its triangles'.
-constexpr int kCluster = 16;
-}  // namespace
-
 // Per object: its triangles in world space as placed now, along a Morton curve of their centres,
 // with the runs' bounds, built once per pass and not once per chart (66 spheres: 2,911 charts
 // each transformed and sorted every other sphere's 1,280 triangles before).
@@ -207,18 +231,8 @@ struct ContactCache::Impl {
             t.hi = glm::max(glm::max(t.a, t.b), t.c);
             e.triangles.push_back(t);
         }
-        sort_along_morton_curve(e.triangles, 0, int(e.triangles.size()), e.lo, e.hi);
-        const size_t cluster = kCluster;
-        for (size_t i = 0; i < e.triangles.size(); i += cluster) {
-            WorldTriangle run;
-            run.lo = glm::dvec3(1e300);
-            run.hi = glm::dvec3(-1e300);
-            for (size_t j = i; j < std::min(i + cluster, e.triangles.size()); ++j) {
-                run.lo = glm::min(run.lo, e.triangles[j].lo);
-                run.hi = glm::max(run.hi, e.triangles[j].hi);
-            }
-            e.runs.push_back(run);
-        }
+        sort_along_morton_curve(e.triangles, e.lo, e.hi);
+        e.runs = run_bounds(e.triangles, e.triangles.size(), [](size_t j) { return j; });
         return e;
     }
 };
@@ -283,13 +297,11 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const double slack = grow + 1e-9 * (1.0 + glm::length(chart_hi - chart_lo));
         for (size_t run = 0; run < e.runs.size(); ++run) {
             if (apart(e.runs[run].lo, e.runs[run].hi, chart_lo, chart_hi, slack)) continue;
-            const size_t cluster = kCluster;
-            for (size_t i = run * cluster; i < std::min((run + 1) * cluster, e.triangles.size());
+            for (size_t i = run * kCluster; i < std::min((run + 1) * kCluster, e.triangles.size());
                  ++i) {
                 const WorldTriangle& t = e.triangles[i];
                 if (apart(t.lo, t.hi, chart_lo, chart_hi, slack)) continue;
                 partners.push_back(t);
-                partners.back().partner = int(partner_vertices.size());
             }
         }
         partner_vertices.push_back(&e.vertices);
@@ -304,16 +316,11 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
     std::vector<int> cluster_begin;       // per partner, its first run in `clusters`; then the end
     for (size_t k = 0; k + 1 < partner_begin.size(); ++k) {
         cluster_begin.push_back(int(clusters.size()));
-        for (int i = partner_begin[k]; i < partner_begin[k + 1]; i += kCluster) {
-            WorldTriangle run;
-            run.lo = glm::dvec3(1e300);
-            run.hi = glm::dvec3(-1e300);
-            for (int j = i; j < std::min(i + kCluster, partner_begin[k + 1]); ++j) {
-                run.lo = glm::min(run.lo, partners[size_t(j)].lo);
-                run.hi = glm::max(run.hi, partners[size_t(j)].hi);
-            }
-            clusters.push_back(run);
-        }
+        const size_t first = size_t(partner_begin[k]);
+        const std::vector<WorldTriangle> runs =
+            run_bounds(partners, size_t(partner_begin[k + 1]) - first,
+                       [first](size_t j) { return first + j; });
+        clusters.insert(clusters.end(), runs.begin(), runs.end());
     }
     cluster_begin.push_back(int(clusters.size()));
     // The near test (within `distance`) needs only the triangles within distance of the chart;
@@ -327,17 +334,8 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
     }
     // The candidates in runs of kCluster with their bounds (they keep the partners' Morton
     // order, so the runs are compact).
-    std::vector<WorldTriangle> near_runs;
-    for (size_t i = 0; i < near_candidates.size(); i += size_t(kCluster)) {
-        WorldTriangle run;
-        run.lo = glm::dvec3(1e300);
-        run.hi = glm::dvec3(-1e300);
-        for (size_t j = i; j < std::min(i + size_t(kCluster), near_candidates.size()); ++j) {
-            run.lo = glm::min(run.lo, partners[size_t(near_candidates[j])].lo);
-            run.hi = glm::max(run.hi, partners[size_t(near_candidates[j])].hi);
-        }
-        near_runs.push_back(run);
-    }
+    const std::vector<WorldTriangle> near_runs = run_bounds(
+        partners, near_candidates.size(), [&](size_t j) { return size_t(near_candidates[j]); });
     // Samples against the runs cost (samples × runs); a grid costs about 8 hashed cells per
     // candidate to build and a few triangles per sample: it pays for itself only for many
     // samples against many candidates (a sphere's 29-triangle chart among five others: the grid
@@ -348,11 +346,7 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const glm::dvec3 a(own.transform.apply_point(own.mesh.positions[f.x])),
             b(own.transform.apply_point(own.mesh.positions[f.y])),
             c(own.transform.apply_point(own.mesh.positions[f.z]));
-        const double longest =
-            std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        if (!std::isfinite(longest)) continue;
-        const double steps = longest / spacing;  // as the sampling below, NaN counted as 1
-        const size_t n = steps > 1.0 ? size_t(std::min(std::ceil(steps), 64.0)) : 1;
+        const size_t n = size_t(sample_subdivisions(a, b, c, spacing));
         samples += n * n;
     }
     constexpr size_t kGridFrom = 256;
@@ -379,9 +373,7 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
         const double area = 0.5 * glm::length(cross);
         if (!(area > 0.0)) continue;
         const glm::dvec3 normal = cross / (2.0 * area);
-        const double longest =
-            std::max({glm::length(b - a), glm::length(c - b), glm::length(a - c)});
-        const int n = std::clamp(int(std::ceil(longest / spacing)), 1, 64);
+        const int n = sample_subdivisions(a, b, c, spacing);
         const double piece = area / double(n * n);
         // A partner's height above a sample's plane is max_w (w · normal) − p · normal: the
         // maximum over its vertices is the triangle's, once (not once per sample), and only for
@@ -428,9 +420,8 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
             } else {
                 for (size_t run = 0; !s.covered && run < near_runs.size(); ++run) {
                     if (outside(p, near_runs[run], s.near ? 2e-6 * distance : distance)) continue;
-                    for (size_t j = run * size_t(kCluster);
-                         !s.covered &&
-                         j < std::min((run + 1) * size_t(kCluster), near_candidates.size());
+                    for (size_t j = run * kCluster;
+                         !s.covered && j < std::min((run + 1) * kCluster, near_candidates.size());
                          ++j)
                         test_one(near_candidates[j]);
                 }
@@ -453,8 +444,8 @@ void for_each_contact_sample(const Scene& scene, const Chart& chart, double dist
                 for (int run = cluster_begin[k]; !s.within_reach && run < cluster_begin[k + 1];
                      ++run) {
                     if (outside(p, clusters[size_t(run)], r)) continue;
-                    const int first = partner_begin[k] + (run - cluster_begin[k]) * kCluster;
-                    const int last = std::min(first + kCluster, partner_begin[k + 1]);
+                    const int first = partner_begin[k] + (run - cluster_begin[k]) * int(kCluster);
+                    const int last = std::min(first + int(kCluster), partner_begin[k + 1]);
                     for (int i = first; i < last; ++i) {
                         const WorldTriangle& t = partners[size_t(i)];
                         if (outside(p, t, r)) continue;
