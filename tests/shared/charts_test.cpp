@@ -762,13 +762,12 @@ TEST(Atlas, TooManyTexelsAreRefusedNamingTheSettingAndTheLimit) {
     EXPECT_EQ(error(make_quad(10000.0f, 1.0f), 1.0f), "");
 }
 
-// The contact samples find a large partner's triangles through a grid (shared/texel_density.cpp);
-// every sample must be classified as testing each triangle would: a dynamic box's charts against
-// a bumpy floor of 1,152 triangles (past the grid's threshold) with one huge triangle far below
-// it (too large for the grid's cells: tested by every sample).
-// The contact samples of a box standing on a wavy floor of 2 × kN² triangles (plus one huge
-// triangle every grid cell holds) against a brute-force test of every floor triangle. With
-// `bottom_only`, only the box's bottom chart; with `cache`, one ContactCache for all its charts.
+// The contact samples find a partner's triangles through runs of 16 with their bounds, or a grid
+// where the samples are many (shared/texel_density.cpp); every sample must be classified as
+// testing each triangle would. A box standing on a wavy floor of 2 × kN² triangles with one huge
+// triangle far below it (too large for the grid's cells: tested by every sample), against a
+// brute-force test of every floor triangle. With `bottom_only`, only the box's bottom chart; with
+// `cache`, one ContactCache for all its charts.
 void check_contact_samples_against_every_triangle(int kN, bool bottom_only, bool cache) {
     Scene scene;
     Object floor;
@@ -886,6 +885,7 @@ void check_contact_samples_against_every_triangle(int kN, bool bottom_only, bool
     EXPECT_GT(within, 0);
 }
 
+// Every face of the box over 1,152 triangles: near, covered and within reach.
 TEST(Atlas, ContactSamplesThroughTheGridMatchTestingEveryTriangle) {
     check_contact_samples_against_every_triangle(24, false, false);
 }

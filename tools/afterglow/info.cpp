@@ -33,7 +33,7 @@ std::string fmt_vec(const glm::vec3& v) {
     std::snprintf(buf, sizeof buf, "(%g, %g, %g)", double(v.x), double(v.y), double(v.z));
     return buf;
 }
-// ", N finer (object: charts × texel size, ...)" for the charts adaptive density subdivided, by
+// ", N finer (object: K charts at S, ...; ...)" for the charts adaptive density subdivided, by
 // object in scene order, the first eight objects named; "tile of T texels" for the fine part of
 // a chart cut into tiles (lightmap.refine_tile), e.g. "floor: tile of 860 texels at 15; block:
 // 5 charts at 15".
