@@ -201,6 +201,29 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
         filter_ms_ = query_ms_ = 0.0;
         return;
     }
+    // What this render draws from: the photons, the view the G-buffer is drawn from (its own,
+    // about to be drawn, or the caller's, drawn this frame), the scene and the filter.
+    std::vector<float> data;
+    data.reserve(positions.size() * 6);
+    for (size_t i = 0; i < positions.size(); ++i)
+        data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x,
+                                 powers[i].y, powers[i].z});
+    const glm::mat4 planned_vp = own_g_buffer_ ? own_g_buffer_->view().view_projection
+                                               : g_buffer_->last_view().view_projection;
+    {
+        const CausticSettings& cs = scene_.settings.caustics;
+        Inputs inputs{data, planned_vp, scene_.version, cs.kernel_k, cs.kernel_photons, cull};
+        // The same inputs as the render before: the texture already holds this render's result
+        // (the caustic photons of a settled scene stay as they were for every frame after their
+        // last re-trace; drawing them again cost two_rooms at 96² 12 ms of a 20 ms frame).
+        if (revision_ != 0 && !showing_none_ && inputs == last_inputs_) {
+            tiles_filtered_ = 0;
+            filter_ms_ = query_ms_ = 0.0;
+            return;
+        }
+        ++revision_;
+        last_inputs_ = std::move(inputs);
+    }
     showing_none_ = false;
     // 1. The scene: depth and stencil cleared, positions, albedo and pixel areas (the G-buffer).
     if (own_g_buffer_) own_g_buffer_->render();
@@ -211,19 +234,6 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     const GLuint surface = g_buffer_->texture(GBufferTarget::surface);
 
     // 2. Photons as points, additive float RGB, each marking the stencil.
-    std::vector<float> data;
-    data.reserve(positions.size() * 6);
-    for (size_t i = 0; i < positions.size(); ++i)
-        data.insert(data.end(), {positions[i].x, positions[i].y, positions[i].z, powers[i].x,
-                                 powers[i].y, powers[i].z});
-    {
-        const CausticSettings& cs = scene_.settings.caustics;
-        Inputs inputs{data, vp, scene_.version, cs.kernel_k, cs.kernel_photons, cull};
-        if (revision_ == 0 || !(inputs == last_inputs_)) {
-            ++revision_;
-            last_inputs_ = std::move(inputs);
-        }
-    }
     gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
     const GLenum one = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &one);
@@ -235,7 +245,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     gl::Enable(GL_STENCIL_TEST);
     gl::StencilFunc(GL_ALWAYS, 1, 0xFF);
     gl::StencilOp(GL_KEEP, GL_KEEP, GL_REPLACE);
-    if (!data.empty()) {
+    const std::vector<float>& data_drawn = last_inputs_.photons;
+    if (!data_drawn.empty()) {
         splat_.use();
         splat_.set("view_projection", vp);
         splat_.set("eye", camera.eye);
@@ -250,8 +261,8 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
         gl::BindTexture(GL_TEXTURE_2D, surface);
         gl::BindVertexArray(photon_vao_.get());
         gl::BindBuffer(GL_ARRAY_BUFFER, photon_vbo_.get());
-        gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data.size() * sizeof(float)), data.data(),
-                       GL_STREAM_DRAW);
+        gl::BufferData(GL_ARRAY_BUFFER, GLsizeiptr(data_drawn.size() * sizeof(float)),
+                       data_drawn.data(), GL_STREAM_DRAW);
         gl::DrawArrays(GL_POINTS, 0, GLsizei(positions.size()));
     }
     gl::Disable(GL_BLEND);

@@ -327,14 +327,18 @@ out vec4 color;
 void main() { color = vec4(0.0); }
 )";
 
-// What a mirror or glass object sees: the diffuse scene with emission and indirect light, and in
-// alpha the distance from the cube map's centre (the lights' shadowed direct light is added by
-// the same passes as in the frame).
+// What a mirror or glass object sees: the diffuse scene with emission, indirect light and the
+// lights' shadowed direct light, and in alpha the distance from the cube map's centre. The direct
+// light is rendered by the same passes as in the frame into a store per face (`direct`, layer
+// `direct_layer`), read here texel for texel: the faces follow a converging indirect term every
+// frame, and the direct light, the larger cost, only when the scene or the lights change.
 const std::string kEnvironmentFragment = std::string(kAlbedoGlsl) + R"(
 in vec3 v_world;
 in vec3 v_normal;
 in vec2 v_uv;
 uniform sampler2D iim;
+uniform sampler2DArray direct;
+uniform int direct_layer;
 uniform vec3 albedo;
 uniform vec3 emission;
 uniform int diffuse;
@@ -343,7 +347,8 @@ out vec4 color;
 void main() {
     float distance = length(v_world - centre);
     if (diffuse == 0) { color = vec4(0.0, 0.0, 0.0, distance); return; }
-    color = vec4(emission + surface_albedo(albedo) * texture(iim, v_uv).rgb, distance);
+    vec3 light = texelFetch(direct, ivec3(ivec2(gl_FragCoord.xy), direct_layer), 0).rgb;
+    color = vec4(emission + surface_albedo(albedo) * texture(iim, v_uv).rgb + light, distance);
 }
 )";
 
@@ -603,12 +608,20 @@ FrameRenderer::FrameRenderer(const Scene& scene, const SceneMeshes& meshes, int 
     gl::Enable(GL_TEXTURE_CUBE_MAP_SEAMLESS);  // no seams where a lookup crosses a face edge
     cube_maps_.resize(scene.objects.size());
     face_generation_.assign(scene.objects.size() * 6, 0);
+    cube_direct_.resize(scene.objects.size());
+    face_direct_generation_.assign(scene.objects.size() * 6, 0);
     inner_maps_.resize(scene.objects.size());
     cube_radii_.assign(scene.objects.size(), 0.0f);
     for (size_t o = 0; o < scene.objects.size(); ++o) {
         const Object& obj = scene.objects[o];
         if (obj.material.type == MaterialType::diffuse) continue;
         cube_maps_[o] = make_cube(GL_LINEAR);
+        cube_direct_[o] = make_texture();
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, cube_direct_[o].get());
+        gl::TexStorage3D(GL_TEXTURE_2D_ARRAY, 1, GL_RGBA32F, cube, cube, 6);
+        gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
+        gl::TexParameteri(GL_TEXTURE_2D_ARRAY, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
         // Nearest: a face's normal is not blended with its neighbours' (the references see facets).
         if (obj.material.type == MaterialType::glass) inner_maps_[o] = make_cube(GL_NEAREST);
         const glm::vec3 c = mesh_bounds(obj.mesh).center();
@@ -671,31 +684,38 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
     gl::FramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_STENCIL_ATTACHMENT, GL_RENDERBUFFER,
                                 cube_depth_.get());
     const GLenum draw = GL_COLOR_ATTACHMENT0;
+    // The direct light the faces' stores hold moves on with the scene and the light samples.
+    if (!direct_key_.valid || direct_key_.scene_version != scene_.version ||
+        direct_key_.lights != lights) {
+        direct_key_ = {scene_.version, {}, 0, IndirectSpace::lightmap, lights, true};
+        ++direct_generation_;
+    }
+    const glm::vec4 cleared_distance(0, 0, 0, 1e30f);  // no surface: a lookup uses the direction
     for (int index : faces) {
         const size_t s = size_t(index / 6);
         const int f = index % 6;
         const glm::vec3 centre = cube_centre(s);
-        {
-            const glm::mat4 view_projection =
-                projection * glm::lookAt(centre, centre + dirs[f], ups[f]);
-            const GLenum face = GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f);
-            if (inner_maps_[s]) {
-                // The object's own surface (only it): its normals and distances.
-                gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, face,
-                                         inner_maps_[s].get(), 0);
-                begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0, 0, 0, 0));
-                inner_.use();
-                inner_.set("view_projection", view_projection);
-                inner_.set("centre", centre);
-                inner_.set("model", model_matrix(scene_.objects[s]));
-                meshes_.draw(s);
-            }
+        const glm::mat4 view_projection =
+            projection * glm::lookAt(centre, centre + dirs[f], ups[f]);
+        const GLenum face = GLenum(GL_TEXTURE_CUBE_MAP_POSITIVE_X + f);
+        if (inner_maps_[s]) {
+            // The object's own surface (only it): its normals and distances.
             gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, face,
-                                     cube_maps_[s].get(), 0);
-            // Alpha 1e30: no surface in that direction (a lookup then uses the direction alone).
-            begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0, 0, 0, 1e30f));
+                                     inner_maps_[s].get(), 0);
+            begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0, 0, 0, 0));
+            inner_.use();
+            inner_.set("view_projection", view_projection);
+            inner_.set("centre", centre);
+            inner_.set("model", model_matrix(scene_.objects[s]));
+            meshes_.draw(s);
+        }
+        // Every object but this one, with the environment program: the depth of the direct
+        // light's passes, then the face itself.
+        auto draw_environment = [&] {
             environment_.use();
             environment_.set("iim", 0);
+            environment_.set("direct", 1);
+            environment_.set("direct_layer", f);
             environment_.set("centre", centre);
             environment_.set("view_projection", view_projection);
             gl::ActiveTexture(GL_TEXTURE0);
@@ -710,10 +730,33 @@ void FrameRenderer::render_cube_maps(GLuint iim, const std::vector<LightSample>&
                 environment_.set("diffuse", obj.material.type == MaterialType::diffuse ? 1 : 0);
                 meshes_.draw(o);
             }
-            // Direct light with the frame's shadow volumes (every object casts, this one too:
-            // a mirror ball shows its own contact shadow).
+        };
+        uint64_t& stored = face_direct_generation_[size_t(index)];
+        if (stored != direct_generation_) {
+            // Direct light with the frame's shadow volumes (every object casts, this one too: a
+            // mirror ball shows its own contact shadow), into the face's store over the depth of
+            // what it sees.
+            gl::FramebufferTextureLayer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, cube_direct_[s].get(),
+                                        0, f);
+            begin_scene_pass(cube_fbo_.get(), 1, size, size, glm::vec4(0.0f));
+            gl::ActiveTexture(GL_TEXTURE1);
+            gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);  // not read while written
+            gl::ColorMask(GL_FALSE, GL_FALSE, GL_FALSE, GL_FALSE);
+            draw_environment();
+            gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
             add_direct_light(lights, view_projection, draw);
+            gl::BindFramebuffer(GL_FRAMEBUFFER, cube_fbo_.get());
+            stored = direct_generation_;
         }
+        gl::FramebufferTexture2D(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, face, cube_maps_[s].get(),
+                                 0);
+        begin_scene_pass(cube_fbo_.get(), 1, size, size, cleared_distance);
+        gl::ActiveTexture(GL_TEXTURE1);
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, cube_direct_[s].get());
+        draw_environment();
+        gl::ActiveTexture(GL_TEXTURE1);
+        gl::BindTexture(GL_TEXTURE_2D_ARRAY, 0);
+        gl::ActiveTexture(GL_TEXTURE0);
     }
     check_gl("FrameRenderer::render_cube_maps");
 }

@@ -225,8 +225,16 @@ private:
     } cube_key_;
     uint64_t generation_ = 0;                // moves on with every change of what the cube maps see
     std::vector<uint64_t> face_generation_;  // per object × 6 faces: the generation shown
-    int last_face_ = -1;                     // the face the round robin rendered last
-    bool last_edited_ = false;               // the last render's scene version was new
+    // Per specular object, the direct light each face sees (6 layers, the faces' order), and
+    // per face the generation of the scene and light samples it holds: the faces follow the
+    // indirect term every frame and draw the direct light (shadow volumes, a pass per light)
+    // only when it changed (two_rooms' mirror ball at 128²: 8.6 of a face's 9.9 ms).
+    std::vector<Texture> cube_direct_;
+    std::vector<uint64_t> face_direct_generation_;
+    CubeMapKey direct_key_;  // the scene version and light samples of direct_generation_
+    uint64_t direct_generation_ = 0;
+    int last_face_ = -1;        // the face the round robin rendered last
+    bool last_edited_ = false;  // the last render's scene version was new
     Framebuffer cube_fbo_;
     float near_ = 1.0f;
 

@@ -102,6 +102,48 @@ TEST_F(CausticsTest, NoPhotonsClearTheTermAndPhotonsComeBack) {
     EXPECT_EQ(caustics.read_radiance(), lit);
 }
 
+// The same photons, view, scene and filter as the render before: nothing is drawn (the texture
+// holds that render's result, and the revision stays, so the frame may accumulate); any of them
+// changed draws again, and gives what a fresh renderer gives.
+TEST_F(CausticsTest, TheSameInputsDrawNothingAndAnyChangeDrawsAgain) {
+    Scene scene = floor_scene(12.0f);
+    SceneMeshes meshes(scene);
+    CausticsRenderer caustics(scene, meshes, 128, 128);
+    std::vector<glm::vec3> positions, powers;
+    disc_photons(0.6f, 2000, positions, powers);
+    caustics.render(positions, powers, true);
+    const std::vector<glm::vec3> lit = caustics.read_radiance();
+    const uint64_t revision = caustics.revision();
+    ASSERT_GT(caustics.tiles_filtered(), 0);
+    caustics.render(positions, powers, true);
+    EXPECT_EQ(caustics.tiles_filtered(), 0) << "drawn again for the same inputs";
+    EXPECT_EQ(caustics.revision(), revision);
+    EXPECT_EQ(caustics.read_radiance(), lit);
+
+    auto fresh = [&] {
+        CausticsRenderer other(scene, meshes, 128, 128);
+        other.render(positions, powers, true);
+        return other.read_radiance();
+    };
+    scene.camera.eye.x += 1.0f;  // the view
+    caustics.render(positions, powers, true);
+    EXPECT_GT(caustics.tiles_filtered(), 0);
+    EXPECT_NE(caustics.revision(), revision);
+    const std::vector<glm::vec3> moved = caustics.read_radiance();
+    EXPECT_NE(moved, lit);
+    EXPECT_EQ(moved, fresh());
+    powers[0] *= 4.0f;  // the photons
+    const uint64_t before_photons = caustics.revision();
+    caustics.render(positions, powers, true);
+    EXPECT_NE(caustics.revision(), before_photons);
+    EXPECT_EQ(caustics.read_radiance(), fresh());
+    scene.settings.caustics.kernel_k += 2;  // the filter
+    const uint64_t before_filter = caustics.revision();
+    caustics.render(positions, powers, true);
+    EXPECT_NE(caustics.revision(), before_filter);
+    EXPECT_EQ(caustics.read_radiance(), fresh());
+}
+
 TEST_F(CausticsTest, SummedWorldRadianceHoldsWhenTheCameraZoomsOut) {
     std::vector<glm::vec3> positions, powers;
     disc_photons(0.8f, 6000, positions, powers);
