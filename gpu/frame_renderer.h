@@ -105,10 +105,13 @@ public:
     // showing an older state are rendered again round robin, all of them within this many
     // frames: a converging IIM changes every frame, an edited scene often, and the six faces
     // per mirror or glass object cost more than the frame itself. The frame of an edit after
-    // frames without one renders none (it draws every light's direct light anew), so after such
-    // an edit they follow within kIndirectRefreshFrames + 1 frames. A new term texture is
-    // rendered whole at once.
+    // frames without one renders none (it draws every light's direct light anew). A face keeps
+    // the direct light it sees and draws it again only after an edit or a change of the light
+    // samples, one such face a frame (kRelitFacesPerFrame): after an edit the faces follow
+    // within max(kIndirectRefreshFrames, 6 × mirror and glass objects) + 1 frames. A new term
+    // texture is rendered whole at once.
     static constexpr size_t kIndirectRefreshFrames = 4;
+    static constexpr size_t kRelitFacesPerFrame = 1;
     // Frames in the running mean the last render showed (1: that frame alone), and whether the
     // mean is complete (as many frames as the settings ask; later renders keep it as it is).
     int accumulated_frames() const { return mean_frames_; }

@@ -250,8 +250,13 @@ PipelineStats Pipeline::frame() {
         if (uses_photon_maps_) invalidated = photons_->invalidate_all();
         indirect_->invalidate_all();
     }
-    const FrameBudgets budgets =
-        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit);
+    // After an edit the caustic photons are traced again over caustics.frames frames (each
+    // drawn the frame after) and the cube-map faces re-lit one a frame: drawing catches up.
+    const bool catching_up =
+        !edited && edits_seen_ && caustic_frames_since_edit_ <= scene_.settings.caustics.frames + 1;
+    edits_seen_ = edits_seen_ || edited;
+    const FrameBudgets budgets = scheduler_.budgets(
+        scene_.settings, int(scene_.atlas.texels.size()), first_edit, catching_up);
     if (!workers_busy) start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.

@@ -168,6 +168,7 @@ private:
     uint64_t seen_version_ = 0;
     bool last_frame_edited_ = false;  // the last frame() saw a scene edit
     int caustic_frames_since_edit_ = 0;
+    bool edits_seen_ = false;  // a frame() saw a scene edit (the frames after it catch up)
     std::unique_ptr<MediaMethodResult> media_;
     MediaMethodSettings media_settings_;
     uint64_t media_version_ = 0;

@@ -49,7 +49,12 @@ public:
     // kEditDrawFactor times the usual estimate (two_rooms' door: 16–27 ms against 12 ms), and
     // gathers with the rest, at least kMinGatherShare of the target. The gathering reads the
     // edit's AIMs as soon as the workers hand them over (between chunks).
-    FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false) const;
+    // In the frames after such an edit (`catching_up`: while the caustic photons are traced again
+    // and the cube-map faces re-lit one a frame) drawing stays above the running estimate too:
+    // they plan for the larger of that estimate and the last frame's drawing (two_rooms' door at
+    // 96²: 28-46 ms of drawing in the three frames after the edit's, planned as 16-19 ms).
+    FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false,
+                         bool catching_up = false) const;
     static constexpr double kEditDrawFactor = 2.0;
     // When drawing alone overruns the target, gathering still gets this share of it: the frame
     // rate cannot hold there, and the picture keeps converging.
@@ -77,6 +82,7 @@ private:
     RunningCost photon_ms_;            // workers, per photon traced (verified or re-traced)
     RunningCost aim_ms_per_texel_;     // workers, per AIM texel rebuilt
     RunningCost caustic_ms_;           // workers, caustic photons (a fixed share per frame)
+    double last_drawing_ = 0.0;        // the last measured frame's drawing (ms)
 };
 
 }  // namespace ag

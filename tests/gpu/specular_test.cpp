@@ -223,18 +223,21 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
         return mean(r.read_back().aov[size_t(FrameTerm::specular)]);
     };
     // Renders until the cube maps are current: within kIndirectRefreshFrames renders of a change
-    // (a share of the faces a frame), not current before.
-    auto settle = [&](FrameRenderer& r, uint64_t revision) {
+    // of the indirect term (a share of the faces a frame), within 6 / kRelitFacesPerFrame of an
+    // edit (the faces re-lit one by one), not current before.
+    auto settle = [&](FrameRenderer& r, uint64_t revision, size_t limit) {
         double seen = specular(r, revision);
         size_t renders = 1;
-        while (!r.cube_maps_current() && renders < 2 * FrameRenderer::kIndirectRefreshFrames) {
+        while (!r.cube_maps_current() && renders < 2 * limit) {
             seen = specular(r, revision);
             ++renders;
         }
         EXPECT_TRUE(r.cube_maps_current());
-        EXPECT_LE(renders, FrameRenderer::kIndirectRefreshFrames);
+        EXPECT_LE(renders, limit);
         return seen;
     };
+    const size_t after_edit = 6 / FrameRenderer::kRelitFacesPerFrame;
+    const size_t after_term = FrameRenderer::kIndirectRefreshFrames;
     const double before = specular(renderer, 1);
     EXPECT_TRUE(renderer.cube_maps_current());        // a new term texture: every face at once
     EXPECT_DOUBLE_EQ(specular(renderer, 1), before);  // kept
@@ -244,7 +247,7 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     EXPECT_FALSE(renderer.cube_maps_current());
     EXPECT_LT(specular(renderer, 1), before) << "the frame after it renders a share";
     EXPECT_FALSE(renderer.cube_maps_current()) << "a share of the faces a frame";
-    const double darker = settle(renderer, 1);
+    const double darker = settle(renderer, 1, after_edit - 1);
     EXPECT_LT(darker, 0.6 * before) << "the mirror must show the darker floor";
     FrameRenderer fresh(scene, meshes, 32, 32);
     EXPECT_DOUBLE_EQ(specular(fresh, 1), darker);
@@ -254,7 +257,7 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     set_albedo(scene, scene.find_object("floor"), glm::vec3(0.4f));
     EXPECT_GT(specular(renderer, 1), darker) << "the second edit's frame renders its share";
     set_albedo(scene, scene.find_object("floor"), glm::vec3(0.2f));
-    EXPECT_DOUBLE_EQ(settle(renderer, 1), darker);
+    EXPECT_DOUBLE_EQ(settle(renderer, 1, after_edit), darker);
     // A new indirect term (non-zero now) reaches the mirror only through a new revision.
     std::vector<glm::vec3> lit(size_t(scene.atlas.width) * size_t(scene.atlas.height),
                                glm::vec3(5.0f));
@@ -265,7 +268,7 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     EXPECT_TRUE(renderer.cube_maps_current());
     specular(renderer, 2);
     EXPECT_FALSE(renderer.cube_maps_current());
-    const double lit_up = settle(renderer, 2);
+    const double lit_up = settle(renderer, 2, after_term);
     EXPECT_GT(lit_up, darker);
     FrameRenderer fresh2(scene, meshes, 32, 32);
     EXPECT_DOUBLE_EQ(specular(fresh2, 2), lit_up);
