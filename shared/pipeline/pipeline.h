@@ -86,6 +86,7 @@ public:
     const FrameScheduler& scheduler() const { return scheduler_; }
     gpu::FrameImages images() const { return renderer_->read_back(); }
     const gpu::FrameRenderer& renderer() const { return *renderer_; }
+    const gpu::CausticsRenderer& caustics() const { return *caustics_; }
     const IndirectMethod& indirect() const { return *indirect_; }
     IndirectMethod& indirect() { return *indirect_; }
     // The IIM method when it is the active one, else null (for lightmap views and statistics).
@@ -168,7 +169,9 @@ private:
     uint64_t seen_version_ = 0;
     bool last_frame_edited_ = false;  // the last frame() saw a scene edit
     int caustic_frames_since_edit_ = 0;
-    bool edits_seen_ = false;  // a frame() saw a scene edit (the frames after it catch up)
+    bool edits_seen_ = false;           // a frame() saw a scene edit (the frames after it catch up)
+    bool caustics_deferred_ = false;    // the last frame kept the caustics drawn before it
+    bool caustics_drawn_last_ = false;  // the last frame drew the caustics anew
     std::unique_ptr<MediaMethodResult> media_;
     MediaMethodSettings media_settings_;
     uint64_t media_version_ = 0;

@@ -30,7 +30,7 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // GL thread: what drawing leaves of the target goes to gathering (at least a share of it).
     // Until a cost is known, gather the fixed count once to measure it.
     const double usual = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
-    const double draw = catching_up ? std::max(usual, last_drawing_) : usual;
+    const double draw = catching_up ? std::max({usual, last_drawing_[0], last_drawing_[1]}) : usual;
     const double share = std::max(target - draw, kMinGatherShare * target);
     // The frame of an edit draws every light's shadows anew (what frames that did so cost:
     // priming's first frames, earlier edits) and moved geometry besides (shadow volumes, cube-map
@@ -100,7 +100,8 @@ void FrameScheduler::measure(const PipelineStats& s) {
     // direct light anew in 27-48 ms, and the edit's frame planned for 156 ms of drawing.
     const bool first = s.frame == 1;
     if ((s.drawn && !first) || !draw_ms_.known()) draw_ms_.add(drawing);
-    last_drawing_ = drawing;
+    last_drawing_[1] = last_drawing_[0];
+    last_drawing_[0] = drawing;
     if (s.drawn_direct && !first) direct_draw_ms_.add(drawing);
     // Only frames that re-traced groups measure a photon's cost: a frame of verification alone
     // (one photon a group) is dominated by its fixed costs (edits, the moved-object query).

@@ -49,10 +49,11 @@ public:
     // kEditDrawFactor times the usual estimate (two_rooms' door: 16–27 ms against 12 ms), and
     // gathers with the rest, at least kMinGatherShare of the target. The gathering reads the
     // edit's AIMs as soon as the workers hand them over (between chunks).
-    // In the frames after such an edit (`catching_up`: while the caustic photons are traced again
-    // and the cube-map faces re-lit one a frame) drawing stays above the running estimate too:
-    // they plan for the larger of that estimate and the last frame's drawing (two_rooms' door at
-    // 96²: 28-46 ms of drawing in the three frames after the edit's, planned as 16-19 ms).
+    // In the frames after such an edit (`catching_up`: while the caustic photons are traced again,
+    // drawn every other frame, and the cube-map faces re-lit one a frame) drawing stays above the
+    // running estimate too: they plan for the largest of that estimate and the last two frames'
+    // drawing (two_rooms' door at 96²: 28-46 ms of drawing in the three frames after the edit's,
+    // planned as 16-19 ms).
     FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false,
                          bool catching_up = false) const;
     static constexpr double kEditDrawFactor = 2.0;
@@ -76,13 +77,13 @@ public:
     const RunningCost& aim_ms_per_texel() const { return aim_ms_per_texel_; }
 
 private:
-    RunningCost draw_ms_;              // GL thread, besides gathering: caustics, frame, uploads
-    RunningCost direct_draw_ms_;       // the same, frames that drew the direct light anew
-    RunningCost gather_ms_per_texel_;  // GL thread, per IIM texel, with the backend in use
-    RunningCost photon_ms_;            // workers, per photon traced (verified or re-traced)
-    RunningCost aim_ms_per_texel_;     // workers, per AIM texel rebuilt
-    RunningCost caustic_ms_;           // workers, caustic photons (a fixed share per frame)
-    double last_drawing_ = 0.0;        // the last measured frame's drawing (ms)
+    RunningCost draw_ms_;                  // GL thread, besides gathering: caustics, frame, uploads
+    RunningCost direct_draw_ms_;           // the same, frames that drew the direct light anew
+    RunningCost gather_ms_per_texel_;      // GL thread, per IIM texel, with the backend in use
+    RunningCost photon_ms_;                // workers, per photon traced (verified or re-traced)
+    RunningCost aim_ms_per_texel_;         // workers, per AIM texel rebuilt
+    RunningCost caustic_ms_;               // workers, caustic photons (a fixed share per frame)
+    double last_drawing_[2] = {0.0, 0.0};  // the last two measured frames' drawing (ms)
 };
 
 }  // namespace ag

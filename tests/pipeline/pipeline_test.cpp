@@ -69,6 +69,44 @@ TEST_F(PipelineTest, AFrameWithNothingChangedDoesNoWork) {
     EXPECT_EQ(before.frame.pixels, after.frame.pixels);
 }
 
+// With a frame-time target the caustics are not drawn again in an edit's frame (its photons are
+// the old ones) nor in every frame while the slices are traced again: the term lags a frame, and
+// the pipeline reports converged only once the last slice is drawn, with what a fresh pipeline
+// draws for the final scene. Without a target every frame draws them.
+TEST_F(PipelineTest, WithATargetTheCausticsWaitAFrameAfterAnEditAndSettleAsAFreshPipeline) {
+    for (const float frame_ms : {33.0f, 0.0f}) {
+        Scene scene = cornell();
+        scene.settings.schedule.frame_ms = frame_ms;
+        scene.settings.gather.refine_passes = 1;  // settled once every texel is gathered
+        scene.settings.photons.refine_layers = 1;
+        Pipeline pipeline(scene, PipelineOptions{48, 48, 2});
+        pipeline.prime();
+        FrameLoop loop(pipeline);
+        for (int f = 0; f < 2; ++f) loop.step();
+        const uint64_t revision = pipeline.caustics().revision();
+        translate_object(scene, scene.find_object("cube"), glm::vec3(-100.0f, 0.0f, 60.0f));
+        const PipelineStats edit = loop.step();
+        if (frame_ms > 0.0f) {
+            EXPECT_EQ(edit.caustic_tiles_filtered, 0) << "drawn in the edit's frame";
+            EXPECT_EQ(pipeline.caustics().revision(), revision);
+        } else {
+            EXPECT_GT(edit.caustic_tiles_filtered, 0);
+            EXPECT_NE(pipeline.caustics().revision(), revision);
+        }
+        int kept = 0;
+        for (int f = 0; f < scene.settings.caustics.frames; ++f)
+            kept += loop.step().caustic_tiles_filtered == 0 ? 1 : 0;
+        if (frame_ms > 0.0f) {
+            EXPECT_GE(kept, scene.settings.caustics.frames / 2 - 1) << "drawn every frame";
+        }
+        ASSERT_GT(settle(loop), 0);
+        Pipeline fresh(scene, PipelineOptions{48, 48, 2});
+        fresh.prime();
+        EXPECT_EQ(pipeline.caustics().read_radiance(), fresh.caustics().read_radiance())
+            << "frame_ms " << frame_ms;
+    }
+}
+
 // `gather.backend = automatic` is resolved by the GL renderer, not by timing both backends: the
 // same scene and settings must give the same image however busy the machine is. Fails if the
 // choice is timed (no reason is given then) or names another renderer than the context's.

@@ -55,9 +55,9 @@ TEST(FrameScheduler, ABudgetShrunkByASlowFrameGrowsBack) {
     EXPECT_GT(scheduler.budgets(settings, 1000).iim_texels, 150);
 }
 
-// The frames after an edit's frame draw more than the running estimate (caustics traced again,
-// cube-map faces re-lit): they plan for the last frame's drawing where that is larger; other
-// frames for the estimate.
+// The frames after an edit's frame draw more than the running estimate (caustics traced again
+// and drawn every other frame, cube-map faces re-lit): they plan for the larger of the last two
+// frames' drawing where that is larger; other frames for the estimate.
 TEST(FrameScheduler, FramesCatchingUpAfterAnEditPlanForTheLastFramesDrawing) {
     Settings settings;
     settings.schedule.frame_ms = 33.0f;
@@ -69,7 +69,10 @@ TEST(FrameScheduler, FramesCatchingUpAfterAnEditPlanForTheLastFramesDrawing) {
     EXPECT_NEAR(catching_up.gather_ms, 33.0 - 20.0, 1e-9);
     EXPECT_GT(plain.gather_ms, catching_up.gather_ms + 2.0);  // the estimate moved 30% of the way
     EXPECT_LT(catching_up.iim_texels, plain.iim_texels);
-    // A light frame after it: the estimate is larger than the last drawing, and is kept.
+    // A light frame after it: the heavy one is still one of the last two.
+    scheduler.measure(measured(5.0, 100, 10.0, 1000, 5.0, 100, 1.0));
+    EXPECT_NEAR(scheduler.budgets(settings, 100000, false, true).gather_ms, 33.0 - 20.0, 1e-9);
+    // Two light frames: the estimate is larger than both, and is kept.
     scheduler.measure(measured(5.0, 100, 10.0, 1000, 5.0, 100, 1.0));
     EXPECT_DOUBLE_EQ(scheduler.budgets(settings, 100000, false, true).gather_ms,
                      scheduler.budgets(settings, 100000).gather_ms);
