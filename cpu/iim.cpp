@@ -16,6 +16,7 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     is_pending_.assign(records, 1);
     valid_.assign(records, 0);
     texel_generation_.assign(records, -1);
+    moved_.assign(records, 0);
     passes_.assign(records, 0);
     sum_.assign(records, glm::dvec3(0.0));
     valid_samples_.assign(records, 0);
@@ -27,6 +28,11 @@ Iim::Iim(const Scene& scene) : scene_(scene) {
     footprint_.resize(records);
     for (int t = 0; t < int(records); ++t) pending_.push_back(t);
     surface_texels_.resize(scene_.surfaces.size());
+    object_texels_.resize(scene_.objects.size());
+    for (int t = 0; t < int(records); ++t) {
+        const int o = scene_.atlas.texels[size_t(t)].object;
+        if (o >= 0 && size_t(o) < object_texels_.size()) object_texels_[size_t(o)].push_back(t);
+    }
     for (int t = 0; t < int(records); ++t) {
         const int s = scene_.atlas.texels[size_t(t)].surface;
         if (s >= 0 && size_t(s) < surface_texels_.size()) surface_texels_[size_t(s)].push_back(t);
@@ -47,7 +53,7 @@ void Iim::schedule(PhotonMaps& maps) {
     std::stable_sort(surfaces.begin(), surfaces.end(), [&](int a, int b) {
         return maps.surface(a).delta_i > maps.surface(b).delta_i;
     });
-    if (surfaces.empty()) return;
+    if (surfaces.empty()) return;  // (queue_moved placed moved texels by their priority)
     // Texels never gathered show no indirect light at all, the largest error there is: they keep
     // their place ahead of everything, or an object edited every frame would starve them. Then
     // the photons say where the light changed: those texels go before everything else queued by
@@ -63,6 +69,11 @@ void Iim::schedule(PhotonMaps& maps) {
             order.push_back(t);
         }
     std::vector<int> changed;
+    for (int t : pending_)  // texels of moved objects rank among the changed ones
+        if (moved_[size_t(t)] && !moved[size_t(t)]) {
+            moved[size_t(t)] = 1;
+            changed.push_back(t);
+        }
     for (int s : surfaces) {
         maps.surface(s).delta_i = 0.0;
         if (size_t(s) >= surface_texels_.size()) continue;
@@ -105,6 +116,10 @@ float Iim::staleness(int record) const {
 }
 
 float Iim::priority(int record) const {
+    if (moved_[size_t(record)]) {
+        const float pixels = coverage_.empty() ? 0.0f : coverage_[size_t(record)];
+        return pixels > 0.0f ? pixels : std::numeric_limits<float>::infinity();
+    }
     const float s = staleness(record);
     if (coverage_.empty() || !std::isfinite(s)) return s;
     const float pixels = coverage_[size_t(record)];
@@ -164,6 +179,37 @@ void Iim::queue_inside(const std::vector<Bounds>& regions) {
     }
 }
 
+void Iim::queue_moved(const std::vector<int>& objects) {
+    std::vector<int> front;
+    std::vector<char> taken(is_pending_.size(), 0);
+    for (int o : objects) {
+        if (o < 0 || size_t(o) >= object_texels_.size()) continue;
+        for (int t : object_texels_[size_t(o)])
+            if (texel_generation_[size_t(t)] >= 0 && !taken[size_t(t)]) {
+                moved_[size_t(t)] = 1;
+                is_pending_[size_t(t)] = 1;
+                taken[size_t(t)] = 1;
+                front.push_back(t);
+            }
+    }
+    if (front.empty()) return;
+    // Behind texels never gathered, ahead of the rest, by priority (seen ones first below).
+    std::stable_sort(front.begin(), front.end(),
+                     [&](int a, int b) { return priority(a) > priority(b); });
+    std::vector<int> order;
+    order.reserve(pending_.size() + front.size());
+    for (int t : pending_)
+        if (texel_generation_[size_t(t)] < 0) {
+            taken[size_t(t)] = 1;
+            order.push_back(t);
+        }
+    order.insert(order.end(), front.begin(), front.end());
+    for (int t : pending_)
+        if (!taken[size_t(t)]) order.push_back(t);
+    std::stable_partition(order.begin(), order.end(), [&](int t) { return seen(t); });
+    pending_.assign(order.begin(), order.end());
+}
+
 IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
     std::vector<int> batch;
     std::vector<char> in_batch(texel_generation_.size(), 0);
@@ -175,6 +221,7 @@ IimFrameStats Iim::gather(Gatherer& gatherer, int budget, uint64_t frame) {
             in_batch[size_t(t)] = 1;
             batch.push_back(t);
             is_pending_[size_t(t)] = 0;
+            moved_[size_t(t)] = 0;
             pending_.pop_front();
         }
     };

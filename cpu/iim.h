@@ -59,6 +59,12 @@ public:
     // Queues the texels whose centres lie inside `regions` (world space), nearest to a region's
     // centre first: where a moved object changes what gathers see, before any photon says so.
     void queue_inside(const std::vector<Bounds>& regions);
+    // Queues the texels of moved objects: what each gathered was seen from another place, so the
+    // photons' estimates say little about how far off it is (after Cornell's cube jumped, its
+    // front face waited 13 frames behind the floor and walls with half the image's error). Until
+    // gathered they rank as if their light were all wrong (relative error 1: the pixels they
+    // cover), ahead of the queue now and among the changed texels in later schedule()s.
+    void queue_moved(const std::vector<int>& objects);
     // Gathers up to `budget` texels with `gatherer`: queued ones first, then stale ones round
     // robin; when there are none, refinement passes of settled texels, fewest passes first.
     // Results that saw more than kBackFaceInvalidFraction back faces are repaired from valid
@@ -117,7 +123,8 @@ private:
     bool seen(int t) const { return coverage_.empty() || coverage_[size_t(t)] > 0.0f; }
     // Order within the changed texels: (|E_now − E_gathered| / (E_now + floor))² × pixels
     // covered where the camera sees the texel (its share of the image's relative squared error);
-    // the staleness alone where coverage is not known or the texel is not seen.
+    // the staleness alone where coverage is not known or the texel is not seen. A texel of a
+    // moved object not gathered since: 1² × pixels, or +∞ where not seen.
     float priority(int record) const;
 
     const Scene& scene_;
@@ -139,6 +146,8 @@ private:
     int aim_generation_ = 0;
     std::vector<std::vector<FootprintPoint>> footprint_;  // per record, computed when first needed
     std::vector<int> texel_generation_;  // per record: AIM generation gathered with; −1 = never
+    std::vector<char> moved_;            // per record: its object moved since it was gathered
+    std::vector<std::vector<int>> object_texels_;   // per object: its texel records
     std::vector<std::vector<int>> surface_texels_;  // per surface: its texel records
     size_t sweep_ = 0;
     // Per record, the running mean of its gathers with the current inputs (refinement).

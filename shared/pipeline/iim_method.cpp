@@ -40,7 +40,7 @@ Bounds IimMethod::world_bounds(const Object& o) {
     return b;
 }
 
-std::vector<Bounds> IimMethod::moved_regions() {
+std::vector<Bounds> IimMethod::moved_regions(std::vector<int>* objects) {
     std::vector<Bounds> regions;
     for (const SceneChange& c : changes_since(scene_, seen_sequence_)) {
         if (c.kind != ChangeKind::object_transform) continue;
@@ -55,6 +55,8 @@ std::vector<Bounds> IimMethod::moved_regions() {
             regions.push_back(b);
         }
         placed_[size_t(c.index)] = now;
+        if (objects && std::find(objects->begin(), objects->end(), c.index) == objects->end())
+            objects->push_back(c.index);
     }
     if (!scene_.changes.empty()) seen_sequence_ = scene_.changes.back().sequence;
     return regions;
@@ -119,10 +121,14 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     cpu_gather_.use_ray_cache(in.mode == PipelineMode::selective);
     if (in.aim_changed) iim_.aim_changed();
     const bool timed = scene_.settings.schedule.frame_ms > 0.0f;
-    const std::vector<Bounds> moved = moved_regions();
+    std::vector<int> moved_objects;
+    const std::vector<Bounds> moved = moved_regions(&moved_objects);
     // The round-robin baselines know nothing of the screen.
     if (in.mode == PipelineMode::selective) update_coverage(!moved.empty(), in.frame);
-    if (timed && in.mode == PipelineMode::selective && !moved.empty()) iim_.queue_inside(moved);
+    if (timed && in.mode == PipelineMode::selective && !moved.empty()) {
+        iim_.queue_inside(moved);
+        iim_.queue_moved(moved_objects);
+    }
     int budget = in.budget;
     if (in.mode == PipelineMode::full) budget = int(scene_.atlas.texels.size());
     // Round robin through every texel, a new cycle when one ends.

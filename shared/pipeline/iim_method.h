@@ -62,8 +62,9 @@ public:
 
 private:
     void choose_backend();
-    // With a frame-time target: the regions where moved objects change what gathers see.
-    std::vector<Bounds> moved_regions();
+    // With a frame-time target: the regions where moved objects change what gathers see (and,
+    // into `objects`, which moved).
+    std::vector<Bounds> moved_regions(std::vector<int>* objects = nullptr);
     static Bounds world_bounds(const Object& o);
     // Measures the texels' screen coverage again when the camera changed, or when objects moved
     // and the last measurement is `kCoverageFrames` frames old; hands it to the IIM.
