@@ -843,3 +843,55 @@ TEST(IimSchedule, ChangedTexelsByTheirErrorRelativeToTheNewValue) {
 }
 
 }  // namespace ag::cpu
+
+namespace ag::cpu {
+
+// A moved object's texels were gathered from another place: the photons' estimates (here
+// unchanged) cannot say how far off they are. queue_moved ranks them as wholly wrong (relative
+// error 1 × pixels): the one covering most pixels goes first, ahead of the changed texels of
+// smaller error × pixels and behind larger ones, and they keep that rank through schedule() until
+// gathered; texels of objects that did not move are not queued.
+TEST(IimSchedule, TexelsOfAMovedObjectRankAsWhollyWrongByThePixelsTheyCover) {
+    ScheduleCase c;
+    Simulated& s = c.s;
+    Iim& map = c.map;
+    const int texels = int(s.scene.atlas.texels.size());
+    const int cube = s.scene.find_object("cube");
+    ASSERT_GE(cube, 0);
+    std::vector<int> on_cube, elsewhere;
+    for (int t = 0; t < texels; ++t)
+        (s.scene.atlas.texels[size_t(t)].object == cube ? on_cube : elsewhere).push_back(t);
+    ASSERT_GT(on_cube.size(), 3u);
+    ASSERT_GT(elsewhere.size(), 3u);
+    std::vector<float> coverage(size_t(texels), 1.0f);
+    coverage[size_t(on_cube[2])] = 30.0f;
+    coverage[size_t(elsewhere[0])] = 50.0f;   // changed: (0.5 / 1)² × 50 = 12.5
+    coverage[size_t(elsewhere[1])] = 200.0f;  // changed: (0.5 / 1)² × 200 = 50
+    map.set_coverage(coverage);
+    const std::vector<float> floors(size_t(texels), 0.0f);
+    std::vector<float> estimate(size_t(texels), 1.0f);
+    map.note_indirect_estimates(estimate, floors);
+    map.gather(c.gather, texels, 0);
+    ASSERT_TRUE(map.complete());
+    map.queue_moved({cube});
+    EXPECT_EQ(map.pending(), int(on_cube.size()));
+    estimate[size_t(elsewhere[0])] = 2.0f;  // the light doubles: 50% too dark until gathered
+    estimate[size_t(elsewhere[1])] = 2.0f;
+    map.note_indirect_estimates(estimate, floors);
+    PhotonMaps& maps = s.sim->maps();
+    for (int surface = 0; surface < int(maps.surface_count()); ++surface)
+        maps.surface(surface).delta_i = 1e9;
+    map.schedule(maps);
+    map.gather(c.gather, 3, 1);
+    const std::vector<int> got = map.last_gathered();
+    ASSERT_EQ(got.size(), 3u);
+    EXPECT_EQ(got[0], elsewhere[1]);  // 50
+    EXPECT_EQ(got[1], on_cube[2]);    // 30: by the photons' estimates (unchanged) it would be last
+    EXPECT_EQ(got[2], elsewhere[0]);  // 12.5
+    // The rest of the cube before the unchanged texels of the other surfaces.
+    map.gather(c.gather, int(on_cube.size()) - 1, 2);
+    for (int t : map.last_gathered())
+        EXPECT_EQ(s.scene.atlas.texels[size_t(t)].object, cube) << "texel " << t;
+}
+
+}  // namespace ag::cpu
