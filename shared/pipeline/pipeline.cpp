@@ -242,7 +242,7 @@ PipelineStats Pipeline::frame() {
     // yet; in a run of edits they are part of every frame, and measured.
     const bool first_edit = edited && !last_frame_edited_;
     last_frame_edited_ = edited;
-    if (edited || frame_ == 1) caustic_frames_since_edit_ = 0;
+    if (edited || frame_ == 1) caustic_frames_since_edit_ = caustic_slices_since_edit_ = 0;
     seen_version_ = scene_.version;
     ++caustic_frames_since_edit_;
     int invalidated = 0;
@@ -284,6 +284,7 @@ PipelineStats Pipeline::frame() {
         const uint64_t revision = caustics_->revision();
         caustics_->render(caustic_positions_, caustic_powers_);
         caustics_drawn_last_ = caustics_->revision() != revision;
+        staged_caustics_drawn_ = true;
         stats.caustic_tiles_filtered = caustics_->tiles_filtered();
     }
     if (!scene_.media.empty()) update_media();
@@ -321,13 +322,20 @@ void Pipeline::hand_over(PipelineStats& stats) {
     work.caustic_ms = w.caustic_ms;
     work.hand_overs = 1;
     add_worker_results(stats, work);
-    caustic_positions_.clear();
-    caustic_powers_.clear();
+    // One slice of caustic photons a hand-over (the workers may run past several frames, so
+    // frames do not count slices); photons other than those staged wait for a drawing.
+    ++caustic_slices_since_edit_;
+    std::vector<glm::vec3> positions, powers;
     for (const cpu::CausticPhoton& p : caustic_tracer_->photons())
         if (p.power != glm::vec3(0.0f)) {
-            caustic_positions_.push_back(p.position);
-            caustic_powers_.push_back(p.power);
+            positions.push_back(p.position);
+            powers.push_back(p.power);
         }
+    if (positions != caustic_positions_ || powers != caustic_powers_) {
+        caustic_positions_ = std::move(positions);
+        caustic_powers_ = std::move(powers);
+        staged_caustics_drawn_ = false;
+    }
     aim_dirty_ = aim_->take_dirty_texels();
     for (int a : aim_dirty_) staged_aim_[size_t(a)] = aim_->radiance()[size_t(a)];
     if (IimMethod* m = iim_method(); m && mode_ == PipelineMode::selective)
@@ -400,8 +408,8 @@ bool Pipeline::converged() const {
     if (cpu_work_.valid()) return false;  // the workers are still at it
     return (photons_->settled() || !uses_photon_maps_) && aim_dirty_.empty() &&
            indirect_->settled() && renderer_->cube_maps_current() &&
-           caustic_frames_since_edit_ > scene_.settings.caustics.frames &&  // +1: drawn next frame
-           !caustics_deferred_;
+           caustic_slices_since_edit_ >= scene_.settings.caustics.frames &&
+           staged_caustics_drawn_ && !caustics_deferred_;
 }
 
 GatherBackend Pipeline::gather_backend() const {
