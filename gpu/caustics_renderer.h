@@ -68,6 +68,9 @@ private:
         bool operator==(const Inputs&) const = default;
     } last_inputs_;
     uint64_t revision_ = 0;
+    // The own G-buffer's last drawing: the scene version it showed (its view is last_view()).
+    bool g_buffer_drawn_ = false;
+    uint64_t g_buffer_version_ = 0;
     bool showing_none_ = false;  // the texture holds zeros from a render without photons
     double filter_ms_ = 0.0, query_ms_ = 0.0;
 };

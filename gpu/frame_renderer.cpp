@@ -1,6 +1,7 @@
 #include "gpu/frame_renderer.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <glm/gtc/matrix_transform.hpp>
 #include <stdexcept>
@@ -919,7 +920,8 @@ void FrameRenderer::render(GLuint iim, GLuint caustics) {
 }
 
 std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirect,
-                                                     const std::vector<LightSample>& lights) {
+                                                     const std::vector<LightSample>& lights,
+                                                     size_t relit_faces) {
     const CubeMapKey& k = cube_key_;
     // A new term texture (or none yet) is rendered whole at once; edits of the scene or the
     // lights, and new revisions of the term, move the generation on.
@@ -947,7 +949,10 @@ std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirec
         for (size_t s = 0; s < cube_maps_.size(); ++s)
             if (cube_maps_[s])
                 for (int f = 0; f < 6; ++f) faces.push_back(int(s) * 6 + f);
-        for (int face : faces) face_generation_[size_t(face)] = generation_;
+        for (int face : faces) {
+            face_generation_[size_t(face)] = generation_;
+            faces_relit_ += face_direct_generation_[size_t(face)] != direct_generation_ ? 1 : 0;
+        }
         return faces;
     }
     // The faces that show an older state follow a share a frame, round robin, all within
@@ -969,22 +974,33 @@ std::vector<int> FrameRenderer::cube_faces_to_render(const IndirectTerm& indirec
     std::rotate(behind.begin(), std::upper_bound(behind.begin(), behind.end(), last_face_),
                 behind.end());
     // A face whose direct light is out of date (after an edit) draws it for every light, the
-    // cost of several faces that follow the indirect term alone: kRelitFacesPerFrame a frame,
-    // so the frames after an edit keep their length (two_rooms at 96², two re-lit faces a
-    // frame: 21-34 ms of the frame's drawing for three frames).
+    // cost of several faces that follow the indirect term alone: `relit_faces` a frame
+    // (kRelitFacesPerFrame), so the frames after an edit keep their length (two_rooms at 96²,
+    // two re-lit faces a frame: 21-34 ms of the frame's drawing for three frames).
     std::vector<int> taken;
     size_t relit = 0;
     for (int face : behind) {
         if (taken.size() >= share) break;
         const bool stale = face_direct_generation_[size_t(face)] != direct_generation_;
-        if (stale && relit >= kRelitFacesPerFrame) continue;
+        if (stale && relit >= relit_faces) continue;
         relit += stale ? 1 : 0;
         taken.push_back(face);
     }
     behind = std::move(taken);
+    faces_relit_ = relit;
+    if (behind.empty()) return behind;
     for (int face : behind) face_generation_[size_t(face)] = generation_;
     last_face_ = behind.back();
     return behind;
+}
+
+size_t FrameRenderer::faces_to_relight() const {
+    size_t n = 0;
+    for (size_t s = 0; s < cube_maps_.size(); ++s)
+        if (cube_maps_[s])
+            for (size_t f = 0; f < 6; ++f)
+                n += face_direct_generation_[s * 6 + f] != direct_generation_ ? 1 : 0;
+    return n;
 }
 
 bool FrameRenderer::cube_maps_current() const {
@@ -996,14 +1012,25 @@ bool FrameRenderer::cube_maps_current() const {
 }
 
 void FrameRenderer::render(const IndirectTerm& indirect, GLuint caustics,
-                           uint64_t caustics_revision) {
+                           uint64_t caustics_revision, size_t relit_faces) {
     const std::vector<LightSample> lights = light_samples(scene_);
     // Cube maps see the scene by its lightmaps; a screen-space term has none to give them. They
     // are kept while the scene, the term and the light samples stay as they were.
     const GLuint iim = indirect.texture;
     const bool in_screen = indirect.space == IndirectSpace::screen;
-    const std::vector<int> faces = cube_faces_to_render(indirect, lights);
-    if (!faces.empty()) render_cube_maps(in_screen ? 0 : iim, lights, faces);
+    faces_relit_ = 0;
+    const std::vector<int> faces = cube_faces_to_render(indirect, lights, relit_faces);
+    cube_faces_ms_ = 0.0;
+    if (!faces.empty()) {
+        const auto t = std::chrono::steady_clock::now();
+        render_cube_maps(in_screen ? 0 : iim, lights, faces);
+        if (faces_relit_ > 0) {  // timed for the scheduler, which plans for re-lit faces
+            gl::Finish();
+            cube_faces_ms_ =
+                std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t)
+                    .count();
+        }
+    }
 
     // The running mean (progressive refinement while nothing changes). The direct term always
     // averages frames of moved area-light samples (direct.accumulate_frames); with

@@ -75,7 +75,10 @@ public:
     void render(GLuint iim, GLuint caustics = 0);
     // The same with the indirect term in lightmap or screen space. `caustics_revision` changes
     // whenever the caustic texture's contents do; 0 = not tracked (changed every frame).
-    void render(const IndirectTerm& indirect, GLuint caustics = 0, uint64_t caustics_revision = 0);
+    // `relit_faces`: at most this many cube-map faces draw their direct light again in this
+    // render (kRelitFacesPerFrame; 0 in a frame that has other drawing to catch up on).
+    void render(const IndirectTerm& indirect, GLuint caustics = 0, uint64_t caustics_revision = 0,
+                size_t relit_faces = kRelitFacesPerFrame);
     FrameImages read_back() const;  // rows top-first, linear radiance
     // The `volume` term from a media method (rows top-first, width × height), composed into
     // every later frame; an empty image sets it back to zero (the frame has no media of its own).
@@ -112,6 +115,13 @@ public:
     // texture is rendered whole at once.
     static constexpr size_t kIndirectRefreshFrames = 4;
     static constexpr size_t kRelitFacesPerFrame = 1;
+    size_t faces_relit() const { return faces_relit_; }  // by the last render
+    // What the last render's cube-map faces took (ms, after glFinish) where it re-lit any; 0
+    // otherwise.
+    double cube_faces_ms() const { return cube_faces_ms_; }
+    // Cube-map faces whose stored direct light is older than the last render's scene and
+    // light samples (they wait for their turn to draw it again).
+    size_t faces_to_relight() const;
     // Frames in the running mean the last render showed (1: that frame alone), and whether the
     // mean is complete (as many frames as the settings ask; later renders keep it as it is).
     int accumulated_frames() const { return mean_frames_; }
@@ -140,7 +150,8 @@ private:
     // The faces to render for this scene version, term and lights: all of them for a new term
     // texture, else a share of those behind (kIndirectRefreshFrames), else none.
     std::vector<int> cube_faces_to_render(const IndirectTerm& indirect,
-                                          const std::vector<LightSample>& lights);
+                                          const std::vector<LightSample>& lights,
+                                          size_t relit_faces);
     glm::vec3 cube_centre(size_t object) const;  // where its cube maps are rendered from (world)
     // Adds each light's direct light on the diffuse objects into `draw_buffer` of the bound
     // framebuffer, outside its shadow volumes (the depth buffer must hold the scene): forward,
@@ -269,6 +280,8 @@ private:
     bool mean_complete_ = false;
     bool drew_ = false;
     bool drew_direct_ = false;
+    size_t faces_relit_ = 0;
+    double cube_faces_ms_ = 0.0;
     DirectPass direct_pass_ = DirectPass::automatic;
     size_t diffuse_triangles_ = 0;  // of the diffuse objects, which the forward passes draw
 };

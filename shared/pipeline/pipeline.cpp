@@ -242,21 +242,42 @@ PipelineStats Pipeline::frame() {
     // yet; in a run of edits they are part of every frame, and measured.
     const bool first_edit = edited && !last_frame_edited_;
     last_frame_edited_ = edited;
-    if (edited || frame_ == 1) caustic_frames_since_edit_ = caustic_slices_since_edit_ = 0;
+    if (edited || frame_ == 1) caustic_slices_since_edit_ = 0;
     seen_version_ = scene_.version;
-    ++caustic_frames_since_edit_;
     int invalidated = 0;
     if (mode_ == PipelineMode::full) {
         if (uses_photon_maps_) invalidated = photons_->invalidate_all();
         indirect_->invalidate_all();
     }
-    // After an edit the caustic photons are traced again over caustics.frames frames (each
-    // drawn the frame after) and the cube-map faces re-lit one a frame: drawing catches up.
-    const bool catching_up =
-        !edited && edits_seen_ && caustic_frames_since_edit_ <= scene_.settings.caustics.frames + 1;
+    // After an edit the caustic photons are traced again, a slice a hand-over, each drawn after
+    // it arrives, and the cube-map faces re-lit one a frame: drawing catches up until the last
+    // slice is drawn and the last face re-lit. Counted by what is left, not by frames: the
+    // workers may hand over later than a slice a frame, and the frame that drew the last slice
+    // with a re-lit face, planned as a settled frame, ran to 41-48 ms on two_rooms' door.
+    const bool catching_up = !edited && edits_seen_ &&
+                             (caustic_slices_since_edit_ < scene_.settings.caustics.frames ||
+                              !staged_caustics_drawn_ || renderer_->faces_to_relight() > 0);
     edits_seen_ = edits_seen_ || edited;
-    const FrameBudgets budgets = scheduler_.budgets(
-        scene_.settings, int(scene_.atlas.texels.size()), first_edit, catching_up);
+    // With a frame-time target, drawing the caustics again waits a frame in the edit's frame
+    // (its photons are still the old ones; the new scene's first slice arrives with the next
+    // frame) and in every other frame while they catch up (a slice re-traced each frame): on
+    // two_rooms at 96² a drawing costs 9-12 ms of the 33. The term lags by at most a frame.
+    // Decided before the budgets, which plan for a drawing where one is expected.
+    const bool timed = scene_.settings.schedule.frame_ms > 0.0f && mode_ != PipelineMode::full;
+    caustics_deferred_ = timed && (first_edit || (catching_up && caustics_drawn_last_));
+    // The caustics are drawn again when the staged photons are new (a slice handed over between
+    // gather chunks may make them so during the frame). While drawing catches up after an edit,
+    // a frame that draws them leaves the cube-map faces' direct light to the next (each costs
+    // about as much as the caustics: 10-12 ms of two_rooms' frame at 96²), so no frame pays
+    // for both.
+    const bool caustics_expected = !caustics_deferred_ && !staged_caustics_drawn_;
+    const int relit_expected =
+        first_edit || (timed && catching_up && caustics_expected)
+            ? 0
+            : int(std::min(gpu::FrameRenderer::kRelitFacesPerFrame, renderer_->faces_to_relight()));
+    const FrameBudgets budgets =
+        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit,
+                           catching_up, caustics_expected, relit_expected);
     if (!workers_busy) start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.
@@ -264,21 +285,26 @@ PipelineStats Pipeline::frame() {
     const bool aim_changed = !aim_dirty_.empty();
     aim_texture_.update(staged_aim_, aim_dirty_);
     aim_dirty_.clear();
-    IndirectInputs in{frame_, aim_changed, mode_, budgets.iim_texels};
-    in.work_ms = budgets.gather_ms;
-    // Selective takes the photon work over the moment it is done; the baselines at the end of
-    // the frame, as brute force does.
-    if (mode_ == PipelineMode::selective && budgets.gather_ms > 0.0)
-        in.poll_hand_over = [this, &stats] { return hand_over_if_done(stats); };
-    indirect_->update(in, stats);
-    stats.gather_ms = ms_since(t);
+    auto update_indirect = [&](int texels, double work_ms) {
+        const Clock::time_point t0 = Clock::now();
+        IndirectInputs in{frame_, aim_changed, mode_, texels};
+        in.work_ms = work_ms;
+        // Selective takes the photon work over the moment it is done; the baselines at the end
+        // of the frame, as brute force does.
+        if (mode_ == PipelineMode::selective && work_ms > 0.0)
+            in.poll_hand_over = [this, &stats] { return hand_over_if_done(stats); };
+        indirect_->update(in, stats);
+        stats.gather_ms = ms_since(t0);
+    };
+    // The edit's frame of the IIM method draws first and gathers with what the drawing left of
+    // the target: its drawing (every light's shadows anew, the moved geometry) is the frame's
+    // least predictable (two_rooms' door at 96²: 22-29 ms against 9-12 ms a settled frame, so
+    // the frame ran to 41-45 ms), and what it gathers reads the AIMs of before the edit anyway
+    // (the workers have just started on it): its texels show a frame later.
+    const bool draw_first =
+        timed && first_edit && iim_method() != nullptr && budgets.gather_ms > 0.0;
+    if (!draw_first) update_indirect(budgets.iim_texels, budgets.gather_ms);
     t = Clock::now();
-    // With a frame-time target, drawing the caustics again waits a frame in the edit's frame
-    // (its photons are still the old ones; the new scene's first slice arrives with the next
-    // frame) and in every other frame while they catch up (a slice re-traced each frame): on
-    // two_rooms at 96² a drawing costs 9-12 ms of the 33. The term lags by at most a frame.
-    const bool timed = scene_.settings.schedule.frame_ms > 0.0f && mode_ != PipelineMode::full;
-    caustics_deferred_ = timed && (first_edit || (catching_up && caustics_drawn_last_));
     caustics_drawn_last_ = false;
     if (!caustics_deferred_) {
         const uint64_t revision = caustics_->revision();
@@ -286,11 +312,26 @@ PipelineStats Pipeline::frame() {
         caustics_drawn_last_ = caustics_->revision() != revision;
         staged_caustics_drawn_ = true;
         stats.caustic_tiles_filtered = caustics_->tiles_filtered();
+        if (caustics_drawn_last_) {
+            gpu::gl::Finish();
+            stats.caustics_draw_ms = ms_since(t);
+        }
     }
+    stats.caustics_drawn = caustics_drawn_last_;
     if (!scene_.media.empty()) update_media();
-    renderer_->render(indirect_->term(), caustics_->texture(), caustics_->revision());
+    const size_t relit_faces =
+        timed && catching_up && caustics_drawn_last_ ? 0 : gpu::FrameRenderer::kRelitFacesPerFrame;
+    renderer_->render(indirect_->term(), caustics_->texture(), caustics_->revision(), relit_faces);
     gpu::gl::Finish();
     stats.draw_ms = ms_since(t);
+    stats.cube_faces_relit = int(renderer_->faces_relit());
+    stats.cube_faces_ms = renderer_->cube_faces_ms();
+    FrameBudgets planned = budgets;
+    if (draw_first) {
+        planned = scheduler_.after_drawing(scene_.settings, int(scene_.atlas.texels.size()),
+                                           ms_since(start));
+        update_indirect(planned.iim_texels, planned.gather_ms);
+    }
     stats.drawn = renderer_->drew();
     stats.drawn_direct = renderer_->drew_direct();
     if (on_gl_drawn_) on_gl_drawn_();
@@ -304,9 +345,9 @@ PipelineStats Pipeline::frame() {
     // An edit's wait for the workers came before this frame, on its behalf.
     stats.wait_ms = ms_since(t) + carried_wait_ms;
     stats.frame_ms = ms_since(start) + carried_wait_ms;
-    stats.budget_iim_texels = budgets.iim_texels;
+    stats.budget_iim_texels = planned.iim_texels;
     stats.budget_photons = budgets.retrace_photons;
-    stats.budget_gather_ms = budgets.gather_ms;
+    stats.budget_gather_ms = planned.gather_ms;
     scheduler_.measure(stats);
     return stats;
 }

@@ -167,8 +167,7 @@ private:
     // settings.caustics.frames frames have passed since it last changed, and are drawn a frame
     // after they are traced.
     uint64_t seen_version_ = 0;
-    bool last_frame_edited_ = false;  // the last frame() saw a scene edit
-    int caustic_frames_since_edit_ = 0;
+    bool last_frame_edited_ = false;      // the last frame() saw a scene edit
     int caustic_slices_since_edit_ = 0;   // caustic slices handed over since the last edit
     bool staged_caustics_drawn_ = false;  // the staged caustic photons were drawn
     bool edits_seen_ = false;           // a frame() saw a scene edit (the frames after it catch up)

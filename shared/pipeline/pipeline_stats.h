@@ -13,6 +13,14 @@ struct PipelineStats {
     cpu::PhotonFrameStats photons;
     cpu::CausticStats caustics;
     int caustic_tiles_filtered = 0;
+    // The caustics were drawn again (other photons, view or scene than their last drawing), in
+    // caustics_draw_ms of draw_ms.
+    bool caustics_drawn = false;
+    double caustics_draw_ms = 0;
+    // Cube-map faces that drew their direct light again (after an edit), and what the faces
+    // drawn in a frame that re-lit any took, of draw_ms.
+    int cube_faces_relit = 0;
+    double cube_faces_ms = 0;
     int iim_texels_gathered = 0;
     int iim_texels_pending = 0;
     int iim_texels_invalid = 0;  // back-face texels repaired from neighbours

@@ -18,7 +18,7 @@ int fit(double ms, const RunningCost& cost, int fallback) {
 }  // namespace
 
 FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_total, bool edited,
-                                     bool catching_up) const {
+                                     bool catching_up, bool draws_caustics, int relit_faces) const {
     FrameBudgets b;
     const double target = settings.schedule.frame_ms;
     if (target <= 0.0) {
@@ -30,7 +30,10 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     // GL thread: what drawing leaves of the target goes to gathering (at least a share of it).
     // Until a cost is known, gather the fixed count once to measure it.
     const double usual = draw_ms_.known() ? draw_ms_.value() : 0.5 * target;
-    const double draw = catching_up ? std::max({usual, last_drawing_[0], last_drawing_[1]}) : usual;
+    const double own = catching_up ? std::max({usual, last_drawing_[0], last_drawing_[1]}) : usual;
+    const double draw =
+        own + (draws_caustics && caustics_draw_ms_.known() ? caustics_draw_ms_.value() : 0.0) +
+        (relit_face_ms_.known() ? relit_faces * relit_face_ms_.value() : 0.0);
     const double share = std::max(target - draw, kMinGatherShare * target);
     // The frame of an edit draws every light's shadows anew (what frames that did so cost:
     // priming's first frames, earlier edits) and moved geometry besides (shadow volumes, cube-map
@@ -54,6 +57,20 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
         b.retrace_photons = std::min(b.retrace_photons, settings.photons.retrace_budget);
         b.aim_surfaces = settings.aim.surfaces_per_frame;
     }
+    return b;
+}
+
+FrameBudgets FrameScheduler::after_drawing(const Settings& settings, int iim_texels_total,
+                                           double elapsed_ms) const {
+    FrameBudgets b = budgets(settings, iim_texels_total);
+    const double target = settings.schedule.frame_ms;
+    if (target <= 0.0) return b;
+    b.gather_ms = std::max(target - elapsed_ms, kMinGatherShare * target);
+    b.iim_texels =
+        std::clamp(fit(b.gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
+                   std::max(1, iim_texels_total));
+    if (settings.schedule.counts_cap)
+        b.iim_texels = std::min(b.iim_texels, settings.gather.texels_per_frame);
     return b;
 }
 
@@ -94,7 +111,13 @@ void FrameScheduler::measure(const PipelineStats& s) {
     // cost is learnt from frames that drew, or the first frame after a quiet spell (an edit's)
     // would plan its gathering for a frame that costs nothing to draw (two_rooms: 9 ms against
     // 20 ms).
-    const double drawing = s.draw_ms + std::max(0.0, s.gather_ms - gather_part);
+    // The caustics' drawing and the re-lit cube-map faces are learnt apart: only some frames
+    // draw them.
+    const double relit_ms = s.cube_faces_relit > 0 ? s.cube_faces_ms : 0.0;
+    const double drawing = std::max(0.0, s.draw_ms - s.caustics_draw_ms - relit_ms) +
+                           std::max(0.0, s.gather_ms - gather_part);
+    if (s.caustics_drawn && s.caustics_draw_ms > 0.0) caustics_draw_ms_.add(s.caustics_draw_ms);
+    if (s.cube_faces_relit > 0) relit_face_ms_.add(relit_ms / s.cube_faces_relit);
     // The first frame compiles the shaders (llvmpipe compiles at a program's first draw) and
     // fills the textures: on bumpy_133k_box it drew in 156 ms, every later frame that drew the
     // direct light anew in 27-48 ms, and the edit's frame planned for 156 ms of drawing.

@@ -53,9 +53,16 @@ public:
     // drawn every other frame, and the cube-map faces re-lit one a frame) drawing stays above the
     // running estimate too: they plan for the largest of that estimate and the last two frames'
     // drawing (two_rooms' door at 96²: 28-46 ms of drawing in the three frames after the edit's,
-    // planned as 16-19 ms).
+    // planned as 16-19 ms). The caustics' drawing and the cube-map faces that draw their direct
+    // light again are learnt apart from the frame's own drawing: a frame that is to draw them
+    // (`draws_caustics`, `relit_faces`) plans for what they cost on top.
     FrameBudgets budgets(const Settings& settings, int iim_texels_total, bool edited = false,
-                         bool catching_up = false) const;
+                         bool catching_up = false, bool draws_caustics = false,
+                         int relit_faces = 0) const;
+    // The GL thread's gathering for a frame that has drawn already, `elapsed_ms` into it: what
+    // is left of the target, at least kMinGatherShare of it (Pipeline: the edit's frame).
+    FrameBudgets after_drawing(const Settings& settings, int iim_texels_total,
+                               double elapsed_ms) const;
     static constexpr double kEditDrawFactor = 2.0;
     // When drawing alone overruns the target, gathering still gets this share of it: the frame
     // rate cannot hold there, and the picture keeps converging.
@@ -71,18 +78,22 @@ public:
               double aim_ms);
 
     const RunningCost& draw_ms() const { return draw_ms_; }
+    const RunningCost& caustics_draw_ms() const { return caustics_draw_ms_; }
+    const RunningCost& relit_face_ms() const { return relit_face_ms_; }
     const RunningCost& direct_draw_ms() const { return direct_draw_ms_; }
     const RunningCost& gather_ms_per_texel() const { return gather_ms_per_texel_; }
     const RunningCost& photon_ms() const { return photon_ms_; }
     const RunningCost& aim_ms_per_texel() const { return aim_ms_per_texel_; }
 
 private:
-    RunningCost draw_ms_;                  // GL thread, besides gathering: caustics, frame, uploads
-    RunningCost direct_draw_ms_;           // the same, frames that drew the direct light anew
-    RunningCost gather_ms_per_texel_;      // GL thread, per IIM texel, with the backend in use
-    RunningCost photon_ms_;                // workers, per photon traced (verified or re-traced)
-    RunningCost aim_ms_per_texel_;         // workers, per AIM texel rebuilt
-    RunningCost caustic_ms_;               // workers, caustic photons (a fixed share per frame)
+    RunningCost draw_ms_;              // GL thread, besides gathering and caustics: frame, uploads
+    RunningCost caustics_draw_ms_;     // GL thread, a drawing of the caustics
+    RunningCost relit_face_ms_;        // GL thread, a cube-map face re-lit
+    RunningCost direct_draw_ms_;       // the same, frames that drew the direct light anew
+    RunningCost gather_ms_per_texel_;  // GL thread, per IIM texel, with the backend in use
+    RunningCost photon_ms_;            // workers, per photon traced (verified or re-traced)
+    RunningCost aim_ms_per_texel_;     // workers, per AIM texel rebuilt
+    RunningCost caustic_ms_;           // workers, caustic photons (a fixed share per frame)
     double last_drawing_[2] = {0.0, 0.0};  // the last two measured frames' drawing (ms)
 };
 

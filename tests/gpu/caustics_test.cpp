@@ -142,6 +142,25 @@ TEST_F(CausticsTest, TheSameInputsDrawNothingAndAnyChangeDrawsAgain) {
     caustics.render(positions, powers, true);
     EXPECT_NE(caustics.revision(), before_filter);
     EXPECT_EQ(caustics.read_radiance(), fresh());
+    // Photons elsewhere over the same scene and view (the next slice after an edit): the kept
+    // G-buffer's stencil marks are cleared, so only the new photons' tiles are filtered.
+    for (glm::vec3& p : positions) p.x += 2.0f;
+    caustics.render(positions, powers, true);
+    const std::vector<glm::vec3> shifted = caustics.read_radiance();
+    const int shifted_tiles = caustics.tiles_filtered();
+    EXPECT_NE(shifted, moved);
+    {
+        CausticsRenderer other(scene, meshes, 128, 128);
+        other.render(positions, powers, true);
+        EXPECT_EQ(shifted, other.read_radiance());
+        EXPECT_EQ(shifted_tiles, other.tiles_filtered());
+    }
+    // The scene changed under the same photons and view (the floor's albedo, which the
+    // G-buffer holds): drawn again.
+    set_albedo(scene, 0, glm::vec3(0.2f, 0.7f, 0.3f));
+    caustics.render(positions, powers, true);
+    EXPECT_NE(caustics.read_radiance(), shifted);
+    EXPECT_EQ(caustics.read_radiance(), fresh());
 }
 
 TEST_F(CausticsTest, SummedWorldRadianceHoldsWhenTheCameraZoomsOut) {

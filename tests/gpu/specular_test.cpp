@@ -272,6 +272,24 @@ TEST_F(SpecularTest, CubeMapsAreKeptUntilWhatTheySeeChanges) {
     EXPECT_GT(lit_up, darker);
     FrameRenderer fresh2(scene, meshes, 32, 32);
     EXPECT_DOUBLE_EQ(specular(fresh2, 2), lit_up);
+    // A frame that has other drawing to catch up on (the pipeline's caustics) re-lights no face
+    // (relit_faces 0): the faces wait, counted, for the next frame; each other frame re-lights
+    // kRelitFacesPerFrame.
+    set_albedo(scene, scene.find_object("floor"), glm::vec3(0.6f));
+    specular(renderer, 2);  // the edit's frame
+    EXPECT_EQ(renderer.faces_relit(), 0u);
+    const size_t stale = renderer.faces_to_relight();
+    EXPECT_EQ(stale, 6u);
+    for (int f = 0; f < 3; ++f) {
+        renderer.render(IndirectTerm{iim.id(), IndirectSpace::lightmap, 2}, 0, 0, 0);
+        EXPECT_EQ(renderer.faces_relit(), 0u);
+        EXPECT_EQ(renderer.faces_to_relight(), stale);
+        EXPECT_EQ(renderer.cube_faces_ms(), 0.0);
+    }
+    specular(renderer, 2);
+    EXPECT_EQ(renderer.faces_relit(), FrameRenderer::kRelitFacesPerFrame);
+    EXPECT_EQ(renderer.faces_to_relight(), stale - FrameRenderer::kRelitFacesPerFrame);
+    EXPECT_GT(renderer.cube_faces_ms(), 0.0);
 }
 
 }  // namespace ag::gpu

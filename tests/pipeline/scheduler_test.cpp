@@ -78,6 +78,43 @@ TEST(FrameScheduler, FramesCatchingUpAfterAnEditPlanForTheLastFramesDrawing) {
                      scheduler.budgets(settings, 100000).gather_ms);
 }
 
+// The caustics' drawing and the cube-map faces that draw their direct light again come in some
+// frames only: learnt apart from the frame's own drawing, they are planned for where a frame is
+// to draw them and nowhere else. A frame that has drawn already gathers with what is left.
+TEST(FrameScheduler, CausticsAndReLitFacesArePlannedForApart) {
+    Settings settings;
+    settings.schedule.frame_ms = 33.0f;
+    FrameScheduler scheduler;
+    for (int f = 0; f < 20; ++f) {
+        PipelineStats s = measured(10.0, 100, 10.0, 1000, 5.0, 100, 1.0);  // 0.1 ms a texel
+        if (f % 2 == 0) {  // every other frame draws the caustics (6 ms of its 16)
+            s.draw_ms += 6.0;
+            s.caustics_drawn = true;
+            s.caustics_draw_ms = 6.0;
+        } else {  // the others re-lit two faces (8 ms of their 18)
+            s.draw_ms += 8.0;
+            s.cube_faces_relit = 2;
+            s.cube_faces_ms = 8.0;
+        }
+        scheduler.measure(s);
+    }
+    EXPECT_NEAR(scheduler.draw_ms().value(), 10.0, 1e-9) << "the frame's own drawing";
+    EXPECT_NEAR(scheduler.caustics_draw_ms().value(), 6.0, 1e-9);
+    EXPECT_NEAR(scheduler.relit_face_ms().value(), 4.0, 1e-9);
+    EXPECT_NEAR(scheduler.budgets(settings, 100000).gather_ms, 33.0 - 10.0, 1e-9);
+    EXPECT_NEAR(scheduler.budgets(settings, 100000, false, false, true).gather_ms, 33.0 - 16.0,
+                1e-9);
+    EXPECT_NEAR(scheduler.budgets(settings, 100000, false, false, false, 1).gather_ms, 33.0 - 14.0,
+                1e-9);
+    EXPECT_NEAR(scheduler.budgets(settings, 100000, false, false, true).iim_texels, 170, 1);
+    // Drawn already, 20 ms into the frame: 13 ms are left; 40 ms into it, the least share.
+    const FrameBudgets after = scheduler.after_drawing(settings, 100000, 20.0);
+    EXPECT_NEAR(after.gather_ms, 13.0, 1e-9);
+    EXPECT_NEAR(after.iim_texels, 130, 1);
+    EXPECT_NEAR(scheduler.after_drawing(settings, 100000, 40.0).gather_ms,
+                FrameScheduler::kMinGatherShare * 33.0, 1e-9);
+}
+
 TEST(FrameScheduler, ATargetIsFilledByMeasuredCost) {
     Settings settings;
     settings.schedule.frame_ms = 33.0f;
