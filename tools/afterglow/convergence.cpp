@@ -218,6 +218,8 @@ ConvergenceRun run_convergence(Scene scene, const std::string& script_path, Pipe
         r.gather_plan_ms = st.budget_gather_ms;
         r.photon_ms = st.photon_ms, r.aim_ms = st.aim_ms;
         r.early_hand_over = st.early_hand_over;
+        r.caustics_draw_ms = st.caustics_draw_ms;
+        r.faces_relit = st.cube_faces_relit;
         r.photons_grown = uint64_t(st.photons.photons_grown);
         // A frame whose workers handed nothing over has no photon frame (frame 0): the sets are
         // what the last hand-over left.
@@ -301,7 +303,8 @@ std::string convergence_csv(const ConvergenceRun& run) {
     csv << "method,frame,wall_s,frame_ms,edited,relmse,rmse,ssim,groups_invalidated,photons_"
            "retraced,aim_texels,iim_texels,iim_pending,rays_traced,rays_reused,workers_behind,"
            "gather_ms,draw_ms,wait_ms,"
-           "gather_plan_ms,photon_ms,aim_ms,early_hand_over,photons_grown,layers,converged\n";
+           "gather_plan_ms,photon_ms,aim_ms,early_hand_over,photons_grown,layers,converged,"
+           "caustics_draw_ms,faces_relit\n";
     // The pipeline mode names the IIM's runs; another indirect method's curve is named after it
     // (and its mode, unless selective) so both join one methods plot.
     std::string method = kPipelineModeNames[size_t(run.mode)];
@@ -316,7 +319,7 @@ std::string convergence_csv(const ConvergenceRun& run) {
             << ',' << (r.workers_behind ? 1 : 0) << ',' << r.gather_ms << ',' << r.draw_ms << ','
             << r.wait_ms << ',' << r.gather_plan_ms << ',' << r.photon_ms << ',' << r.aim_ms << ','
             << (r.early_hand_over ? 1 : 0) << ',' << r.photons_grown << ',' << r.layers << ','
-            << (r.converged ? 1 : 0) << "\n";
+            << (r.converged ? 1 : 0) << ',' << r.caustics_draw_ms << ',' << r.faces_relit << "\n";
     return csv.str();
 }
 

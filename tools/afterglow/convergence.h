@@ -63,6 +63,10 @@ struct FrameRecord {
     uint64_t photons_grown = 0;  // photons traced for the next refinement layer
     int layers = 1;              // photon sets in the maps (photons.refine_layers)
     bool converged = false;      // Pipeline::converged() after the frame
+    // Of draw_ms: the caustics drawn again (0 when kept), and the cube-map faces that drew their
+    // direct light again (after an edit, one a frame).
+    double caustics_draw_ms = 0.0;
+    int faces_relit = 0;
 };
 
 struct SettleAnalysis {

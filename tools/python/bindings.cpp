@@ -156,6 +156,10 @@ py::dict stats_dict(const PipelineStats& s) {
     d["draw_ms"] = s.draw_ms;
     d["wait_ms"] = s.wait_ms;
     d["early_hand_over"] = s.early_hand_over;
+    d["caustics_drawn"] = s.caustics_drawn;
+    d["caustics_draw_ms"] = s.caustics_draw_ms;
+    d["cube_faces_relit"] = s.cube_faces_relit;
+    d["cube_faces_ms"] = s.cube_faces_ms;
     d["drawn"] = s.drawn;
     d["photons_verified"] = s.photons.photons_verified;
     d["groups_invalidated"] = s.photons.groups_invalidated;
