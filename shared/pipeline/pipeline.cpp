@@ -242,7 +242,8 @@ PipelineStats Pipeline::frame() {
     // yet; in a run of edits they are part of every frame, and measured.
     const bool first_edit = edited && !last_frame_edited_;
     last_frame_edited_ = edited;
-    if (edited || frame_ == 1) caustic_slices_since_edit_ = 0;
+    if (edited || frame_ == 1) caustic_slices_since_edit_ = frames_since_edit_ = 0;
+    ++frames_since_edit_;
     seen_version_ = scene_.version;
     int invalidated = 0;
     if (mode_ == PipelineMode::full) {
@@ -265,19 +266,31 @@ PipelineStats Pipeline::frame() {
     // Decided before the budgets, which plan for a drawing where one is expected.
     const bool timed = scene_.settings.schedule.frame_ms > 0.0f && mode_ != PipelineMode::full;
     caustics_deferred_ = timed && (first_edit || (catching_up && caustics_drawn_last_));
-    // The caustics are drawn again when the staged photons are new (a slice handed over between
-    // gather chunks may make them so during the frame). While drawing catches up after an edit,
-    // a frame that draws them leaves the cube-map faces' direct light to the next (each costs
-    // about as much as the caustics: 10-12 ms of two_rooms' frame at 96²), so no frame pays
-    // for both.
-    const bool caustics_expected = !caustics_deferred_ && !staged_caustics_drawn_;
+    // The caustics are drawn again when the staged photons are new: staged since their last
+    // drawing, or handed over during this frame's gathering (selective takes the photon work
+    // over between chunks) while the slices still hold photons of before the last edit. Planning
+    // only for the first, selective's frames during cornell's continuous move drew caustics
+    // they had not planned for, ran long, and its error lagged the move more than full-budget's.
+    // While drawing catches up after an edit, a frame that draws them leaves the cube-map faces'
+    // direct light to the next (each costs about as much as the caustics: 10-12 ms of
+    // two_rooms' frame at 96²), so no frame pays for both.
+    const bool caustics_expected =
+        !caustics_deferred_ &&
+        (!staged_caustics_drawn_ || caustic_slices_since_edit_ < scene_.settings.caustics.frames);
     const int relit_expected =
         first_edit || (timed && catching_up && caustics_expected)
             ? 0
             : int(std::min(gpu::FrameRenderer::kRelitFacesPerFrame, renderer_->faces_to_relight()));
+    // The scheduler's hedge for the frames after an edit (planning for the last frames'
+    // drawing where it was larger than the estimate: the AIM rebuild on the workers slows the
+    // GL thread's passes) covers the first caustics.frames + 1 of them; the caustics and
+    // re-lit faces that come later are planned for by their own costs. Hedging for all of
+    // catching up held gathering at its least share up to 16 frames after an edit, and
+    // selective's error lagged cornell's continuous move more than full-budget's.
+    const bool hedge = catching_up && frames_since_edit_ <= scene_.settings.caustics.frames + 1;
     const FrameBudgets budgets =
-        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit,
-                           catching_up, caustics_expected, relit_expected);
+        scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit, hedge,
+                           caustics_expected, relit_expected);
     if (!workers_busy) start_cpu_work(budgets);
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.

@@ -169,6 +169,7 @@ private:
     uint64_t seen_version_ = 0;
     bool last_frame_edited_ = false;      // the last frame() saw a scene edit
     int caustic_slices_since_edit_ = 0;   // caustic slices handed over since the last edit
+    int frames_since_edit_ = 0;           // frames since the last edit's, that one counted
     bool staged_caustics_drawn_ = false;  // the staged caustic photons were drawn
     bool edits_seen_ = false;           // a frame() saw a scene edit (the frames after it catch up)
     bool caustics_deferred_ = false;    // the last frame kept the caustics drawn before it
