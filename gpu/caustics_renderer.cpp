@@ -238,6 +238,7 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
         if (same) {
             gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
             gl::StencilMask(0xFF);
+            gl::ClearStencil(0);
             gl::Clear(GL_STENCIL_BUFFER_BIT);
         } else {
             own_g_buffer_->render();
@@ -252,9 +253,14 @@ void CausticsRenderer::render(const std::vector<glm::vec3>& positions,
     const GLuint surface = g_buffer_->texture(GBufferTarget::surface);
 
     // 2. Photons as points, additive float RGB, each marking the stencil.
+    // Its own state, whatever the caller's passes left: a kept G-buffer does not set it (the
+    // viewer's clear colour filled the splats, and the caustics covered the image).
     gl::BindFramebuffer(GL_FRAMEBUFFER, splat_fbo_.get());
     const GLenum one = GL_COLOR_ATTACHMENT0;
     gl::DrawBuffers(1, &one);
+    gl::Viewport(0, 0, width_, height_);
+    gl::ColorMask(GL_TRUE, GL_TRUE, GL_TRUE, GL_TRUE);
+    gl::ClearColor(0.0f, 0.0f, 0.0f, 0.0f);
     gl::Clear(GL_COLOR_BUFFER_BIT);
     gl::DepthMask(GL_FALSE);
     gl::Disable(GL_DEPTH_TEST);  // visibility is decided per photon against the positions

@@ -145,6 +145,11 @@ TEST_F(CausticsTest, TheSameInputsDrawNothingAndAnyChangeDrawsAgain) {
     // Photons elsewhere over the same scene and view (the next slice after an edit): the kept
     // G-buffer's stencil marks are cleared, so only the new photons' tiles are filtered.
     for (glm::vec3& p : positions) p.x += 2.0f;
+    // Whatever state the caller's passes left (the viewer clears to grey, draws its window): a
+    // kept G-buffer sets none of it.
+    gl::ClearColor(0.5f, 0.5f, 0.5f, 1.0f);
+    gl::ClearStencil(3);
+    gl::Viewport(0, 0, 7, 5);
     caustics.render(positions, powers, true);
     const std::vector<glm::vec3> shifted = caustics.read_radiance();
     const int shifted_tiles = caustics.tiles_filtered();
