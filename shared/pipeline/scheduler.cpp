@@ -43,9 +43,7 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
     const double gather_ms =
         edited ? std::max(target - edit_draw, kMinGatherShare * target) : share;
     b.gather_ms = gather_ms;
-    b.iim_texels =
-        std::clamp(fit(gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
-                   std::max(1, iim_texels_total));
+    b.iim_texels = gather_texels(settings, gather_ms, iim_texels_total);
     // Workers: photons first, AIMs with the rest (aim_texels_left, measured as they go).
     b.worker_ms = kWorkerShare * target;
     const double caustics = caustic_ms_.known() ? caustic_ms_.value() : 0.0;
@@ -53,7 +51,6 @@ FrameBudgets FrameScheduler::budgets(const Settings& settings, int iim_texels_to
         std::max(1, fit(b.worker_ms - caustics, photon_ms_, settings.photons.retrace_budget));
     b.aim_surfaces = FrameBudgets::kUnlimited;
     if (settings.schedule.counts_cap) {
-        b.iim_texels = std::min(b.iim_texels, settings.gather.texels_per_frame);
         b.retrace_photons = std::min(b.retrace_photons, settings.photons.retrace_budget);
         b.aim_surfaces = settings.aim.surfaces_per_frame;
     }
@@ -66,12 +63,15 @@ FrameBudgets FrameScheduler::after_drawing(const Settings& settings, int iim_tex
     const double target = settings.schedule.frame_ms;
     if (target <= 0.0) return b;
     b.gather_ms = std::max(target - elapsed_ms, kMinGatherShare * target);
-    b.iim_texels =
-        std::clamp(fit(b.gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame), 1,
-                   std::max(1, iim_texels_total));
-    if (settings.schedule.counts_cap)
-        b.iim_texels = std::min(b.iim_texels, settings.gather.texels_per_frame);
+    b.iim_texels = gather_texels(settings, b.gather_ms, iim_texels_total);
     return b;
+}
+
+int FrameScheduler::gather_texels(const Settings& settings, double gather_ms,
+                                  int iim_texels_total) const {
+    const int n = std::clamp(fit(gather_ms, gather_ms_per_texel_, settings.gather.texels_per_frame),
+                             1, std::max(1, iim_texels_total));
+    return settings.schedule.counts_cap ? std::min(n, settings.gather.texels_per_frame) : n;
 }
 
 int FrameScheduler::aim_texels_left(const Settings& settings, double elapsed_ms) const {

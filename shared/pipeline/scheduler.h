@@ -86,6 +86,10 @@ public:
     const RunningCost& aim_ms_per_texel() const { return aim_ms_per_texel_; }
 
 private:
+    // IIM texels that fit `gather_ms` at the measured cost (at least one, at most all; capped
+    // by the fixed count with counts_cap).
+    int gather_texels(const Settings& settings, double gather_ms, int iim_texels_total) const;
+
     RunningCost draw_ms_;              // GL thread, besides gathering and caustics: frame, uploads
     RunningCost caustics_draw_ms_;     // GL thread, a drawing of the caustics
     RunningCost relit_face_ms_;        // GL thread, a cube-map face re-lit
