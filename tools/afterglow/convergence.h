@@ -31,7 +31,9 @@ struct ReferenceRequest {
 
 // The pm (or pt) reference of `scene`'s state after `script_path` (may be empty) has run for
 // `frames` frames on a copy, at the scene camera's size: rendered into CACHE/NAME-HASH.exr (with
-// every component beside it) unless already there; HASH covers everything the image depends on.
+// every component beside it) unless already there; HASH covers everything the image depends on,
+// and a small render of the scene by this build's renderer (a cache another build filled whose
+// renderer draws differently is not read back).
 // Returns the full image's path.
 std::string cached_reference(const Scene& scene, const std::string& script_path, int frames,
                              const ReferenceRequest& request);
