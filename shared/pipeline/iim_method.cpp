@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
+#include <limits>
 #include <string>
 
 #include "gpu/gl.h"
@@ -140,6 +141,7 @@ void IimMethod::update(const IndirectInputs& in, PipelineStats& stats) {
     stats.iim_texels_gathered = s.gathered;
     stats.iim_texels_invalid = s.invalid;
     stats.texel_gather_ms = texel_gather_ms_;
+    stats.gather_wait_ms = gather_wait_ms_;
     // New values fade in over blend_frames so the thesis's trickle of ≤ 20 texels a frame never
     // pops. With a frame-time target the scheduler updates as much as fits, by priority, and the
     // values show at once, as brute force shows them: the light follows the edit without lag.
@@ -156,7 +158,7 @@ cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget,
     auto ms_since = [](Clock::time_point t) {
         return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
     };
-    texel_gather_ms_ = 0.0;
+    texel_gather_ms_ = gather_wait_ms_ = 0.0;
     if (in.work_ms <= 0.0 || in.mode == PipelineMode::full) {
         const Clock::time_point t = Clock::now();
         const cpu::IimFrameStats s = iim_.gather(gatherer(backend_), budget, in.frame);
@@ -188,13 +190,32 @@ cpu::IimFrameStats IimMethod::gather(const IndirectInputs& in, int budget,
         total.refined += s.refined;
         total.pending = s.pending;
         gathered_.insert(gathered_.end(), iim_.last_gathered().begin(), iim_.last_gathered().end());
-        if (s.gathered < chunk) break;  // nothing left to gather, refresh or refine
-        if (in.poll_hand_over && in.poll_hand_over()) iim_.aim_changed();
-        const double ms = ms_since(start);
         const int left = budget - total.gathered;
+        if (s.gathered < chunk) {
+            // Nothing left to gather, refresh or refine. New AIMs bring texels to gather again:
+            // taken over if the workers are done, or waited for with half of what the share has
+            // left (the rest gathers what they bring). On bumpy_133k_box the box jump's AIM
+            // rebuild (120-145 ms on the workers) ended during the gathering of the frame after
+            // the edit's, whose queue ran out at 50-60 ms of a 150 ms share: its texels waited
+            // a frame and 25 ms of drawing.
+            const double remaining = in.work_ms - ms_since(start);
+            if (left <= 0 || remaining <= 0.0) break;
+            bool arrived = in.poll_hand_over && in.poll_hand_over();
+            if (!arrived && in.wait_hand_over) {
+                const Clock::time_point wait_start = Clock::now();
+                arrived = in.wait_hand_over(0.5 * remaining);
+                gather_wait_ms_ += ms_since(wait_start);
+            }
+            if (!arrived) break;
+            iim_.aim_changed();
+        } else if (in.poll_hand_over && in.poll_hand_over()) {
+            iim_.aim_changed();
+        }
+        const double ms = ms_since(start);
         if (ms >= in.work_ms || left <= 0) break;
-        const double fits =
-            std::floor((in.work_ms - ms) / (ms_since(loop_start) / double(total.gathered)));
+        const double per_texel = std::max(
+            1e-6, (ms_since(loop_start) - gather_wait_ms_) / double(std::max(1, total.gathered)));
+        const double fits = std::floor((in.work_ms - ms) / per_texel);
         chunk = int(std::clamp<double>(fits, double(std::min(left, kFirstChunkTexels)),
                                        double(std::min(left, kChunkTexels))));
     }

@@ -79,6 +79,7 @@ private:
     static constexpr int kChunkTexels = 256, kFirstChunkTexels = 8;
     std::vector<int> gathered_;     // texel records gathered in the last update()
     double texel_gather_ms_ = 0.0;  // of it, the time in the gatherers
+    double gather_wait_ms_ = 0.0;   // of it, waiting for the workers' new AIMs
 
     const Scene& scene_;
     cpu::Iim iim_;

@@ -38,6 +38,10 @@ struct IndirectInputs {
     // Between chunks: hands this frame's photon work over if the workers have finished it (never
     // waits) and says whether new AIMs arrived, so the rest of the frame reads them.
     std::function<bool()> poll_hand_over;
+    // When the work has run out before the share: waits at most `ms` for the workers' repair of
+    // an edit (never for verification or refinement alone), hands it over and says whether new
+    // AIMs arrived. Unset: never waits.
+    std::function<bool(double ms)> wait_hand_over;
 };
 
 class IndirectMethod {

@@ -291,21 +291,40 @@ PipelineStats Pipeline::frame() {
     const FrameBudgets budgets =
         scheduler_.budgets(scene_.settings, int(scene_.atlas.texels.size()), first_edit, hedge,
                            caustics_expected, relit_expected);
-    if (!workers_busy) start_cpu_work(budgets);
+    if (!workers_busy) {
+        // Repair work (an edit's, or invalid groups still queued) may be waited for mid-gather;
+        // verification and refinement alone never are.
+        cpu_work_repairs_ = edited || photons_->queued_photons() > 0;
+        start_cpu_work(budgets);
+    }
 
     // GL: the AIM texels handed over by the last frame, the indirect term, then the frame.
     Clock::time_point t = Clock::now();
     const bool aim_changed = !aim_dirty_.empty();
     aim_texture_.update(staged_aim_, aim_dirty_);
     aim_dirty_.clear();
-    auto update_indirect = [&](int texels, double work_ms) {
+    auto update_indirect = [&](int texels, double work_ms, bool may_wait) {
         const Clock::time_point t0 = Clock::now();
         IndirectInputs in{frame_, aim_changed, mode_, texels};
         in.work_ms = work_ms;
         // Selective takes the photon work over the moment it is done; the baselines at the end
         // of the frame, as brute force does.
-        if (mode_ == PipelineMode::selective && work_ms > 0.0)
+        if (mode_ == PipelineMode::selective && work_ms > 0.0) {
             in.poll_hand_over = [this, &stats] { return hand_over_if_done(stats); };
+            // Not after drawing: what the edit's frame gathers then shows a frame later, and
+            // the next frame takes the new AIMs over as they arrive.
+            if (may_wait)
+                in.wait_hand_over = [this, &stats](double ms) {
+                    // A run whose frames wait for their photon work at the end keeps doing so.
+                    if (!cpu_work_.valid() || !cpu_work_repairs_ || ms <= 0.0 ||
+                        waits_for_workers())
+                        return false;
+                    if (cpu_work_.wait_for(std::chrono::duration<double, std::milli>(ms)) !=
+                        std::future_status::ready)
+                        return false;
+                    return hand_over_if_done(stats);
+                };
+        }
         indirect_->update(in, stats);
         stats.gather_ms = ms_since(t0);
     };
@@ -316,7 +335,7 @@ PipelineStats Pipeline::frame() {
     // (the workers have just started on it): its texels show a frame later.
     const bool draw_first =
         timed && first_edit && iim_method() != nullptr && budgets.gather_ms > 0.0;
-    if (!draw_first) update_indirect(budgets.iim_texels, budgets.gather_ms);
+    if (!draw_first) update_indirect(budgets.iim_texels, budgets.gather_ms, true);
     t = Clock::now();
     caustics_drawn_last_ = false;
     if (!caustics_deferred_) {
@@ -343,7 +362,7 @@ PipelineStats Pipeline::frame() {
     if (draw_first) {
         planned = scheduler_.after_drawing(scene_.settings, int(scene_.atlas.texels.size()),
                                            ms_since(start));
-        update_indirect(planned.iim_texels, planned.gather_ms);
+        update_indirect(planned.iim_texels, planned.gather_ms, false);
     }
     stats.drawn = renderer_->drew();
     stats.drawn_direct = renderer_->drew_direct();

@@ -152,6 +152,7 @@ private:
         double photon_ms = 0, aim_ms = 0, caustic_ms = 0;
     };
     std::future<CpuWork> cpu_work_;
+    bool cpu_work_repairs_ = false;  // cpu_work_ repairs an edit (IndirectInputs::wait_hand_over)
     // Runs each frame's CPU side; declared after everything its tasks use, so it is joined first.
     WorkerThread cpu_thread_;
     // Staged at the hand-over for the next frame's GL work (no data race with the workers).

@@ -53,6 +53,9 @@ struct PipelineStats {
     // its 42 ms "gathering" 54 texels on bumpy_133k_box, half of it the coverage pass, and the
     // budgets of the frames after it stayed at a quarter of what fits.
     double texel_gather_ms = -1;
+    // Of gather_ms: waiting mid-gather for the workers' repair of an edit, whose new AIMs the
+    // rest of the share gathers (IndirectInputs::wait_hand_over). Neither gathering nor drawing.
+    double gather_wait_ms = 0;
     // CPU gather rays of this frame's IIM texels, and how many of them were re-read from the ray
     // cache instead of traced (gather.ray_cache_mb).
     uint64_t gather_rays = 0, gather_rays_reused = 0;

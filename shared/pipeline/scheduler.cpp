@@ -115,7 +115,7 @@ void FrameScheduler::measure(const PipelineStats& s) {
     // draw them.
     const double relit_ms = s.cube_faces_relit > 0 ? s.cube_faces_ms : 0.0;
     const double drawing = std::max(0.0, s.draw_ms - s.caustics_draw_ms - relit_ms) +
-                           std::max(0.0, s.gather_ms - gather_part);
+                           std::max(0.0, s.gather_ms - s.gather_wait_ms - gather_part);
     if (s.caustics_drawn && s.caustics_draw_ms > 0.0) caustics_draw_ms_.add(s.caustics_draw_ms);
     if (s.cube_faces_relit > 0) relit_face_ms_.add(relit_ms / s.cube_faces_relit);
     // The first frame compiles the shaders (llvmpipe compiles at a program's first draw) and

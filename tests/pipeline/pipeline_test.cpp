@@ -458,6 +458,70 @@ TEST_F(PipelineTest, AFrameDoesNotWaitForPhotonWorkThatOutlastsIt) {
     a_frame_waits("wait_for_workers");
 }
 
+// With a frame-time target, a frame whose gathering runs out while the workers repair an edit
+// waits for them within its share and gathers what their new AIMs bring in the same frame
+// (IndirectInputs::wait_hand_over); the wait is neither gathering nor drawing to the scheduler.
+// The edit's photon work is held on a gate that opens 150 ms after the edit's frame returned; the
+// target (20 s) leaves the frame after it far more than that to wait, however slow the machine.
+// Verification alone is never waited for: the quiet frames before the edit hand nothing over.
+TEST_F(PipelineTest, AFrameWaitsWithinItsShareForAnEditsRepair) {
+    Scene scene = cornell();
+    scene.settings.schedule.frame_ms = 20000.0f;
+    scene.settings.gather.refine_passes = 1;
+    scene.settings.photons.refine_layers = 1;
+    std::mutex m;
+    std::condition_variable cv;
+    bool hold = false;
+    PipelineOptions options{32, 32};
+    options.on_cpu_work_start = [&] {
+        std::unique_lock lock(m);
+        test::wait_running(cv, lock, std::chrono::seconds(60), [&] { return !hold; });
+    };
+    auto set_hold = [&](bool h) {
+        {
+            std::lock_guard lock(m);
+            hold = h;
+        }
+        cv.notify_all();
+    };
+    Pipeline pipeline(scene, options);
+    pipeline.prime();
+    FrameLoop loop(pipeline);
+    for (int f = 0; f < 3; ++f) loop.step();
+    pipeline.sync();
+    // Quiet frames: the photon work is verification, not waited for.
+    set_hold(true);
+    std::thread quiet_opener([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        set_hold(false);
+    });
+    const PipelineStats quiet = loop.step();
+    quiet_opener.join();
+    EXPECT_LT(quiet.gather_wait_ms, 1.0);  // the gate held it 300 ms
+    EXPECT_TRUE(quiet.workers_behind);
+    pipeline.sync();
+
+    set_hold(true);
+    translate_object(scene, scene.find_object("cube"), glm::vec3(-100.0f, 0.0f, 60.0f));
+    const PipelineStats edit = loop.step();  // draws first; its gathering shows a frame later
+    EXPECT_TRUE(edit.workers_behind);
+    EXPECT_EQ(edit.gather_wait_ms, 0.0);
+    std::thread opener([&] {
+        std::this_thread::sleep_for(std::chrono::milliseconds(150));
+        set_hold(false);
+    });
+    const PipelineStats after = loop.step();
+    opener.join();
+    EXPECT_TRUE(after.early_hand_over);
+    EXPECT_FALSE(after.workers_behind);
+    EXPECT_GT(after.gather_wait_ms, 0.0);
+    EXPECT_LE(after.gather_wait_ms, after.gather_ms);
+    EXPECT_GT(after.photons.aim_texels_rebuilt, 0);
+    // Under the target, not held to it: the frame ended once the new AIMs' texels were gathered.
+    EXPECT_LT(after.frame_ms, 20000.0);
+    ASSERT_GT(settle(loop), 0);
+}
+
 // The viewer makes a new pipeline on the same scene before the old one goes (another indirect
 // method): the old one's destructor must leave the new one's wait in place, or edits would no
 // longer wait for the new workers.
