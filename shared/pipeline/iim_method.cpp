@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <chrono>
-#include <limits>
 #include <string>
 
 #include "gpu/gl.h"

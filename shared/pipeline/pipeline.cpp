@@ -312,13 +312,11 @@ PipelineStats Pipeline::frame() {
         if (mode_ == PipelineMode::selective && work_ms > 0.0) {
             in.poll_hand_over = [this, &stats] { return hand_over_if_done(stats); };
             // Not after drawing: what the edit's frame gathers then shows a frame later, and
-            // the next frame takes the new AIMs over as they arrive.
-            if (may_wait)
+            // the next frame takes the new AIMs over as they arrive. A run whose frames wait for
+            // their photon work at the end keeps doing so.
+            if (may_wait && !waits_for_workers())
                 in.wait_hand_over = [this, &stats](double ms) {
-                    // A run whose frames wait for their photon work at the end keeps doing so.
-                    if (!cpu_work_.valid() || !cpu_work_repairs_ || ms <= 0.0 ||
-                        waits_for_workers())
-                        return false;
+                    if (!cpu_work_.valid() || !cpu_work_repairs_ || ms <= 0.0) return false;
                     if (cpu_work_.wait_for(std::chrono::duration<double, std::milli>(ms)) !=
                         std::future_status::ready)
                         return false;
